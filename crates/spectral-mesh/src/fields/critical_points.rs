@@ -1,0 +1,1 @@
+//! critical_points (to be written).

@@ -1,0 +1,1 @@
+//! harmonic (to be written).

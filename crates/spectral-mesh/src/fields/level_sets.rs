@@ -1,0 +1,1 @@
+//! level_sets (to be written).

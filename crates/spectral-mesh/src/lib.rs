@@ -1,0 +1,21 @@
+//! # spectral-mesh
+//!
+//! Harmonic maps, heat diffusion and filtered spectral distances on triangle meshes.
+//!
+//! Data flows one way: a file or a built-in shape becomes a [`Mesh`]; the mesh gives
+//! operators ([`operators::Operators`]: the stiffness S, positive semi-definite, and a
+//! mass B); operators give an eigenbasis; the basis (or a direct solve) gives fields.
+//! Conventions are those of the project's `MATH.md`.
+
+pub mod fields;
+pub mod io;
+pub mod linalg;
+pub mod mesh;
+pub mod operators;
+pub mod shapes;
+pub mod spectral;
+
+pub use linalg::SparseMatrix;
+pub use mesh::Mesh;
+pub use operators::{Laplacian, Operators};
+pub use spectral::Eigenbasis;

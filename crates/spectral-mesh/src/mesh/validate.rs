@@ -1,0 +1,1 @@
+//! Mesh checks and repairs.

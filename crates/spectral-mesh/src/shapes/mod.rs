@@ -1,0 +1,1 @@
+//! Built-in procedural shapes with a resolution parameter.

@@ -1,0 +1,5 @@
+//! Spectral quantities: the generalized eigenbasis and everything computed from it.
+
+pub mod eigenbasis;
+
+pub use eigenbasis::Eigenbasis;
