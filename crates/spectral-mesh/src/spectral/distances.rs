@@ -1,0 +1,1 @@
+//! distances (to be written).
