@@ -271,7 +271,13 @@ impl ConstraintSpec {
                             }
                             continue;
                         }
-                        picked.push((Constraint { vertex: v, value: val }, name));
+                        picked.push((
+                            Constraint {
+                                vertex: v,
+                                value: val,
+                            },
+                            name,
+                        ));
                     }
                 }
                 Ok(picked.into_iter().map(|(c, _)| c).collect())
@@ -326,7 +332,10 @@ fn validate_constraints(
     let mut out = Vec::with_capacity(list.len());
     for c in list {
         if c.vertex >= n {
-            return Err(HarmonicError::ConstraintOutOfRange { vertex: c.vertex, n });
+            return Err(HarmonicError::ConstraintOutOfRange {
+                vertex: c.vertex,
+                n,
+            });
         }
         if !c.value.is_finite() {
             return Err(HarmonicError::NonFinite {
@@ -398,9 +407,12 @@ pub fn parse_constraints(text: &str, source_name: &str) -> Result<Vec<Constraint
         if tokens.len() != 2 {
             return Err(err(format!("found {} fields", tokens.len())));
         }
-        let vertex = tokens[0]
-            .parse::<usize>()
-            .map_err(|_| err(format!("vertex '{}' is not a non-negative integer", tokens[0])))?;
+        let vertex = tokens[0].parse::<usize>().map_err(|_| {
+            err(format!(
+                "vertex '{}' is not a non-negative integer",
+                tokens[0]
+            ))
+        })?;
         let value = tokens[1]
             .parse::<f64>()
             .map_err(|_| err(format!("value '{}' is not a number", tokens[1])))?;
@@ -779,7 +791,12 @@ mod tests {
 
     fn two_triangles() -> Mesh {
         Mesh::new(
-            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
             vec![[0, 1, 2], [0, 2, 3]],
         )
         .unwrap()
@@ -820,7 +837,10 @@ mod tests {
         let c4 = ConstraintSpec::Extremes(4).resolve(&m).unwrap();
         assert_eq!(c4.len(), 3);
         let e = ConstraintSpec::Extremes(6).resolve(&m).unwrap_err();
-        assert!(matches!(e, HarmonicError::ExtremesConflict { vertex: 0, .. }), "{e}");
+        assert!(
+            matches!(e, HarmonicError::ExtremesConflict { vertex: 0, .. }),
+            "{e}"
+        );
         assert!(e.to_string().contains("max z"));
         assert!(ConstraintSpec::Extremes(3).resolve(&m).is_err());
     }
@@ -860,9 +880,10 @@ mod tests {
     #[test]
     fn nearest_points() {
         let m = two_triangles();
-        let c = ConstraintSpec::NearestPoints(vec![([0.9, 1.2, 0.0], 3.0), ([-1.0, 0.1, 0.0], 1.0)])
-            .resolve(&m)
-            .unwrap();
+        let c =
+            ConstraintSpec::NearestPoints(vec![([0.9, 1.2, 0.0], 3.0), ([-1.0, 0.1, 0.0], 1.0)])
+                .resolve(&m)
+                .unwrap();
         assert_eq!(c[0].vertex, 2);
         assert_eq!(c[1].vertex, 0);
     }
