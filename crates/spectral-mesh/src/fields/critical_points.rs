@@ -174,8 +174,11 @@ pub fn critical_points_with(
             edges.push((tri[(k + 1) % 3], tri[(k + 2) % 3]));
         }
         let above = |u: usize| -> bool {
-            let (a, b) = (field[u], field[v]);
-            a > b || (!(a < b) && u > v)
+            match field[u].partial_cmp(&field[v]) {
+                Some(std::cmp::Ordering::Greater) => true,
+                Some(std::cmp::Ordering::Less) => false,
+                _ => u > v,
+            }
         };
         let (kind, open, nonman) = classify(&edges, &above, rule);
         if nonman {

@@ -1,5 +1,5 @@
 //! Small mesh generators shared by the `fields_*` integration tests.
-#![allow(dead_code)]
+#![allow(dead_code, clippy::unwrap_used)]
 
 use spectral_mesh::Mesh;
 
@@ -20,7 +20,7 @@ impl Rng {
 /// A torus in the xy plane (major radius `big_r`, minor `r`) on a staggered grid of
 /// `nu x nv` vertices (`nv` even), so that the triangles are close to equilateral.
 pub fn torus(big_r: f64, r: f64, nu: usize, nv: usize) -> Mesh {
-    assert!(nv % 2 == 0);
+    assert!(nv.is_multiple_of(2));
     let mut p = Vec::with_capacity(nu * nv);
     for j in 0..nv {
         let v = std::f64::consts::TAU * j as f64 / nv as f64;
