@@ -89,3 +89,46 @@ fn boundary_aware_counts_on_a_disk() {
     assert!(cp.saddles.is_empty());
     assert_eq!(cp.euler_check_doubled(1), (2, 2));
 }
+
+#[test]
+fn non_manifold_vertices_are_listed_and_classified_conservatively() {
+    // Two spheres glued at one vertex (a pinch): vertex 0 of the second is merged into
+    // vertex 0 of the first after translating the second so the two points coincide.
+    let a = icosphere(1);
+    let pa = a.positions()[0];
+    let b = a
+        .map_positions(|q| [2.0 * pa[0] - q[0], 2.0 * pa[1] - q[1], 2.0 * pa[2] - q[2]])
+        .unwrap();
+    let n = a.n_vertices();
+    let mut p = a.positions().to_vec();
+    p.extend(b.positions().iter().skip(1));
+    let remap = |v: usize| if v == 0 { 0 } else { v + n - 1 };
+    let mut t = a.triangles().to_vec();
+    t.extend(b.triangles().iter().map(|tri| tri.map(remap)));
+    let m = spectral_mesh::Mesh::new(p, t).unwrap();
+    // Distance from the pinch: the pinch is the unique minimum, no vertex is missed.
+    let f: Vec<f64> = m
+        .positions()
+        .iter()
+        .map(|q| ((q[0] - pa[0]).powi(2) + (q[1] - pa[1]).powi(2) + (q[2] - pa[2]).powi(2)).sqrt())
+        .collect();
+    let cp = critical_points(&m, &f).unwrap();
+    assert_eq!(cp.non_manifold, vec![0]);
+    assert_eq!(cp.minima, vec![0]);
+    assert_eq!(cp.maxima.len(), 2, "{cp:?}");
+    // A non-manifold edge (three triangles on edge 0-1) does not panic and is reported.
+    let m3 = spectral_mesh::Mesh::new(
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, 1.0, 0.0],
+            [0.5, -1.0, 0.0],
+            [0.5, 0.0, 1.0],
+        ],
+        vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]],
+    )
+    .unwrap();
+    let cp3 = critical_points(&m3, &[0.0, 1.0, 2.0, 3.0, 4.0]).unwrap();
+    assert!(cp3.non_manifold.contains(&0) && cp3.non_manifold.contains(&1));
+    assert_eq!(cp3.minima, vec![0]);
+}

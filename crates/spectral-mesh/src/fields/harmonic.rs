@@ -78,8 +78,7 @@ pub enum HarmonicError {
     /// Two of the paper's default rules pick the same vertex with different values.
     #[error(
         "the default constraints conflict: vertex {vertex} is both the {first} (value {first_value}) \
-         and the {second} (value {second_value}); the mesh is flat or degenerate along that axis, \
-         use fewer or explicit constraints"
+         and the {second} (value {second_value}); use fewer or explicit constraints"
     )]
     ExtremesConflict {
         /// The vertex picked twice.
