@@ -250,12 +250,11 @@ fn chain(nodes: &[Crossing], segs: &[[usize; 2]]) -> Vec<Polyline> {
     };
 
     // Open chains (and branches at junctions) first, in a deterministic order.
-    for v in 0..n {
-        if adj[v].len() == 2 {
+    for (v, inc) in adj.iter().enumerate() {
+        if inc.len() == 2 {
             continue;
         }
-        for idx in 0..adj[v].len() {
-            let s = adj[v][idx];
+        for &s in inc {
             if used[s] {
                 continue;
             }
