@@ -158,7 +158,9 @@ fn isometry_and_scale() {
     check(Filter::CommuteTime, Filter::CommuteTime, 1.0);
     check(
         Filter::Diffusion { t: 0.01 },
-        Filter::Diffusion { t: 0.01 * alpha * alpha },
+        Filter::Diffusion {
+            t: 0.01 * alpha * alpha,
+        },
         1.0 / alpha,
     );
 }
@@ -219,7 +221,11 @@ fn filter_validation_names_the_failing_eigenvalue() {
     let w = band.weights(&basis.values).unwrap();
     assert_eq!(w[2], 0.0);
     assert_eq!(w[0], 0.0);
-    assert!(w.iter().enumerate().all(|(i, &v)| i == 0 || i == 2 || v > 0.0));
+    assert!(
+        w.iter()
+            .enumerate()
+            .all(|(i, &v)| i == 0 || i == 2 || v > 0.0)
+    );
 }
 
 #[test]

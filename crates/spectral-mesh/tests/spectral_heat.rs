@@ -4,8 +4,7 @@ mod spectral_util;
 
 use spectral_mesh::spectral::heat::{
     HeatSolver, KernelKind, ScaleNormalization, basis_function, diffuse, normalize_basis,
-    reference_basis_function_dense, reference_heat_time_stepping, sphere_heat_kernel,
-    total_mass,
+    reference_basis_function_dense, reference_heat_time_stepping, sphere_heat_kernel, total_mass,
 };
 use spectral_mesh::{Eigenbasis, Laplacian, Operators};
 use spectral_util::*;
@@ -95,7 +94,12 @@ fn wfem_s_t_is_symmetric_positive_definite() {
     assert!(cholesky(&st).is_some(), "S_t is not positive definite");
     // The paper: ||x_i - x_j||_t^2 = exp(-lambda_i t) + exp(-lambda_j t) for i != j.
     let (a, b) = (4, 9);
-    let d: Vec<f64> = basis.vector(a).iter().zip(basis.vector(b)).map(|(x, y)| x - y).collect();
+    let d: Vec<f64> = basis
+        .vector(a)
+        .iter()
+        .zip(basis.vector(b))
+        .map(|(x, y)| x - y)
+        .collect();
     let sd: Vec<f64> = (0..n).map(|i| dot(&st[i], &d)).collect();
     let lhs = dot(&d, &sd);
     let rhs = (-basis.values[a] * t).exp() + (-basis.values[b] * t).exp();
@@ -151,7 +155,10 @@ fn sphere_kernel_converges_with_refinement() {
         let rate = (errs[i - 1] / errs[i]).ln() / (hs[i - 1] / hs[i]).ln();
         println!(
             "sphere heat kernel t = {t}: h = {:.4} rel. L_inf error {:.3e} -> h = {:.4} {:.3e}, rate {rate:.2}",
-            hs[i - 1], errs[i - 1], hs[i], errs[i]
+            hs[i - 1],
+            errs[i - 1],
+            hs[i],
+            errs[i]
         );
         assert!(errs[i] < errs[i - 1], "{errs:?}");
     }
@@ -166,7 +173,11 @@ fn solver_matches_free_functions_and_normalisation_is_documented() {
     let a = total_mass(&basis);
     assert!((a - mesh.area()).abs() <= 1e-12 * a);
     let t = 0.002;
-    for kind in [KernelKind::Wfem, KernelKind::VoronoiCot, KernelKind::Standard] {
+    for kind in [
+        KernelKind::Wfem,
+        KernelKind::VoronoiCot,
+        KernelKind::Standard,
+    ] {
         let plain = HeatSolver::new(&basis, kind, ScaleNormalization::None);
         let x = plain.basis_function(7, t).unwrap();
         let y = basis_function(&basis, 7, t, kind).unwrap();
@@ -182,7 +193,9 @@ fn solver_matches_free_functions_and_normalisation_is_documented() {
         assert_eq!(many[0], u);
     }
     // A scaled copy of the mesh gives the same unit-area kernel.
-    let scaled = mesh.map_positions(|p| [3.0 * p[0], 3.0 * p[1], 3.0 * p[2]]).unwrap();
+    let scaled = mesh
+        .map_positions(|p| [3.0 * p[0], 3.0 * p[1], 3.0 * p[2]])
+        .unwrap();
     let b2 = Eigenbasis::dense(&fem(&scaled), 30).unwrap();
     let n1 = normalize_basis(&basis, ScaleNormalization::UnitArea);
     let n2 = normalize_basis(&b2, ScaleNormalization::UnitArea);
@@ -191,7 +204,10 @@ fn solver_matches_free_functions_and_normalisation_is_documented() {
     }
     let s1 = HeatSolver::new(&basis, KernelKind::Wfem, ScaleNormalization::UnitArea);
     let s2 = HeatSolver::new(&b2, KernelKind::Wfem, ScaleNormalization::UnitArea);
-    let (k1, k2) = (s1.basis_function(3, 0.01).unwrap(), s2.basis_function(3, 0.01).unwrap());
+    let (k1, k2) = (
+        s1.basis_function(3, 0.01).unwrap(),
+        s2.basis_function(3, 0.01).unwrap(),
+    );
     assert!(max_diff(&k1, &k2) <= 1e-9 * max_abs(&k1));
 }
 

@@ -58,7 +58,9 @@ fn wks_auto_energies_follow_pyfm_and_are_sign_invariant() {
     // Flip the sign of some eigenvectors: nothing changes.
     let n = basis.n;
     for j in [2usize, 5] {
-        basis.vectors[j * n..(j + 1) * n].iter_mut().for_each(|v| *v = -*v);
+        basis.vectors[j * n..(j + 1) * n]
+            .iter_mut()
+            .for_each(|v| *v = -*v);
     }
     let w2 = wks(&basis, &e, sigma, true).unwrap();
     assert_eq!(w1, w2);

@@ -13,8 +13,8 @@
 //! labels are deterministic for a given input. The genus of each patch is that of the
 //! sub-mesh made of the triangles whose three vertices share its label.
 
-use crate::mesh::topology::{Topology, UnionFind};
 use crate::mesh::Mesh;
+use crate::mesh::topology::{Topology, UnionFind};
 
 /// Parameters of [`segment`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,7 +104,9 @@ pub fn segment(
     }
     let (lo, hi) = field
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
     let threshold = params.persistence * (hi - lo);
 
     // Sweep order: descending value, ties by ascending index.
@@ -194,10 +196,7 @@ pub fn segment(
             tris_of[l].push(*tri);
         }
     }
-    let patch_genus = tris_of
-        .iter()
-        .map(|tris| patch_genus(mesh, tris))
-        .collect();
+    let patch_genus = tris_of.iter().map(|tris| patch_genus(mesh, tris)).collect();
     Ok(Segmentation {
         labels,
         n_patches,

@@ -135,13 +135,11 @@ fn weighted_rows(basis: &Eigenbasis, w: &[f64]) -> (Vec<f64>, usize) {
     let used: Vec<usize> = (0..w.len()).filter(|&j| w[j] > 0.0).collect();
     let m = used.len();
     let mut e = vec![0.0; n * m];
-    e.par_chunks_mut(m.max(1))
-        .enumerate()
-        .for_each(|(i, row)| {
-            for (c, &j) in used.iter().enumerate() {
-                row[c] = w[j].sqrt() * basis.vectors[j * n + i];
-            }
-        });
+    e.par_chunks_mut(m.max(1)).enumerate().for_each(|(i, row)| {
+        for (c, &j) in used.iter().enumerate() {
+            row[c] = w[j].sqrt() * basis.vectors[j * n + i];
+        }
+    });
     (e, m)
 }
 

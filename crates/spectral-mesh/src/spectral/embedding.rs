@@ -33,9 +33,7 @@ pub fn spectral_embedding(
     filter: &Filter,
     dims: usize,
 ) -> Result<Vec<Vec<f64>>, EmbeddingError> {
-    let w = filter
-        .weights(&basis.values)
-        .map_err(DistanceError::from)?;
+    let w = filter.weights(&basis.values).map_err(DistanceError::from)?;
     let n = basis.n;
     let used: Vec<usize> = (0..w.len()).filter(|&j| w[j] > 0.0).take(dims).collect();
     Ok((0..n)

@@ -354,7 +354,10 @@ fn parse_params(text: &str, list: &str) -> Result<BTreeMap<String, f64>, FilterE
             message: format!("parameter '{item}' is not of the form name=value"),
         })?;
         let k = k.trim();
-        let valid = k.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        let valid = k
+            .chars()
+            .next()
+            .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
             && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
         if !valid || k == "s" || k == "pi" {
             return Err(FilterError::Syntax {
@@ -783,19 +786,35 @@ mod tests {
         assert!((ev("exp(-s*t)/s", 2.0) - (-1.0f64).exp() / 2.0).abs() < 1e-15);
         assert_eq!(ev("max(s, 1) + min(s, 1) + pow(2, 3)", 4.0), 13.0);
         assert_eq!(ev("1e-3 * 1E3", 0.0), 1.0);
-        assert!((ev("sqrt(abs(-4)) + log(exp(1)) + tanh(0) + sin(0) + cos(0)", 0.0) - 4.0).abs() < 1e-15);
+        assert!(
+            (ev(
+                "sqrt(abs(-4)) + log(exp(1)) + tanh(0) + sin(0) + cos(0)",
+                0.0
+            ) - 4.0)
+                .abs()
+                < 1e-15
+        );
     }
 
     #[test]
     fn parse_errors_give_positions() {
         let e = Expr::parse("s + * 2", &[]).unwrap_err();
-        assert!(matches!(e, FilterError::Expression { position: 4, .. }), "{e}");
+        assert!(
+            matches!(e, FilterError::Expression { position: 4, .. }),
+            "{e}"
+        );
         let e = Expr::parse("exp(s", &[]).unwrap_err();
-        assert!(matches!(e, FilterError::Expression { position: 5, .. }), "{e}");
+        assert!(
+            matches!(e, FilterError::Expression { position: 5, .. }),
+            "{e}"
+        );
         let e = Expr::parse("foo(s)", &[]).unwrap_err();
         assert!(e.to_string().contains("unknown function 'foo'"), "{e}");
         let e = Expr::parse("s * q", &[]).unwrap_err();
-        assert!(matches!(e, FilterError::Expression { position: 4, .. }), "{e}");
+        assert!(
+            matches!(e, FilterError::Expression { position: 4, .. }),
+            "{e}"
+        );
         assert!(Expr::parse("", &[]).is_err());
         assert!(Expr::parse("(s))", &[]).is_err());
         assert!(Expr::parse("pow(s)", &[]).is_err());
@@ -817,7 +836,10 @@ mod tests {
             let g: Filter = f.to_string().parse().unwrap();
             assert_eq!(f, g, "{t}");
         }
-        assert_eq!("heat".parse::<Filter>().unwrap(), Filter::Diffusion { t: 0.5 });
+        assert_eq!(
+            "heat".parse::<Filter>().unwrap(),
+            Filter::Diffusion { t: 0.5 }
+        );
         assert!("diffusion:t=-1".parse::<Filter>().is_err());
         assert!("mix:a=2".parse::<Filter>().is_err());
         assert!("diffusion:x=1".parse::<Filter>().is_err());
@@ -843,7 +865,11 @@ mod tests {
         assert_eq!(phi.weights(&ev).unwrap(), w);
         let band = Filter::BandSuppression { indices: vec![2] };
         assert_eq!(band.weights(&ev).unwrap(), vec![0.0, 1.0, 0.0, 1.0]);
-        assert!(Filter::BandSuppression { indices: vec![9] }.weights(&ev).is_err());
+        assert!(
+            Filter::BandSuppression { indices: vec![9] }
+                .weights(&ev)
+                .is_err()
+        );
         assert!(Filter::CommuteTime.weights(&[0.0, 0.0]).is_err());
     }
 }

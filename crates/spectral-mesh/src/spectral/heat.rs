@@ -519,7 +519,10 @@ mod tests {
         let (th, t) = (0.7f64, 0.3);
         let x = th.cos();
         let c = 1.0 / (4.0 * std::f64::consts::PI);
-        let want = c * (1.0 + 3.0 * (-2.0 * t).exp() * x + 5.0 * (-6.0 * t).exp() * (3.0 * x * x - 1.0) / 2.0);
+        let want = c
+            * (1.0
+                + 3.0 * (-2.0 * t).exp() * x
+                + 5.0 * (-6.0 * t).exp() * (3.0 * x * x - 1.0) / 2.0);
         assert!((sphere_heat_kernel(th, t, 1.0, 2) - want).abs() < 1e-15);
         // Radius scaling: k_R(theta, t) = k_1(theta, t / R^2) / R^2.
         let a = sphere_heat_kernel(0.4, 0.8, 2.0, 60);

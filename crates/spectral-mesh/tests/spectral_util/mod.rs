@@ -125,8 +125,16 @@ pub fn planar_patch(m: usize, seed: u64) -> Mesh {
     let mut pos = Vec::new();
     for i in 0..m {
         for j in 0..m {
-            let jx = if i > 0 && i + 1 < m { 0.3 * (rng.next() - 0.5) } else { 0.0 };
-            let jy = if j > 0 && j + 1 < m { 0.3 * (rng.next() - 0.5) } else { 0.0 };
+            let jx = if i > 0 && i + 1 < m {
+                0.3 * (rng.next() - 0.5)
+            } else {
+                0.0
+            };
+            let jy = if j > 0 && j + 1 < m {
+                0.3 * (rng.next() - 0.5)
+            } else {
+                0.0
+            };
             let x = (i as f64 + jx) / (m - 1) as f64 * 1.3;
             let y = (j as f64 + jy) / (m - 1) as f64;
             pos.push([x, y, 0.1 * (x * x - 0.5 * y)]);
@@ -236,5 +244,7 @@ pub fn max_abs(a: &[f64]) -> f64 {
 }
 
 pub fn max_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
 }
