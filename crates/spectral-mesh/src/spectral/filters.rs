@@ -235,7 +235,7 @@ impl Filter {
     pub fn weights(&self, eigenvalues: &[f64]) -> Result<Vec<f64>, FilterError> {
         self.validate_parameters()?;
         let lmax = eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        if !(lmax > 0.0) || !lmax.is_finite() {
+        if !lmax.is_finite() || lmax <= 0.0 {
             return Err(FilterError::EmptySpectrum);
         }
         let zero = |v: f64| v.abs() <= ZERO_EIGENVALUE_EPS * lmax;

@@ -516,7 +516,7 @@ mod tests {
         s *= 2.0 * std::f64::consts::PI;
         assert!((s - 1.0).abs() < 1e-6, "{s}");
         // l_max = 2 by hand: P_2 = (3x^2-1)/2.
-        let (th, t) = (0.7f64, 0.3);
+        let (th, t) = (0.7f64, 0.3f64);
         let x = th.cos();
         let c = 1.0 / (4.0 * std::f64::consts::PI);
         let want = c

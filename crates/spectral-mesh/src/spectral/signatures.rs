@@ -176,7 +176,7 @@ pub fn wks_auto_energies(
     let (l1, lmax) = first_nonzero(basis)?;
     let (mut e_min, mut e_max) = (l1.ln(), lmax.ln());
     let sigma = 7.0 * (e_max - e_min) / n_energies as f64;
-    if !(sigma > 0.0) {
+    if sigma.is_nan() || sigma <= 0.0 {
         return Err(SignatureError::InvalidParameter(
             "the non-zero spectrum has a single value: WKS bandwidth would be 0".into(),
         ));
