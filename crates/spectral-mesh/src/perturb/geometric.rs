@@ -116,8 +116,12 @@ pub fn local_scale(
     }
     let m = mesh.map_positions(|p| {
         let d = sub(p, center);
-        let s = 1.0 + (alpha - 1.0) * falloff(norm(d) / radius);
-        add(center, vscale(d, s))
+        let w = falloff(norm(d) / radius);
+        if w == 0.0 {
+            // Outside the ball: untouched, bit for bit.
+            return p;
+        }
+        add(center, vscale(d, 1.0 + (alpha - 1.0) * w))
     })?;
     Ok(Perturbed {
         mesh: m,
