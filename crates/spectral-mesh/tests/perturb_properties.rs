@@ -1,6 +1,9 @@
 //! Properties of the mesh perturbations: magnitudes, invariances, surface preservation,
 //! topology, exact pull-back of linear functions and determinism.
 
+// Test helpers (not `#[test]` functions themselves) unwrap freely.
+#![allow(clippy::unwrap_used)]
+
 use std::collections::HashMap;
 
 use spectral_mesh::mesh::topology::Topology;

@@ -93,10 +93,10 @@ impl<'a> Remesher<'a> {
         let tt = self.orig.triangles()[t];
         let mut b = [0.0; 3];
         for k in 0..3 {
-            if hb[k] != 0.0 {
-                if let Some(j) = tt.iter().position(|&x| x == ht[k]) {
-                    b[j] += hb[k];
-                }
+            if hb[k] != 0.0
+                && let Some(j) = tt.iter().position(|&x| x == ht[k])
+            {
+                b[j] += hb[k];
             }
         }
         b
