@@ -13,6 +13,7 @@ pub mod io;
 pub mod linalg;
 pub mod mesh;
 pub mod operators;
+pub mod perturb;
 pub mod shapes;
 pub mod spectral;
 

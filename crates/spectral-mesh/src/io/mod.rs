@@ -616,6 +616,3 @@ pub(crate) fn assemble(
 pub(crate) fn fmt_f64(x: f64) -> String {
     format!("{x:?}")
 }
-
-#[cfg(test)]
-mod tests;

@@ -73,7 +73,13 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
                 .to_string(),
             None => msg,
         };
-        let msg = msg.replace(['\n', '\t'], " ");
+        // ply-rs nests "... Error: ..." messages; the innermost one is the useful part.
+        let first = msg.lines().next().unwrap_or("").trim().to_string();
+        let msg = match msg.rfind("Error: ") {
+            Some(k) => format!("{first} ({})", &msg[k + 7..]),
+            None => msg,
+        };
+        let msg = msg.split_whitespace().collect::<Vec<_>>().join(" ");
         let line = match (e.line(), header_lines) {
             (Some(l), Some(h)) if binary && l > h => None,
             (l, _) => l,

@@ -67,7 +67,7 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     let mut dropped = 0usize;
     for (k, tri) in reader.enumerate() {
         let tri = tri.map_err(|e| ctx.invalid(None, format!("{kind}, facet {k}: {e}")))?;
-        let mut idx = [0i64; 3];
+        let mut keys = [[0u32; 3]; 3];
         for (c, v) in tri.vertices.iter().enumerate() {
             let p = v.0;
             if p.iter().any(|x| !x.is_finite()) {
@@ -77,17 +77,20 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
                 ));
             }
             // `+ 0.0` turns -0 into +0 so equal numbers weld.
-            let key = p.map(|x| (x + 0.0).to_bits());
-            let next = positions.len();
-            let i = *weld.entry(key).or_insert(next);
-            if i == next {
-                positions.push(p.map(f64::from));
-            }
-            idx[c] = i as i64;
+            keys[c] = p.map(|x| (x + 0.0).to_bits());
         }
-        if idx[0] == idx[1] || idx[1] == idx[2] || idx[0] == idx[2] {
+        if keys[0] == keys[1] || keys[1] == keys[2] || keys[0] == keys[2] {
             dropped += 1;
             continue;
+        }
+        let mut idx = [0i64; 3];
+        for (c, v) in tri.vertices.iter().enumerate() {
+            let next = positions.len();
+            let i = *weld.entry(keys[c]).or_insert(next);
+            if i == next {
+                positions.push(v.0.map(f64::from));
+            }
+            idx[c] = i as i64;
         }
         faces.push(&idx, None);
     }
