@@ -103,3 +103,47 @@ pub fn mixed_voronoi_corner_areas(p: [[f64; 3]; 3], area: f64) -> [f64; 3] {
         (l2[b] * cot[b] + l2[a] * cot[a]) / 8.0
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mixed_voronoi_matches_meyer_on_acute_and_obtuse_triangles() {
+        // Equilateral: each corner gets a third.
+        let s3 = 3f64.sqrt();
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, s3 / 2.0, 0.0]];
+        let a = s3 / 4.0;
+        for q in mixed_voronoi_corner_areas(p, a) {
+            assert!((q - a / 3.0).abs() < 1e-15);
+        }
+        // Obtuse at corner 2.
+        let p = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 0.1, 0.0]];
+        let q = mixed_voronoi_corner_areas(p, 0.1);
+        assert_eq!(q, [0.025, 0.025, 0.05]);
+    }
+
+    #[test]
+    fn fem_mass_rows_sum_to_barycentric_and_total_area() {
+        let m = Mesh::new(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 1.0, 0.3],
+            ],
+            vec![[0, 1, 2], [1, 3, 2]],
+        )
+        .unwrap();
+        let fem = mass_matrix(&m, MassKind::Fem);
+        let bary = mass_matrix(&m, MassKind::Barycentric);
+        let rs = fem.row_sums();
+        for (i, r) in rs.iter().enumerate() {
+            assert!((r - bary.get(i, i)).abs() < 1e-15);
+        }
+        let total: f64 = fem.values().iter().sum();
+        assert!((total - m.area()).abs() < 1e-14);
+        assert_eq!(fem.get(0, 3), 0.0);
+        assert!(fem.get(1, 2) > fem.get(0, 1));
+    }
+}

@@ -84,3 +84,55 @@ pub fn uniform_laplacian(mesh: &Mesh) -> SparseMatrix {
     let w: Vec<(usize, usize, f64)> = e.into_iter().map(|(i, j)| (i, j, 1.0)).collect();
     assemble_laplacian(mesh.n_vertices(), &w)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn regular_tetrahedron_has_cot60_weights() {
+        let s3 = 3f64.sqrt();
+        let m = Mesh::new(
+            vec![
+                [1.0, 1.0, 1.0],
+                [1.0, -1.0, -1.0],
+                [-1.0, 1.0, -1.0],
+                [-1.0, -1.0, 1.0],
+            ],
+            vec![[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]],
+        )
+        .unwrap();
+        let s = cotan_stiffness(&m);
+        // Each edge has two opposite 60 degree angles: S(i,j) = -(2 / sqrt 3) / 2.
+        for i in 0..4 {
+            for j in 0..4 {
+                let want = if i == j { 3.0 / s3 } else { -1.0 / s3 };
+                assert!((s.get(i, j) - want).abs() < 1e-15, "({i},{j})");
+            }
+        }
+        let u = uniform_laplacian(&m);
+        assert_eq!(u.get(0, 0), 3.0);
+        assert_eq!(u.get(0, 1), -1.0);
+    }
+
+    #[test]
+    fn boundary_edge_has_one_angle_and_degenerate_triangle_contributes_nothing() {
+        // Right isosceles triangle: the hypotenuse sees the right angle (cot 0), each leg
+        // sees a 45 degree angle (cot 1).
+        let m = Mesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
+        let s = cotan_stiffness(&m);
+        assert!((s.get(0, 1) + 0.5).abs() < 1e-15);
+        assert!((s.get(0, 2) + 0.5).abs() < 1e-15);
+        assert!(s.get(1, 2).abs() < 1e-15);
+        let flat = Mesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
+        assert_eq!(cotan_stiffness(&flat).max_abs(), 0.0);
+    }
+}

@@ -1,0 +1,122 @@
+#!/usr/bin/env python3
+"""Conformance: our stiffness and mass matrices against libigl.
+
+For every mesh given on the command line this runs
+`spectral-mesh operators MESH --out DIR` (our CLI), reads the exported
+triangulated mesh and Matrix Market files, and compares:
+
+  S                 == -igl.cotmatrix(V, F)
+  B_fem             == igl.massmatrix(V, F, MASSMATRIX_TYPE_FULL)
+  B_barycentric     == igl.massmatrix(V, F, MASSMATRIX_TYPE_BARYCENTRIC)
+  B_mixed_voronoi   == igl.massmatrix(V, F, MASSMATRIX_TYPE_VORONOI)
+
+to 1e-12 of the largest entry. libigl gets the very vertex and face arrays we
+used (our reader's triangulation), so the comparison is of the operators alone.
+Where libigl can read the original file itself, its arrays are also compared
+with ours (a check of our reader).
+
+Exit status: 0 when every compared mesh passes, 1 otherwise.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import igl
+import numpy as np
+import scipy.io
+import scipy.sparse as sp
+
+TOL = 1e-12
+
+
+def read_plain_off(path):
+    """Reads the plain OFF our CLI writes (header, counts, coordinates, triangles)."""
+    with open(path) as f:
+        tokens = [t for line in f for t in line.split("#", 1)[0].split()]
+    assert tokens[0] == "OFF", f"{path}: not a plain OFF"
+    nv, nf = int(tokens[1]), int(tokens[2])
+    pos = 4
+    V = np.array(tokens[pos : pos + 3 * nv], dtype=np.float64).reshape(nv, 3)
+    pos += 3 * nv
+    F = np.empty((nf, 3), dtype=np.int64)
+    for i in range(nf):
+        k = int(tokens[pos])
+        assert k == 3, f"{path}: face {i} is not a triangle"
+        F[i] = [int(x) for x in tokens[pos + 1 : pos + 4]]
+        pos += 4
+    return V, F
+
+
+def rel_err(ours, theirs):
+    ours = sp.csc_matrix(ours)
+    theirs = sp.csc_matrix(theirs)
+    scale = max(abs(theirs).max(), 1e-300)
+    return abs(ours - theirs).max() / scale
+
+
+def compare(cli, mesh, workdir):
+    out = os.path.join(workdir, os.path.basename(mesh) + ".ops")
+    proc = subprocess.run(
+        [cli, "operators", mesh, "--out", out, "--force"],
+        capture_output=True,
+        text=True,
+    )
+    if proc.returncode != 0:
+        return {"mesh": mesh, "status": "refused by spectral-mesh", "reason": proc.stderr.strip()}
+    V, F = read_plain_off(os.path.join(out, "mesh.off"))
+    res = {"mesh": os.path.basename(mesh), "n": int(V.shape[0]), "m": int(F.shape[0])}
+    S = scipy.io.mmread(os.path.join(out, "S.mtx"))
+    res["S"] = rel_err(S, -igl.cotmatrix(V, F))
+    kinds = {
+        "B_fem": igl.MASSMATRIX_TYPE_FULL,
+        "B_barycentric": igl.MASSMATRIX_TYPE_BARYCENTRIC,
+        "B_mixed_voronoi": igl.MASSMATRIX_TYPE_VORONOI,
+    }
+    for name, kind in kinds.items():
+        B = scipy.io.mmread(os.path.join(out, name + ".mtx"))
+        res[name] = rel_err(B, igl.massmatrix(V, F, kind))
+    # Symmetry to the last bit and S 1 = 0 (relative to the largest entry).
+    S = sp.csc_matrix(S)
+    res["S_asym"] = abs(S - S.T).max()
+    res["S_rowsum"] = abs(S @ np.ones(S.shape[0])).max() / abs(S).max()
+    try:
+        Vi, Fi = igl.read_triangle_mesh(mesh)
+        if Vi.shape == V.shape and Fi.shape == F.shape:
+            res["reader_max_diff"] = float(abs(Vi - V).max()) + float(abs(Fi - F).max())
+    except Exception:  # libigl cannot read every file we can
+        pass
+    keys = ["S", "B_fem", "B_barycentric", "B_mixed_voronoi", "S_rowsum"]
+    res["status"] = "pass" if all(res[k] <= TOL for k in keys) and res["S_asym"] == 0 else "FAIL"
+    if res.get("reader_max_diff", 0) > 0:
+        res["status"] = "FAIL"
+    return res
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--cli", required=True, help="path to the spectral-mesh binary")
+    ap.add_argument("--min-meshes", type=int, default=15)
+    ap.add_argument("meshes", nargs="+")
+    args = ap.parse_args()
+    failures, compared = 0, 0
+    with tempfile.TemporaryDirectory() as work:
+        for m in args.meshes:
+            r = compare(args.cli, m, work)
+            print(json.dumps(r, default=float))
+            if r["status"] == "pass":
+                compared += 1
+            elif r["status"] == "FAIL":
+                compared += 1
+                failures += 1
+    print(f"operators vs libigl: {compared - failures} passed, {failures} failed")
+    if compared < args.min_meshes:
+        print(f"only {compared} meshes compared, need at least {args.min_meshes}")
+        return 1
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Runs every test: format and lint checks, the Rust test suite, and the conformance
+# suite against libigl and SciPy (installed into .venv on first use).
+#
+# Real meshes: set SPECTRAL_MESH_SHARED_MESHES to the folder of shared meshes
+# (.ci/run sets it to ../shared/meshes). Unset, the tests that need them say they
+# were skipped; set to a missing folder, they fail.
+set -uo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+cd "$root"
+passed=0
+failed=0
+failures=()
+step() {
+  local name="$1"; shift
+  echo "=== $name"
+  local t0=$SECONDS
+  if "$@"; then
+    passed=$((passed + 1)); echo "--- ok: $name ($((SECONDS - t0)) s)"
+  else
+    failed=$((failed + 1)); failures+=("$name"); echo "--- FAILED: $name ($((SECONDS - t0)) s)"
+  fi
+}
+
+if [ -n "${SPECTRAL_MESH_SHARED_MESHES:-}" ] && [ ! -d "$SPECTRAL_MESH_SHARED_MESHES" ]; then
+  echo "SPECTRAL_MESH_SHARED_MESHES=$SPECTRAL_MESH_SHARED_MESHES is not a folder" >&2
+  exit 1
+fi
+
+step "cargo fmt --check" cargo fmt --all -- --check
+step "cargo clippy" cargo clippy --workspace --all-targets --quiet -- -D warnings
+step "cargo test" cargo test --workspace --quiet
+step "build release CLI" cargo build --release --quiet -p spectral-mesh-cli
+cli="$root/target/release/spectral-mesh"
+
+py="$(bash scripts/setup-python.sh)" || { echo "python peers could not be installed"; exit 1; }
+if [ -n "${SPECTRAL_MESH_SHARED_MESHES:-}" ]; then
+  meshes=("$SPECTRAL_MESH_SHARED_MESHES"/*.off)
+  step "conformance: operators vs libigl" "$py" conformance/operators_libigl.py --cli "$cli" "${meshes[@]}"
+else
+  echo "skipped: conformance on shared meshes (SPECTRAL_MESH_SHARED_MESHES unset)"
+fi
+for s in conformance/check_*.sh; do
+  [ -e "$s" ] || continue
+  step "conformance: $(basename "$s" .sh)" bash "$s" "$cli" "$py"
+done
+
+echo
+if [ "$failed" -gt 0 ]; then
+  printf 'failed step: %s\n' "${failures[@]}"
+fi
+echo "test steps: $passed passed, $failed failed"
+[ "$failed" -eq 0 ]
