@@ -1,5 +1,7 @@
 //! Reading every supported format and variant, and format detection.
 
+#![allow(clippy::unwrap_used)]
+
 use spectral_mesh::io::{MeshFormat, read_mesh_from_bytes};
 
 fn load(text: &str, name: &str) -> spectral_mesh::io::LoadedMesh {

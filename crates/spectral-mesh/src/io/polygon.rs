@@ -57,7 +57,8 @@ pub fn triangulate_polygon(
     for i in 0..k {
         extent = extent.max(norm(sub(positions[poly[i]], positions[poly[0]])));
     }
-    if !(norm(nrm) > 1e-14 * extent * extent) {
+    let nn = norm(nrm);
+    if nn.is_nan() || nn <= 1e-14 * extent * extent {
         fan(out);
         return false;
     }
