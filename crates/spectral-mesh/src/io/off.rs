@@ -83,7 +83,10 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
             lx.next_token();
             return Err(ctx.invalid(
                 Some(lx.last_line()),
-                format!("expected an OFF header such as OFF or COFF, found '{}'", show(first)),
+                format!(
+                    "expected an OFF header such as OFF or COFF, found '{}'",
+                    show(first)
+                ),
             ));
         }
     };
@@ -99,7 +102,10 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
             Some(v) if v >= 0 => Ok(v as usize),
             _ => Err(ctx.invalid(
                 Some(lx.last_line()),
-                format!("the {what} count '{}' is not a non-negative integer", show(t)),
+                format!(
+                    "the {what} count '{}' is not a non-negative integer",
+                    show(t)
+                ),
             )),
         }
     };
@@ -115,9 +121,7 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
         }
     } else {
         let mut probe = lx.clone();
-        let alone = probe
-            .next_token()
-            .is_some_and(|t| parse_i64(t).is_some())
+        let alone = probe.next_token().is_some_and(|t| parse_i64(t).is_some())
             && probe.next_on_line().is_none();
         if alone {
             lx = probe;

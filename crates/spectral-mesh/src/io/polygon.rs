@@ -1,6 +1,6 @@
 //! Polygon triangulation used by every reader.
 
-use crate::mesh::{cross, dot, normalize, norm, sub};
+use crate::mesh::{cross, dot, norm, normalize, sub};
 
 /// Largest polygon triangulated by ear clipping; bigger ones get a fan.
 const MAX_EAR_CLIPPING: usize = 200;
@@ -150,7 +150,12 @@ mod tests {
 
     #[test]
     fn convex_quad_keeps_winding_and_area() {
-        let p = vec![[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let p = vec![
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
         let mut out = Vec::new();
         assert!(triangulate_polygon(&p, &[0, 1, 2, 3], &mut out));
         assert_eq!(out.len(), 2);

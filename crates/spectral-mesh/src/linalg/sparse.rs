@@ -188,6 +188,7 @@ impl SparseMatrix {
 
     /// `y = A x`. For a symmetric matrix this is computed by columns in parallel as
     /// `y_i = sum_j A(j, i) x_j` (a row of A^T), which equals `A x`.
+    #[allow(clippy::needless_range_loop)]
     pub fn mul_vec(&self, x: &[f64]) -> Vec<f64> {
         assert_eq!(x.len(), self.ncols);
         let mut y = vec![0.0; self.nrows];
@@ -276,6 +277,7 @@ impl SparseMatrix {
     }
 
     /// Dense copy, column-major `nrows x ncols` (for tests and tiny problems).
+    #[allow(clippy::needless_range_loop)]
     pub fn to_dense(&self) -> Vec<Vec<f64>> {
         let mut d = vec![vec![0.0; self.ncols]; self.nrows];
         for c in 0..self.ncols {

@@ -137,7 +137,10 @@ fn catmull_clark(pos: &[[f64; 3]], quads: &[[usize; 4]]) -> (Vec<[f64; 3]>, Vec<
             if f1 == usize::MAX {
                 scale(add(pos[a], pos[b]), 0.5)
             } else {
-                scale(add(add(pos[a], pos[b]), add(face_pt[f0], face_pt[f1])), 0.25)
+                scale(
+                    add(add(pos[a], pos[b]), add(face_pt[f0], face_pt[f1])),
+                    0.25,
+                )
             }
         })
         .collect();
