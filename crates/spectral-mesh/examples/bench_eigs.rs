@@ -5,6 +5,8 @@
 //! Prints one line of `key=value` pairs: n, k, seconds (assembly excluded, factorization
 //! included), iterations, solves, max residual, orthogonality error, peak RSS.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use std::path::PathBuf;
 use std::time::Instant;
 

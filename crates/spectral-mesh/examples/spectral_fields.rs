@@ -7,6 +7,8 @@
 //! `commute_<i>.txt` (n). The basis comes from `compute_eigenbasis` (the engine every
 //! command uses: dense for small meshes, block shift-invert above).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use std::error::Error;
 use std::fs;
 use std::io::Write;
@@ -95,7 +97,8 @@ fn main() -> Result<(), Box<dyn Error>> {
         k,
         ..Default::default()
     };
-    let basis = spectral_mesh::spectral::eigenbasis::compute_eigenbasis(&ops, &params, &mut |_| {})?;
+    let basis =
+        spectral_mesh::spectral::eigenbasis::compute_eigenbasis(&ops, &params, &mut |_| {})?;
     write(&out.join("eigenvalues.txt"), &basis.values)?;
     for &a in &anchors {
         write(
