@@ -29,7 +29,7 @@ use std::str::FromStr;
 /// Largest number of output pixels accepted (`width * height`).
 pub const MAX_PIXELS: u64 = 1 << 26;
 /// Largest number of supersampled samples; `supersample` is lowered to stay under it.
-pub const MAX_SAMPLES: u64 = 1 << 26;
+pub const MAX_SAMPLES: u64 = 1 << 25;
 
 /// Viewing direction.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -118,6 +118,50 @@ pub enum Background {
     Transparent,
     /// Opaque colour.
     Color([u8; 3]),
+}
+
+impl FromStr for Background {
+    type Err = RenderError;
+
+    /// `white | transparent | #rrggbb`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let low = s.trim().to_ascii_lowercase();
+        match low.as_str() {
+            "white" => return Ok(Background::White),
+            "transparent" | "none" => return Ok(Background::Transparent),
+            _ => {}
+        }
+        let bad = || RenderError::InvalidOption(format!("unknown background '{s}'"));
+        let hex = low.strip_prefix('#').ok_or_else(bad)?;
+        if hex.len() != 6 || !hex.is_ascii() {
+            return Err(bad());
+        }
+        let ch = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).map_err(|_| bad());
+        Ok(Background::Color([ch(0)?, ch(2)?, ch(4)?]))
+    }
+}
+
+impl FromStr for Projection {
+    type Err = RenderError;
+
+    /// `orthographic | ortho | perspective` (40° field of view) `| perspective:FOV`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let low = s.trim().to_ascii_lowercase();
+        let bad = || RenderError::InvalidOption(format!("unknown projection '{s}'"));
+        match low.as_str() {
+            "orthographic" | "ortho" => Ok(Projection::Orthographic),
+            "perspective" => Ok(Projection::Perspective { fov_deg: 40.0 }),
+            _ => {
+                let fov = low.strip_prefix("perspective:").ok_or_else(bad)?;
+                let fov: f64 = fov.trim().parse().map_err(|_| bad())?;
+                if fov.is_finite() && fov > 0.0 && fov < 180.0 {
+                    Ok(Projection::Perspective { fov_deg: fov })
+                } else {
+                    Err(bad())
+                }
+            }
+        }
+    }
 }
 
 /// Rendering parameters. `Default`: 800×800, iso view, orthographic, white background,

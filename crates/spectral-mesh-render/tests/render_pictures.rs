@@ -367,6 +367,20 @@ fn perspective_and_named_views_fit_the_shape() {
         }
     }
     assert!("sideways".parse::<View>().is_err());
+    assert_eq!(
+        "#ff8000".parse::<Background>().unwrap(),
+        Background::Color([255, 128, 0])
+    );
+    assert_eq!(
+        "transparent".parse::<Background>().unwrap(),
+        Background::Transparent
+    );
+    assert!("#ff80".parse::<Background>().is_err());
+    assert_eq!(
+        "perspective:30".parse::<Projection>().unwrap(),
+        Projection::Perspective { fov_deg: 30.0 }
+    );
+    assert!("fisheye".parse::<Projection>().is_err());
 }
 
 #[test]
