@@ -404,6 +404,32 @@ fn bad_inputs_are_errors() {
 }
 
 #[test]
+fn tiny_and_odd_sizes_do_not_panic() {
+    let mesh = sphere(1.0, 8, 16);
+    let field: Vec<f64> = mesh.positions().iter().map(|p| p[0]).collect();
+    let mut scene = Scene::with_field(&mesh, &field, Colormap::Viridis, None);
+    scene.level_sets = extract_level_sets(&mesh, &field, &[0.0, 0.5]);
+    scene.markers = vec![Marker {
+        position: [1.0, 0.0, 0.0],
+        kind: MarkerKind::Maximum,
+    }];
+    for (w, h) in [(1, 1), (2, 3), (7, 1), (41, 5), (300, 17)] {
+        for ss in [1, 4] {
+            let o = RenderOptions {
+                supersample: ss,
+                marker_radius: 0.5,
+                line_width: 9.0,
+                ..opts(w, h)
+            };
+            let img = render_scene(&scene, &o).unwrap();
+            assert_eq!((img.width, img.height), (w, h));
+            assert_eq!(img.rgba.len(), (w * h * 4) as usize);
+            assert!(img.png_bytes().unwrap().starts_with(b"\x89PNG"));
+        }
+    }
+}
+
+#[test]
 fn png_round_trip() {
     let mesh = sphere(1.0, 12, 24);
     let img = render_scene(&Scene::new(&mesh), &opts(64, 48)).unwrap();
