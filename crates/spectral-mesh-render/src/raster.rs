@@ -559,7 +559,7 @@ pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Image, Render
     // Level-set lines.
     let ppu = cam.pixels_per_unit();
     let line_half = 0.5 * f64::from(opts.line_width.max(0.0)) * ss_f;
-    let line_bias = (0.01 * cam.radius + 2.5 * f64::from(opts.line_width) / ppu) as f32;
+    let line_bias = (0.01 * cam.radius + 4.0 / (ppu * ss_f)) as f32;
     let lc = opts.line_color;
     for ls in &scene.level_sets {
         for seg in &ls.segments {
@@ -725,8 +725,31 @@ fn fast_u8(v: f32) -> u8 {
     (v * 255.0 + 0.5) as u8
 }
 
-/// A thick segment (capsule of half-width `half` samples) in the supersampled buffer,
-/// depth-tested against the surface with `bias`.
+/// Whether a line point at sample `(x, y)` with depth `z` is visible: the surface sample
+/// under it is not nearer by more than `bias`; where no surface is under it (past a
+/// silhouette), the nearest surface within two samples decides.
+fn line_point_visible(buf: &Buffers, x: f64, y: f64, z: f32, bias: f32) -> bool {
+    if !x.is_finite() || !y.is_finite() {
+        return false;
+    }
+    let xi = x.floor().clamp(0.0, buf.w as f64 - 1.0) as usize;
+    let yi = y.floor().clamp(0.0, buf.h as f64 - 1.0) as usize;
+    let d = buf.depth[yi * buf.w + xi];
+    if d != f32::NEG_INFINITY {
+        return z + bias >= d;
+    }
+    let mut near = f32::NEG_INFINITY;
+    for yy in yi.saturating_sub(2)..=(yi + 2).min(buf.h - 1) {
+        for xx in xi.saturating_sub(2)..=(xi + 2).min(buf.w - 1) {
+            near = near.max(buf.depth[yy * buf.w + xx]);
+        }
+    }
+    near == f32::NEG_INFINITY || z + bias >= near
+}
+
+/// A thick segment (capsule of half-width `half` samples) in the supersampled buffer.
+/// Each pixel takes the visibility of the nearest point of the segment's centre line, so
+/// the line keeps its width on steep surfaces and hidden parts stay hidden.
 fn draw_segment(buf: &mut Buffers, a: [f64; 3], b: [f64; 3], half: f64, bias: f32, c: [u8; 3]) {
     if half <= 0.0 || a.iter().chain(&b).any(|v| !v.is_finite()) {
         return;
@@ -750,15 +773,13 @@ fn draw_segment(buf: &mut Buffers, a: [f64; 3], b: [f64; 3], half: f64, bias: f3
             } else {
                 0.0
             };
-            let (qx, qy) = (a[0] + u * dx - x, a[1] + u * dy - y);
-            if qx * qx + qy * qy > h2 {
+            let (qx, qy) = (a[0] + u * dx, a[1] + u * dy);
+            if (qx - x).powi(2) + (qy - y).powi(2) > h2 {
                 continue;
             }
             let z = (a[2] + u * (b[2] - a[2])) as f32;
-            let i = py * buf.w + px;
-            let d = buf.depth[i];
-            if d == f32::NEG_INFINITY || z + bias >= d {
-                buf.rgba[i] = [c[0], c[1], c[2], 255];
+            if line_point_visible(buf, qx, qy, z, bias) {
+                buf.rgba[py * buf.w + px] = [c[0], c[1], c[2], 255];
             }
         }
     }

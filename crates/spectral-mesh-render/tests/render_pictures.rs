@@ -244,6 +244,38 @@ fn hidden_level_sets_are_occluded() {
 }
 
 #[test]
+fn hidden_lines_do_not_leak_past_the_silhouette() {
+    // A level set just behind the silhouette circle of a sphere seen from the front.
+    let mesh = sphere(1.0, 64, 128);
+    let field: Vec<f64> = mesh.positions().iter().map(|p| p[2]).collect();
+    let mut scene = Scene::new(&mesh);
+    scene.vertex_colors = vec![[1.0, 1.0, 1.0]; mesh.n_vertices()];
+    scene.level_sets = extract_level_sets(&mesh, &field, &[-0.06]);
+    let o = RenderOptions {
+        line_width: 4.0,
+        ambient: 1.0,
+        diffuse: 0.0,
+        ..opts(200, 200)
+    };
+    let img = render_scene(&scene, &o).unwrap();
+    let dark = img
+        .rgba
+        .chunks_exact(4)
+        .filter(|c| c[0] < 100 && c[3] == 255)
+        .count();
+    assert_eq!(dark, 0, "hidden ring leaked {dark} dark pixels");
+    // The same ring just in front of the silhouette is drawn.
+    scene.level_sets = extract_level_sets(&mesh, &field, &[0.06]);
+    let img = render_scene(&scene, &o).unwrap();
+    let dark = img
+        .rgba
+        .chunks_exact(4)
+        .filter(|c| c[0] < 100 && c[3] == 255)
+        .count();
+    assert!(dark > 300, "{dark}");
+}
+
+#[test]
 fn markers_appear_at_projected_positions_when_visible() {
     let mesh = sphere(1.0, 32, 64);
     let mut scene = Scene::new(&mesh);
