@@ -1,10 +1,10 @@
 //! Sparse Cholesky factorization (faer, AMD ordering, supernodal) with the symbolic
 //! analysis kept so that a matrix with the same pattern refactors cheaply.
 
-use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{MatMut, Side};
+use faer::linalg::solvers::Solve;
 
 use super::SparseMatrix;
 
@@ -33,8 +33,13 @@ pub struct SparseCholesky {
 }
 
 fn view(a: &SparseMatrix) -> Result<SparseColMatRef<'_, usize, f64>, CholeskyError> {
-    let sym =
-        SymbolicSparseColMatRef::new_checked(a.nrows(), a.ncols(), a.col_ptr(), None, a.row_idx());
+    let sym = SymbolicSparseColMatRef::new_checked(
+        a.nrows(),
+        a.ncols(),
+        a.col_ptr(),
+        None,
+        a.row_idx(),
+    );
     Ok(SparseColMatRef::new(sym, a.values()))
 }
 
