@@ -12,6 +12,7 @@ use spectral_mesh::Operators;
 use spectral_mesh::io::read_mesh;
 use spectral_mesh::linalg::{SparseEigenOptions, sparse_generalized_eigen};
 use spectral_mesh::operators::Laplacian;
+use spectral_mesh::spectral::store::{BasisMeta, save_npz};
 use spectral_mesh::spectral::eigenbasis::{
     EigenMethod, EigenParams, EigenProgress, compute_eigenbasis,
 };
@@ -156,7 +157,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         peak_rss_mib()
     );
     if let Some(o) = out {
-        std::fs::write(&o, format!("{:?}", basis.values))?;
+        let meta = BasisMeta::new(&basis, Some(&mesh), &params);
+        save_npz(&basis, &o, &meta)?;
     }
     Ok(())
 }

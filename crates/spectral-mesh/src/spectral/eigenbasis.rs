@@ -114,10 +114,10 @@ impl Default for EigenParams {
 
 /// Problems up to this many (free) vertices always use the dense path under
 /// [`EigenMethod::Auto`].
-pub const DENSE_MAX_N: usize = 1000;
+pub const DENSE_MAX_N: usize = 300;
 /// Problems up to this size use the dense path under [`EigenMethod::Auto`] when `k` is more
 /// than a third of `n`.
-pub const DENSE_MAX_N_LARGE_K: usize = 4000;
+pub const DENSE_MAX_N_LARGE_K: usize = 1500;
 
 /// The `k` smallest pairs of `S x = lambda B x` (S positive semi-definite, B the mass of
 /// `ops`): eigenvalues ascending, eigenvectors B-orthonormal with the sign rule of
