@@ -5,4 +5,6 @@ pub mod experiment;
 pub mod info;
 pub mod operators;
 pub mod render;
+pub mod run;
 pub mod shapes;
+pub mod study;
