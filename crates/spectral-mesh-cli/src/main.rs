@@ -34,6 +34,12 @@ enum Command {
     Operators(commands::operators::Args),
     /// Draw a per-vertex field: PNG picture, VRML scene, coloured PLY.
     Render(commands::render::Args),
+    /// Compute an eigenbasis, check it and save it (.npz), its eigenvalues and a plot.
+    Eigs(commands::eigs::Args),
+    /// Heat kernel: the basis function K_t e_V or the diffusion of a signal.
+    Heat(commands::heat::Args),
+    /// Filtered spectral distances from a vertex (and all pairs for small meshes).
+    Distance(commands::distance::Args),
     /// Run one of the paper's experiments with its defaults and outputs.
     #[command(subcommand)]
     Experiment(commands::experiment::Experiment),
@@ -47,6 +53,9 @@ fn main() -> std::process::ExitCode {
         Command::Convert(a) => commands::convert::run(a),
         Command::Operators(a) => commands::operators::run(a),
         Command::Render(a) => commands::render::run(a),
+        Command::Eigs(a) => commands::eigs::run(a),
+        Command::Heat(a) => commands::heat::run(a),
+        Command::Distance(a) => commands::distance::run(a),
         Command::Experiment(e) => commands::experiment::run(e),
     };
     match result {

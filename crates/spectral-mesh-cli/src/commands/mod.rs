@@ -1,6 +1,9 @@
 //! One module per subcommand: an `Args` struct (clap) and a `run` function.
 
 pub mod convert;
+pub mod distance;
+pub mod eigs;
+pub mod heat;
 pub mod experiment;
 pub mod info;
 pub mod operators;
