@@ -40,6 +40,14 @@ enum Command {
     Heat(commands::heat::Args),
     /// Filtered spectral distances from a vertex (and all pairs for small meshes).
     Distance(commands::distance::Args),
+    /// Point signatures: HKS, WKS, auto-diffusion, generalized spectral function.
+    Signature(commands::signature::Args),
+    /// Segment into patches: basins of the maxima of a signature.
+    Segment(commands::segment::Args),
+    /// Spectral embedding as a mesh with the same triangles, and its coordinates.
+    Embed(commands::embed::Args),
+    /// Perturb a mesh (noise, scaling, resampling, holes, ...) and map it to the original.
+    Perturb(commands::perturb::Args),
     /// Run one of the paper's experiments with its defaults and outputs.
     #[command(subcommand)]
     Experiment(commands::experiment::Experiment),
@@ -56,6 +64,10 @@ fn main() -> std::process::ExitCode {
         Command::Eigs(a) => commands::eigs::run(a),
         Command::Heat(a) => commands::heat::run(a),
         Command::Distance(a) => commands::distance::run(a),
+        Command::Signature(a) => commands::signature::run(a),
+        Command::Segment(a) => commands::segment::run(a),
+        Command::Embed(a) => commands::embed::run(a),
+        Command::Perturb(a) => commands::perturb::run(a),
         Command::Experiment(e) => commands::experiment::run(e),
     };
     match result {

@@ -151,10 +151,10 @@ pub fn run(args: Args) -> Result<()> {
         Kind::WfemDiffusion(t) => wfem_diffusion_distances_from(&basis, source, *t),
     }
     .map_err(|e| anyhow::anyhow!("--distance {}: {e}", args.distance))?;
-    let (far, dmax) = d
-        .iter()
-        .enumerate()
-        .fold((source, 0.0f64), |b, (i, &v)| if v > b.1 { (i, v) } else { b });
+    let (far, dmax) = d.iter().enumerate().fold(
+        (source, 0.0f64),
+        |b, (i, &v)| if v > b.1 { (i, v) } else { b },
+    );
     println!(
         "{}: n = {n}; {} distance from vertex {source}, k = {} ({}){}, eigenpairs in {:.2} s",
         input.label(),

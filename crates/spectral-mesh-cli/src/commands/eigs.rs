@@ -41,10 +41,7 @@ impl BasisArgs {
             bail!("-k 0: at least one eigenpair is needed");
         }
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            bail!(
-                "--tolerance {}: must be a positive number",
-                self.tolerance
-            );
+            bail!("--tolerance {}: must be a positive number", self.tolerance);
         }
         Ok(EigenParams {
             k: self.k,
@@ -113,7 +110,8 @@ pub fn check_vertex(v: usize, mesh: &Mesh, option: &str) -> Result<()> {
 
 /// Lower-case extension of a path.
 pub fn extension(p: &Path) -> Option<String> {
-    p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase())
+    p.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
 }
 
 /// Checks before any work that every output has one of the `allowed` extensions, is
@@ -322,9 +320,7 @@ pub fn run(args: Args) -> Result<()> {
         if let Some(&(i, c)) = groups.last()
             && i + c == b.k()
         {
-            println!(
-                "note: the last cluster reaches k; it may continue beyond the computed pairs"
-            );
+            println!("note: the last cluster reaches k; it may continue beyond the computed pairs");
         }
     }
 

@@ -71,9 +71,10 @@ fn parse_indicator(text: &str) -> Result<(usize, f64)> {
     let (v, r) = text
         .split_once(',')
         .ok_or_else(|| anyhow::anyhow!("--indicator {text}: expected V,R (vertex,radius)"))?;
-    let v: usize = v.trim().parse().map_err(|_| {
-        anyhow::anyhow!("--indicator {text}: '{v}' is not a vertex index")
-    })?;
+    let v: usize = v
+        .trim()
+        .parse()
+        .map_err(|_| anyhow::anyhow!("--indicator {text}: '{v}' is not a vertex index"))?;
     let r: f64 = r
         .trim()
         .parse()
@@ -117,7 +118,9 @@ pub fn run(args: Args) -> Result<()> {
                 (
                     Some(f),
                     vec![v],
-                    format!("indicator of the ball of radius {r} around vertex {v} ({count} vertices)"),
+                    format!(
+                        "indicator of the ball of radius {r} around vertex {v} ({count} vertices)"
+                    ),
                 )
             }
             (None, None) => {
@@ -143,10 +146,11 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     let mass_out = bmass(&f);
-    let (imax, fmax) = f
-        .iter()
-        .enumerate()
-        .fold((0, f64::NEG_INFINITY), |b, (i, &v)| if v > b.1 { (i, v) } else { b });
+    let (imax, fmax) =
+        f.iter().enumerate().fold(
+            (0, f64::NEG_INFINITY),
+            |b, (i, &v)| if v > b.1 { (i, v) } else { b },
+        );
     let fmin = f.iter().copied().fold(f64::INFINITY, f64::min);
     println!(
         "{}: n = {}; {what}, t = {}{}, kernel {:?}, k = {} ({}), eigenpairs in {:.2} s",

@@ -3,9 +3,13 @@
 pub mod convert;
 pub mod distance;
 pub mod eigs;
-pub mod heat;
+pub mod embed;
 pub mod experiment;
+pub mod heat;
 pub mod info;
 pub mod operators;
+pub mod perturb;
 pub mod render;
+pub mod segment;
 pub mod shapes;
+pub mod signature;
