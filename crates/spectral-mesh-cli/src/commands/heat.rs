@@ -93,7 +93,6 @@ pub fn run(args: Args) -> Result<()> {
     if !(args.t.is_finite() && args.t >= 0.0) {
         bail!("--t {}: the time must be a finite number >= 0", args.t);
     }
-    check_outputs(&args.out, &FIGURE_EXTS, args.force)?;
     // What is diffused: None = e_anchor.
     let (signal, marks, what): (Option<Vec<f64>>, Vec<usize>, String) =
         match (&args.signal, &args.indicator) {
@@ -129,6 +128,7 @@ pub fn run(args: Args) -> Result<()> {
                 (None, vec![a], format!("basis function K_t e_{a}"))
             }
         };
+    check_outputs(&args.out, &FIGURE_EXTS, args.force)?;
     let tb = args.basis.compute(mesh, None)?;
     let solver = HeatSolver::new(
         &tb.basis,
