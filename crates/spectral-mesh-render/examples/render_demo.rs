@@ -2,6 +2,8 @@
 //!
 //! `cargo run --release -p spectral-mesh-render --example render_demo -- OUT_DIR`
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use spectral_mesh::Mesh;
 use spectral_mesh_render::*;
 use std::time::Instant;

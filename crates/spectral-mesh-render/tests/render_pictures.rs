@@ -1,5 +1,7 @@
 //! Property tests of the renderer, the VRML writer and the plots.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use spectral_mesh::Mesh;
 use spectral_mesh_render::vrml::parse_vrml;
 use spectral_mesh_render::*;

@@ -1,5 +1,7 @@
 //! Filtered spectral distances: metric axioms, closed forms, truncation, isometry, filters.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod spectral_util;
 
 use spectral_mesh::Eigenbasis;

@@ -1,5 +1,7 @@
 //! Heat kernel: exact properties on the full spectrum, references, the analytic sphere.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod spectral_util;
 
 use spectral_mesh::spectral::heat::{
