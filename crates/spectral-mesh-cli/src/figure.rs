@@ -65,6 +65,9 @@ pub struct Figure<'a> {
     pub sources: Vec<usize>,
     /// Critical points, computed once and shared by the outputs.
     pub critical: Option<CriticalPoints>,
+    /// Explicit per-vertex colours (RGB in `[0, 1]`) replacing the colour map, e.g. for
+    /// categorical labels; level sets and the colour bar are then not drawn.
+    pub colors: Option<Vec<[f32; 3]>>,
 }
 
 impl<'a> Figure<'a> {
@@ -85,6 +88,7 @@ impl<'a> Figure<'a> {
             field,
             sources,
             critical,
+            colors: None,
         })
     }
 
@@ -92,8 +96,11 @@ impl<'a> Figure<'a> {
         let cmap = args.colormap;
         let range = field_range(self.field, cmap);
         let mut scene = Scene::new(self.mesh);
-        scene.vertex_colors = field_colors(self.field, cmap, Some(range));
-        if args.levels > 0 && range.1 > range.0 {
+        scene.vertex_colors = match &self.colors {
+            Some(c) => c.clone(),
+            None => field_colors(self.field, cmap, Some(range)),
+        };
+        if self.colors.is_none() && args.levels > 0 && range.1 > range.0 {
             let vals = level_values(range.0, range.1, args.levels);
             scene.level_sets = extract_level_sets(self.mesh, self.field, &vals);
         }
@@ -117,7 +124,7 @@ impl<'a> Figure<'a> {
                 kind: MarkerKind::Source,
             });
         }
-        if !args.no_colorbar {
+        if !args.no_colorbar && self.colors.is_none() {
             scene.colorbar = Some(ColorBar {
                 min: range.0,
                 max: range.1,
@@ -155,7 +162,10 @@ impl<'a> Figure<'a> {
 
     /// Writes a PLY with per-vertex colours and the raw field as a `value` property.
     pub fn write_ply(&self, path: &Path, args: &FigureArgs) -> Result<()> {
-        let colors = field_colors(self.field, args.colormap, None)
+        let colors = self
+            .colors
+            .clone()
+            .unwrap_or_else(|| field_colors(self.field, args.colormap, None))
             .into_iter()
             .map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8))
             .collect();

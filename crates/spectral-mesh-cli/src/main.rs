@@ -35,6 +35,20 @@ enum Command {
     Operators(commands::operators::Args),
     /// Draw a per-vertex field: PNG picture, VRML scene, coloured PLY.
     Render(commands::render::Args),
+    /// Compute an eigenbasis, check it and save it (.npz), its eigenvalues and a plot.
+    Eigs(commands::eigs::Args),
+    /// Heat kernel: the basis function K_t e_V or the diffusion of a signal.
+    Heat(commands::heat::Args),
+    /// Filtered spectral distances from a vertex (and all pairs for small meshes).
+    Distance(commands::distance::Args),
+    /// Point signatures: HKS, WKS, auto-diffusion, generalized spectral function.
+    Signature(commands::signature::Args),
+    /// Segment into patches: basins of the maxima of a signature.
+    Segment(commands::segment::Args),
+    /// Spectral embedding as a mesh with the same triangles, and its coordinates.
+    Embed(commands::embed::Args),
+    /// Perturb a mesh (noise, scaling, resampling, holes, ...) and map it to the original.
+    Perturb(commands::perturb::Args),
     /// Run one of the paper's experiments with its defaults and outputs.
     #[command(subcommand)]
     Experiment(commands::experiment::Experiment),
@@ -53,6 +67,13 @@ fn main() -> std::process::ExitCode {
         Command::Convert(a) => commands::convert::run(a),
         Command::Operators(a) => commands::operators::run(a),
         Command::Render(a) => commands::render::run(a),
+        Command::Eigs(a) => commands::eigs::run(a),
+        Command::Heat(a) => commands::heat::run(a),
+        Command::Distance(a) => commands::distance::run(a),
+        Command::Signature(a) => commands::signature::run(a),
+        Command::Segment(a) => commands::segment::run(a),
+        Command::Embed(a) => commands::embed::run(a),
+        Command::Perturb(a) => commands::perturb::run(a),
         Command::Experiment(e) => commands::experiment::run(e),
         Command::Run(a) => commands::run::run(a),
         Command::Study(s) => commands::study::run(s),

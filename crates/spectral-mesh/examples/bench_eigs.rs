@@ -14,10 +14,10 @@ use spectral_mesh::Operators;
 use spectral_mesh::io::read_mesh;
 use spectral_mesh::linalg::{SparseEigenOptions, sparse_generalized_eigen};
 use spectral_mesh::operators::Laplacian;
-use spectral_mesh::spectral::store::{BasisMeta, save_npz};
 use spectral_mesh::spectral::eigenbasis::{
     EigenMethod, EigenParams, EigenProgress, compute_eigenbasis,
 };
+use spectral_mesh::spectral::store::{BasisMeta, save_npz};
 
 fn peak_rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")

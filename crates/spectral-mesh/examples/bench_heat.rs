@@ -36,7 +36,9 @@ fn main() {
     let mut state = 0x9e3779b97f4a7c15u64;
     let mut checksum = 0.0;
     for i in 0..q {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         let anchor = (state >> 33) as usize % n;
         let t = 1e-3 * (1.0 + i as f64);
         let t1 = Instant::now();

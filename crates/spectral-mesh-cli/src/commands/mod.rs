@@ -1,10 +1,17 @@
 //! One module per subcommand: an `Args` struct (clap) and a `run` function.
 
 pub mod convert;
+pub mod distance;
+pub mod eigs;
+pub mod embed;
 pub mod experiment;
+pub mod heat;
 pub mod info;
 pub mod operators;
+pub mod perturb;
 pub mod render;
 pub mod run;
+pub mod segment;
 pub mod shapes;
+pub mod signature;
 pub mod study;

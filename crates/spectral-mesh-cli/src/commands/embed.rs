@@ -1,0 +1,134 @@
+//! `spectral-mesh embed MESH --filter F --dims 3 -o embedded.off`: the spectral embedding
+//! `p -> (sqrt(w(lambda_k)) x_k(p))_k`, as a mesh with the same triangles and as coordinates.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use spectral_mesh::Mesh;
+use spectral_mesh::io::{MeshFormat, WriteOptions, write_mesh_to};
+use spectral_mesh::spectral::embedding::spectral_embedding;
+use spectral_mesh::spectral::filters::Filter;
+
+use super::distance::FILTER_HELP;
+use super::eigs::{BasisArgs, check_outputs, normalized};
+use crate::input;
+use crate::output::{check_writable, write_atomic};
+
+/// Arguments of `embed`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Mesh file or built-in shape (default: the 3-torus).
+    pub mesh: Option<String>,
+    /// The filter whose distance the embedding realizes (see below).
+    #[arg(long, default_value = "biharmonic", long_help = FILTER_HELP)]
+    pub filter: String,
+    /// Number of coordinates (pairs with non-zero weight, in basis order); the mesh
+    /// output uses the first three (missing ones are 0).
+    #[arg(long, default_value_t = 3)]
+    pub dims: usize,
+    #[command(flatten)]
+    pub basis: BasisArgs,
+    /// Use the basis as given instead of the shape scaled to unit area.
+    #[arg(long)]
+    pub no_normalize: bool,
+    /// The embedded mesh: .off, .obj, .ply or .stl (repeatable).
+    #[arg(long, short = 'o')]
+    pub out: Vec<PathBuf>,
+    /// Write the coordinates: one row per vertex, --dims columns.
+    #[arg(long)]
+    pub coords: Option<PathBuf>,
+    /// Overwrite existing outputs.
+    #[arg(long, short = 'f')]
+    pub force: bool,
+}
+
+/// Computes the embedding and writes it.
+pub fn run(args: Args) -> Result<()> {
+    let input = input::load(args.mesh.as_deref())?;
+    let mesh = &input.mesh;
+    let filter: Filter = args
+        .filter
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--filter {}: {e}", args.filter))?;
+    if args.dims == 0 {
+        bail!("--dims 0: at least one coordinate is needed");
+    }
+    if args.out.is_empty() && args.coords.is_none() {
+        bail!("nothing to write: give -o MESH and/or --coords FILE");
+    }
+    check_outputs(&args.out, &["off", "obj", "ply", "stl"], args.force)?;
+    if let Some(c) = &args.coords {
+        check_writable(c, args.force)?;
+    }
+    let tb = args.basis.compute(mesh, None)?;
+    let basis = normalized(&tb.basis, args.no_normalize);
+    let coords = spectral_embedding(&basis, &filter, args.dims)
+        .map_err(|e| anyhow::anyhow!("--filter {}: {e}", args.filter))?;
+    let got = coords.first().map_or(0, Vec::len);
+    println!(
+        "{}: n = {}, m = {}; {} embedding with {got} coordinate(s){}, k = {} ({}){}, eigenpairs in {:.2} s",
+        input.label(),
+        mesh.n_vertices(),
+        mesh.n_triangles(),
+        args.filter,
+        if got < args.dims {
+            format!(
+                " (asked for {}: the basis has only {got} pairs of non-zero weight)",
+                args.dims
+            )
+        } else {
+            String::new()
+        },
+        tb.basis.k(),
+        tb.basis.laplacian,
+        if args.no_normalize {
+            ""
+        } else {
+            ", unit-area shape"
+        },
+        tb.seconds
+    );
+    if !args.out.is_empty() {
+        let pos: Vec<[f64; 3]> = coords
+            .iter()
+            .map(|v| std::array::from_fn(|d| v.get(d).copied().unwrap_or(0.0)))
+            .collect();
+        let embedded = Mesh::new(pos, mesh.triangles().to_vec())
+            .context("the embedded positions do not form a mesh")?;
+        let (lo, hi) = embedded.bounding_box();
+        println!(
+            "embedded mesh: bounding box {:?} .. {:?}, area {}",
+            lo,
+            hi,
+            embedded.area()
+        );
+        for o in &args.out {
+            let format = MeshFormat::from_path(o)
+                .with_context(|| format!("{}: unknown mesh format", o.display()))?;
+            let mut buf = Vec::new();
+            write_mesh_to(
+                &mut buf,
+                format,
+                &embedded,
+                &WriteOptions {
+                    format: Some(format),
+                    ..Default::default()
+                },
+            )
+            .with_context(|| format!("writing {}", o.display()))?;
+            write_atomic(o, &buf)?;
+            println!("-> {}", o.display());
+        }
+    }
+    if let Some(c) = &args.coords {
+        let mut s = String::with_capacity(coords.len() * got * 24);
+        for row in &coords {
+            let r: Vec<String> = row.iter().map(|v| format!("{v:?}")).collect();
+            s.push_str(&r.join(" "));
+            s.push('\n');
+        }
+        write_atomic(c, s.as_bytes())?;
+        println!("coordinates ({} x {got}) -> {}", coords.len(), c.display());
+    }
+    Ok(())
+}
