@@ -55,7 +55,10 @@ fn s(p: &Path) -> &str {
 
 /// The number after `key` in a summary line, e.g. `number_after(out, "relative change ")`.
 fn number_after(text: &str, key: &str) -> f64 {
-    let i = text.find(key).unwrap_or_else(|| panic!("'{key}' not in {text}")) + key.len();
+    let i = text
+        .find(key)
+        .unwrap_or_else(|| panic!("'{key}' not in {text}"))
+        + key.len();
     let rest = &text[i..];
     let end = rest
         .find(|c: char| !(c.is_ascii_digit() || "+-.eE".contains(c)))
@@ -99,7 +102,10 @@ fn eigs_summary_and_eigenvalues_are_right_for_the_sphere() {
 #[test]
 fn eigs_dirichlet_refuses_a_closed_mesh_and_pins_the_disk() {
     let e = err(&["eigs", SPHERE, "-k", "5", "--dirichlet-boundary"]);
-    assert!(e.contains("--dirichlet-boundary") && e.contains("closed"), "{e}");
+    assert!(
+        e.contains("--dirichlet-boundary") && e.contains("closed"),
+        "{e}"
+    );
     let dir = tempfile::tempdir().unwrap();
     let ev = dir.path().join("ev.txt");
     let out = ok(&[
@@ -122,8 +128,20 @@ fn heat_basis_function_peaks_at_the_anchor_and_keeps_the_mass() {
     let txt = dir.path().join("h.txt");
     let png = dir.path().join("h.png");
     let out = ok(&[
-        "heat", SPHERE, "--anchor", "7", "--t", "0.05", "-k", "30", "-o", s(&txt), "-o", s(&png),
-        "--size", "200",
+        "heat",
+        SPHERE,
+        "--anchor",
+        "7",
+        "--t",
+        "0.05",
+        "-k",
+        "30",
+        "-o",
+        s(&txt),
+        "-o",
+        s(&png),
+        "--size",
+        "200",
     ]);
     let f = values(&txt);
     assert_eq!(f.len(), 162);
@@ -201,7 +219,12 @@ fn distance_is_zero_at_the_source_and_symmetric() {
     assert_eq!(fa[a], 0.0);
     assert_eq!(fb[b], 0.0);
     assert!(fa[b] > 0.0);
-    assert!((fa[b] - fb[a]).abs() <= 1e-10 * fa[b], "{} vs {}", fa[b], fb[a]);
+    assert!(
+        (fa[b] - fb[a]).abs() <= 1e-10 * fa[b],
+        "{} vs {}",
+        fa[b],
+        fb[a]
+    );
     // The .npy: header then 162 x 162 little-endian doubles, symmetric, row a = run a.
     let bytes = std::fs::read(&ap).unwrap();
     assert_eq!(&bytes[..6], b"\x93NUMPY");
@@ -485,7 +508,16 @@ fn outputs_are_never_overwritten_without_force() {
         vec!["segment", SPHERE, "-k", "5", "-o", s(&txt)],
         vec!["eigs", SPHERE, "-k", "5", "--eigenvalues-txt", s(&txt)],
         vec!["embed", SPHERE, "-k", "5", "--coords", s(&txt)],
-        vec!["perturb", SPHERE, "--apply", "scale:2", "-o", "x.off", "--map", s(&txt)],
+        vec![
+            "perturb",
+            SPHERE,
+            "--apply",
+            "scale:2",
+            "-o",
+            "x.off",
+            "--map",
+            s(&txt),
+        ],
     ] {
         let e = err(&args);
         assert!(e.contains("already exists") && e.contains("--force"), "{e}");
@@ -496,5 +528,97 @@ fn outputs_are_never_overwritten_without_force() {
     assert_eq!(values(&txt).len(), 162);
     // Unknown output types are refused before any computation.
     let e = err(&["heat", SPHERE, "-o", s(&dir.path().join("h.jpg"))]);
-    assert!(e.contains("h.jpg") && e.contains("unknown output type"), "{e}");
+    assert!(
+        e.contains("h.jpg") && e.contains("unknown output type"),
+        "{e}"
+    );
+}
+
+#[test]
+fn eigs_npz_reads_back_with_the_same_eigenvalues() {
+    let dir = tempfile::tempdir().unwrap();
+    let npz = dir.path().join("basis.npz");
+    let ev = dir.path().join("ev.txt");
+    ok(&[
+        "eigs",
+        SPHERE,
+        "-k",
+        "12",
+        "--laplacian",
+        "voronoi-cot",
+        "-o",
+        s(&npz),
+        "--eigenvalues-txt",
+        s(&ev),
+    ]);
+    let (basis, meta) = spectral_mesh::spectral::store::load_npz(&npz).unwrap();
+    let v = values(&ev);
+    assert_eq!(
+        basis.values, v,
+        "the text and the archive agree bit for bit"
+    );
+    assert_eq!(basis.n, 162);
+    assert_eq!(meta.k, 12);
+    assert_eq!(basis.laplacian.name(), "voronoi-cot");
+    assert!(basis.values[0].abs() < 1e-8);
+    // No temporary file is left behind.
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(names.len(), 2);
+    // Refuses to overwrite, and a wrong extension.
+    let e = err(&["eigs", SPHERE, "-k", "3", "-o", s(&npz)]);
+    assert!(e.contains("already exists"), "{e}");
+    let e = err(&[
+        "eigs",
+        SPHERE,
+        "-k",
+        "3",
+        "-o",
+        s(&dir.path().join("b.npy")),
+    ]);
+    assert!(e.contains(".npz"), "{e}");
+    // NumPy reads it, when available.
+    let script = format!(
+        "import numpy as np\nf = np.load(r'{}')\nprint(f['eigenvalues'].shape, f['eigenvectors'].shape)\nprint(repr(float(f['eigenvalues'][5])))",
+        npz.display()
+    );
+    match Command::new("python3").args(["-c", &script]).output() {
+        Ok(o) if o.status.success() => {
+            let text = String::from_utf8_lossy(&o.stdout);
+            assert!(text.contains("(12,) (162, 12)"), "{text}");
+            let last: f64 = text.lines().last().unwrap().trim().parse().unwrap();
+            assert_eq!(last, v[5]);
+        }
+        _ => eprintln!("skipped the NumPy check: python3 with numpy is not available"),
+    }
+}
+
+#[test]
+fn cache_is_filled_then_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let a = dir.path().join("a.txt");
+    let b = dir.path().join("b.txt");
+    let first = ok(&[
+        "distance",
+        SPHERE,
+        "-k",
+        "8",
+        "--cache",
+        s(&cache),
+        "-o",
+        s(&a),
+    ]);
+    assert!(first.contains("computed and stored in"), "{first}");
+    let second = ok(&[
+        "distance",
+        SPHERE,
+        "-k",
+        "8",
+        "--cache",
+        s(&cache),
+        "-o",
+        s(&b),
+    ]);
+    assert!(second.contains("loaded from"), "{second}");
+    assert_eq!(values(&a), values(&b));
 }
