@@ -1,5 +1,6 @@
 //! End-to-end tests of `eigs`, `heat`, `distance`, `signature`, `segment`, `embed` and
 //! `perturb`: the numbers in the files and the summaries, and the errors.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
 use std::process::{Command, Output};
