@@ -11,6 +11,6 @@ mkdir -p docs
 cp "$work/h/harmonic-map-1.png" docs/harmonic-map-3torus.png
 "$cli" experiment spectral-distance 3torus --distance biharmonic -k 100 --out "$work/d" --size 640 > /dev/null
 cp "$work/d/filtered-spectral-distance.png" docs/biharmonic-distance-3torus.png
-"$cli" experiment diffusion-basis irregular-sphere:res=4 --t 0.01 -k 100 --out "$work/b" --size 640 --view front > /dev/null
+"$cli" experiment diffusion-basis irregular-sphere:res=4 --t 0.01 -k 100 --out "$work/b" --size 640 --view 70,20 --no-critical-points > /dev/null
 cp "$work/b/diffusion-basis.png" docs/heat-basis-irregular-sphere.png
 echo "wrote docs/harmonic-map-3torus.png docs/biharmonic-distance-3torus.png docs/heat-basis-irregular-sphere.png"

@@ -3,6 +3,7 @@
 
 mod basis;
 mod commands;
+mod expfile;
 mod figure;
 mod input;
 mod output;
@@ -51,6 +52,11 @@ enum Command {
     /// Run one of the paper's experiments with its defaults and outputs.
     #[command(subcommand)]
     Experiment(commands::experiment::Experiment),
+    /// Replay an experiment file written by --save-experiment (or by hand).
+    Run(commands::run::Args),
+    /// Truncation (Fig. 12) and robustness studies.
+    #[command(subcommand)]
+    Study(commands::study::Study),
 }
 
 fn main() -> std::process::ExitCode {
@@ -69,6 +75,8 @@ fn main() -> std::process::ExitCode {
         Command::Embed(a) => commands::embed::run(a),
         Command::Perturb(a) => commands::perturb::run(a),
         Command::Experiment(e) => commands::experiment::run(e),
+        Command::Run(a) => commands::run::run(a),
+        Command::Study(s) => commands::study::run(s),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -83,6 +83,42 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut f = std::fs::File::create(format!("{out}/torus.wrl"))?;
     write_vrml(&mut f, &scene)?;
 
+    // Plots.
+    let values: Vec<f64> = (0..40).map(|i| (i as f64).powf(1.05) * 2.7).collect();
+    plots::plot_spectrum(
+        format!("{out}/spectrum.png"),
+        &values,
+        "Spectrum of the 3-torus",
+    )?;
+    plots::plot_spectrum(
+        format!("{out}/spectrum.svg"),
+        &values,
+        "Spectrum of the 3-torus",
+    )?;
+    let s: Vec<f64> = (1..400).map(|i| i as f64 * 0.25).collect();
+    let curves = vec![
+        (
+            "heat t = 0.1".to_string(),
+            s.iter().map(|&x| (x, (-0.1 * x).exp())).collect(),
+        ),
+        (
+            "bi-harmonic".to_string(),
+            s.iter().map(|&x| (x, 1.0 / (x * x))).collect::<Vec<_>>(),
+        ),
+        (
+            "commute time".to_string(),
+            s.iter().map(|&x| (x, 1.0 / x)).collect::<Vec<_>>(),
+        ),
+    ];
+    plots::plot_curves(
+        format!("{out}/filters.png"),
+        &curves,
+        "s",
+        "w(s)",
+        true,
+        "Filters",
+    )?;
+
     // Timing: ~100k triangles at 1024x1024.
     let big = torus(500, 100);
     let bf: Vec<f64> = big.positions().iter().map(|p| p[1]).collect();

@@ -127,6 +127,13 @@ impl Image {
         Ok(())
     }
 
+    /// The image encoded as PNG bytes.
+    pub fn png_bytes(&self) -> Result<Vec<u8>, RenderError> {
+        let mut v = Vec::new();
+        self.write_png(&mut v)?;
+        Ok(v)
+    }
+
     /// Writes the image to a PNG file.
     pub fn save_png(&self, path: impl AsRef<Path>) -> Result<(), RenderError> {
         let f = std::fs::File::create(path)?;

@@ -254,7 +254,7 @@ where
                 .map_err(e)?;
         }
     }
-    if curves.len() > 1 || labels.markers {
+    if curves.len() > 1 {
         chart
             .configure_series_labels()
             .label_font(("sans-serif", 16))

@@ -17,9 +17,10 @@
 //! The picture is drawn at `supersample` times the output size and box-filtered down.
 //! Pixel `(x, y)` has its centre at `(x + 0.5, y + 0.5)`, `y` downwards.
 
-use crate::colormap::{Colormap, to_u8};
+use crate::colormap::Colormap;
 use crate::text;
 use crate::{Image, RenderError};
+use rayon::prelude::*;
 use spectral_mesh::Mesh;
 use spectral_mesh::fields::level_sets::LevelSet;
 use spectral_mesh::mesh::{cross, dot, norm, normalize, sub};
@@ -28,7 +29,7 @@ use std::str::FromStr;
 /// Largest number of output pixels accepted (`width * height`).
 pub const MAX_PIXELS: u64 = 1 << 26;
 /// Largest number of supersampled samples; `supersample` is lowered to stay under it.
-pub const MAX_SAMPLES: u64 = 1 << 26;
+pub const MAX_SAMPLES: u64 = 1 << 25;
 
 /// Viewing direction.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -117,6 +118,50 @@ pub enum Background {
     Transparent,
     /// Opaque colour.
     Color([u8; 3]),
+}
+
+impl FromStr for Background {
+    type Err = RenderError;
+
+    /// `white | transparent | #rrggbb`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let low = s.trim().to_ascii_lowercase();
+        match low.as_str() {
+            "white" => return Ok(Background::White),
+            "transparent" | "none" => return Ok(Background::Transparent),
+            _ => {}
+        }
+        let bad = || RenderError::InvalidOption(format!("unknown background '{s}'"));
+        let hex = low.strip_prefix('#').ok_or_else(bad)?;
+        if hex.len() != 6 || !hex.is_ascii() {
+            return Err(bad());
+        }
+        let ch = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).map_err(|_| bad());
+        Ok(Background::Color([ch(0)?, ch(2)?, ch(4)?]))
+    }
+}
+
+impl FromStr for Projection {
+    type Err = RenderError;
+
+    /// `orthographic | ortho | perspective` (40° field of view) `| perspective:FOV`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let low = s.trim().to_ascii_lowercase();
+        let bad = || RenderError::InvalidOption(format!("unknown projection '{s}'"));
+        match low.as_str() {
+            "orthographic" | "ortho" => Ok(Projection::Orthographic),
+            "perspective" => Ok(Projection::Perspective { fov_deg: 40.0 }),
+            _ => {
+                let fov = low.strip_prefix("perspective:").ok_or_else(bad)?;
+                let fov: f64 = fov.trim().parse().map_err(|_| bad())?;
+                if fov.is_finite() && fov > 0.0 && fov < 180.0 {
+                    Ok(Projection::Perspective { fov_deg: fov })
+                } else {
+                    Err(bad())
+                }
+            }
+        }
+    }
 }
 
 /// Rendering parameters. `Default`: 800×800, iso view, orthographic, white background,
@@ -509,14 +554,12 @@ pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Image, Render
             }
         })
         .collect();
-    for tri in mesh.triangles() {
-        raster_triangle(&mut buf, &verts[tri[0]], &verts[tri[1]], &verts[tri[2]]);
-    }
+    raster_all(&mut buf, mesh.triangles(), &verts);
 
     // Level-set lines.
     let ppu = cam.pixels_per_unit();
     let line_half = 0.5 * f64::from(opts.line_width.max(0.0)) * ss_f;
-    let line_bias = (0.01 * cam.radius + 2.5 * f64::from(opts.line_width) / ppu) as f32;
+    let line_bias = (0.01 * cam.radius + 4.0 / (ppu * ss_f)) as f32;
     let lc = opts.line_color;
     for ls in &scene.level_sets {
         for seg in &ls.segments {
@@ -564,16 +607,69 @@ struct RVert {
     c: [f32; 3],
 }
 
-fn raster_triangle(buf: &mut Buffers, v0: &RVert, v1: &RVert, v2: &RVert) {
+/// Rows `[y0, y0 + rgba.len() / w)` of the supersampled buffers.
+struct Band<'a> {
+    w: usize,
+    y0: usize,
+    y1: usize,
+    rgba: &'a mut [[u8; 4]],
+    depth: &'a mut [f32],
+}
+
+/// Rasterizes all triangles, in parallel over horizontal bands of the buffer (each band
+/// draws the triangles overlapping it, in mesh order, so the result does not depend on
+/// the number of threads).
+fn raster_all(buf: &mut Buffers, tris: &[[usize; 3]], verts: &[RVert]) {
+    let threads = rayon::current_num_threads().max(1);
+    let band_h = buf.h.div_ceil(threads * 8).max(16);
+    let n_bands = buf.h.div_ceil(band_h);
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); n_bands];
+    for (t, tri) in tris.iter().enumerate() {
+        let ys = [verts[tri[0]].y, verts[tri[1]].y, verts[tri[2]].y];
+        let lo = ys[0].min(ys[1]).min(ys[2]).floor();
+        let hi = ys[0].max(ys[1]).max(ys[2]).ceil();
+        if !lo.is_finite() || !hi.is_finite() || hi < 0.0 || lo >= buf.h as f64 {
+            continue;
+        }
+        let b0 = (lo.max(0.0) as usize) / band_h;
+        let b1 = ((hi as usize).min(buf.h - 1)) / band_h;
+        for bin in &mut bins[b0..=b1.min(n_bands - 1)] {
+            bin.push(t as u32);
+        }
+    }
+    let w = buf.w;
+    let h = buf.h;
+    buf.rgba
+        .par_chunks_mut(band_h * w)
+        .zip(buf.depth.par_chunks_mut(band_h * w))
+        .zip(bins.par_iter())
+        .enumerate()
+        .for_each(|(b, ((rgba, depth), bin))| {
+            let y0 = b * band_h;
+            let mut band = Band {
+                w,
+                y0,
+                y1: (y0 + band_h).min(h),
+                rgba,
+                depth,
+            };
+            for &t in bin {
+                let [a, bb, c] = tris[t as usize];
+                raster_triangle(&mut band, &verts[a], &verts[bb], &verts[c]);
+            }
+        });
+}
+
+fn raster_triangle(buf: &mut Band, v0: &RVert, v1: &RVert, v2: &RVert) {
     let area = (v1.x - v0.x) * (v2.y - v0.y) - (v2.x - v0.x) * (v1.y - v0.y);
     if area.abs() < 1e-12 || !area.is_finite() {
         return;
     }
     let inv_area = 1.0 / area;
     let xmin = v0.x.min(v1.x).min(v2.x).floor().max(0.0);
-    let ymin = v0.y.min(v1.y).min(v2.y).floor().max(0.0);
+    let ymin = v0.y.min(v1.y).min(v2.y).floor().max(buf.y0 as f64);
     let xmax = v0.x.max(v1.x).max(v2.x).ceil().min(buf.w as f64 - 1.0);
-    let ymax = v0.y.max(v1.y).max(v2.y).ceil().min(buf.h as f64 - 1.0);
+    let ymax = v0.y.max(v1.y).max(v2.y).ceil().min(buf.y1 as f64 - 1.0);
     if xmin > xmax || ymin > ymax {
         return;
     }
@@ -593,7 +689,7 @@ fn raster_triangle(buf: &mut Buffers, v0: &RVert, v1: &RVert, v2: &RVert) {
     let eps = -1e-9;
     for py in y0..=y1 {
         let y = py as f64 + 0.5;
-        let row = py * buf.w;
+        let row = (py - buf.y0) * buf.w;
         let xs = x0 as f64 + 0.5;
         let mut b0 = e0.0 * xs + e0.1 * y + e0.2;
         let mut b1 = e1.0 * xs + e1.1 * y + e1.2;
@@ -612,7 +708,7 @@ fn raster_triangle(buf: &mut Buffers, v0: &RVert, v1: &RVert, v2: &RVert) {
                 if z > buf.depth[i] {
                     buf.depth[i] = z;
                     let (w0, w1, w2) = (w0 as f32, w1 as f32, w2 as f32);
-                    let c = |k: usize| to_u8(w0 * v0.c[k] + w1 * v1.c[k] + w2 * v2.c[k]);
+                    let c = |k: usize| fast_u8(w0 * v0.c[k] + w1 * v1.c[k] + w2 * v2.c[k]);
                     buf.rgba[i] = [c(0), c(1), c(2), 255];
                 }
             }
@@ -623,8 +719,37 @@ fn raster_triangle(buf: &mut Buffers, v0: &RVert, v1: &RVert, v2: &RVert) {
     }
 }
 
-/// A thick segment (capsule of half-width `half` samples) in the supersampled buffer,
-/// depth-tested against the surface with `bias`.
+/// `[0, 1]` to 8 bits; `as` saturates out-of-range values (and maps NaN to 0).
+#[inline]
+fn fast_u8(v: f32) -> u8 {
+    (v * 255.0 + 0.5) as u8
+}
+
+/// Whether a line point at sample `(x, y)` with depth `z` is visible: the surface sample
+/// under it is not nearer by more than `bias`; where no surface is under it (past a
+/// silhouette), the nearest surface within two samples decides.
+fn line_point_visible(buf: &Buffers, x: f64, y: f64, z: f32, bias: f32) -> bool {
+    if !x.is_finite() || !y.is_finite() {
+        return false;
+    }
+    let xi = x.floor().clamp(0.0, buf.w as f64 - 1.0) as usize;
+    let yi = y.floor().clamp(0.0, buf.h as f64 - 1.0) as usize;
+    let d = buf.depth[yi * buf.w + xi];
+    if d != f32::NEG_INFINITY {
+        return z + bias >= d;
+    }
+    let mut near = f32::NEG_INFINITY;
+    for yy in yi.saturating_sub(2)..=(yi + 2).min(buf.h - 1) {
+        for xx in xi.saturating_sub(2)..=(xi + 2).min(buf.w - 1) {
+            near = near.max(buf.depth[yy * buf.w + xx]);
+        }
+    }
+    near == f32::NEG_INFINITY || z + bias >= near
+}
+
+/// A thick segment (capsule of half-width `half` samples) in the supersampled buffer.
+/// Each pixel takes the visibility of the nearest point of the segment's centre line, so
+/// the line keeps its width on steep surfaces and hidden parts stay hidden.
 fn draw_segment(buf: &mut Buffers, a: [f64; 3], b: [f64; 3], half: f64, bias: f32, c: [u8; 3]) {
     if half <= 0.0 || a.iter().chain(&b).any(|v| !v.is_finite()) {
         return;
@@ -648,15 +773,13 @@ fn draw_segment(buf: &mut Buffers, a: [f64; 3], b: [f64; 3], half: f64, bias: f3
             } else {
                 0.0
             };
-            let (qx, qy) = (a[0] + u * dx - x, a[1] + u * dy - y);
-            if qx * qx + qy * qy > h2 {
+            let (qx, qy) = (a[0] + u * dx, a[1] + u * dy);
+            if (qx - x).powi(2) + (qy - y).powi(2) > h2 {
                 continue;
             }
             let z = (a[2] + u * (b[2] - a[2])) as f32;
-            let i = py * buf.w + px;
-            let d = buf.depth[i];
-            if d == f32::NEG_INFINITY || z + bias >= d {
-                buf.rgba[i] = [c[0], c[1], c[2], 255];
+            if line_point_visible(buf, qx, qy, z, bias) {
+                buf.rgba[py * buf.w + px] = [c[0], c[1], c[2], 255];
             }
         }
     }
@@ -701,49 +824,51 @@ fn downsample(buf: &Buffers, ss: usize, bg: Background) -> Image {
     let (w, h) = (buf.w / ss, buf.h / ss);
     let n = (ss * ss) as f32;
     let mut rgba = vec![0u8; w * h * 4];
-    for y in 0..h {
-        for x in 0..w {
-            let mut acc = [0f32; 3];
-            let mut cover = 0f32;
-            for sy in 0..ss {
-                let row = (y * ss + sy) * buf.w + x * ss;
-                for s in &buf.rgba[row..row + ss] {
-                    if s[3] != 0 {
-                        cover += 1.0;
-                        acc[0] += f32::from(s[0]);
-                        acc[1] += f32::from(s[1]);
-                        acc[2] += f32::from(s[2]);
+    rgba.par_chunks_mut(w * 4)
+        .enumerate()
+        .for_each(|(y, out_row)| {
+            for x in 0..w {
+                let mut acc = [0f32; 3];
+                let mut cover = 0f32;
+                for sy in 0..ss {
+                    let row = (y * ss + sy) * buf.w + x * ss;
+                    for s in &buf.rgba[row..row + ss] {
+                        if s[3] != 0 {
+                            cover += 1.0;
+                            acc[0] += f32::from(s[0]);
+                            acc[1] += f32::from(s[1]);
+                            acc[2] += f32::from(s[2]);
+                        }
                     }
                 }
+                let o = x * 4;
+                let px = match bg {
+                    Background::Transparent => {
+                        if cover == 0.0 {
+                            [0, 0, 0, 0]
+                        } else {
+                            let q = |v: f32| (v / cover).round().clamp(0.0, 255.0) as u8;
+                            let a = (255.0 * cover / n).round() as u8;
+                            [q(acc[0]), q(acc[1]), q(acc[2]), a]
+                        }
+                    }
+                    Background::White | Background::Color(_) => {
+                        let b = match bg {
+                            Background::Color(c) => c,
+                            _ => [255, 255, 255],
+                        };
+                        let empty = n - cover;
+                        let q = |v: f32, k: usize| {
+                            ((v + empty * f32::from(b[k])) / n)
+                                .round()
+                                .clamp(0.0, 255.0) as u8
+                        };
+                        [q(acc[0], 0), q(acc[1], 1), q(acc[2], 2), 255]
+                    }
+                };
+                out_row[o..o + 4].copy_from_slice(&px);
             }
-            let o = (y * w + x) * 4;
-            let px = match bg {
-                Background::Transparent => {
-                    if cover == 0.0 {
-                        [0, 0, 0, 0]
-                    } else {
-                        let q = |v: f32| (v / cover).round().clamp(0.0, 255.0) as u8;
-                        let a = (255.0 * cover / n).round() as u8;
-                        [q(acc[0]), q(acc[1]), q(acc[2]), a]
-                    }
-                }
-                Background::White | Background::Color(_) => {
-                    let b = match bg {
-                        Background::Color(c) => c,
-                        _ => [255, 255, 255],
-                    };
-                    let empty = n - cover;
-                    let q = |v: f32, k: usize| {
-                        ((v + empty * f32::from(b[k])) / n)
-                            .round()
-                            .clamp(0.0, 255.0) as u8
-                    };
-                    [q(acc[0], 0), q(acc[1], 1), q(acc[2], 2), 255]
-                }
-            };
-            rgba[o..o + 4].copy_from_slice(&px);
-        }
-    }
+        });
     Image {
         width: w as u32,
         height: h as u32,

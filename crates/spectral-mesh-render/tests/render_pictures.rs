@@ -1,5 +1,5 @@
 //! Property tests of the renderer, the VRML writer and the plots.
-
+#![allow(clippy::unwrap_used)]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use spectral_mesh::Mesh;
@@ -245,6 +245,38 @@ fn hidden_level_sets_are_occluded() {
 }
 
 #[test]
+fn hidden_lines_do_not_leak_past_the_silhouette() {
+    // A level set just behind the silhouette circle of a sphere seen from the front.
+    let mesh = sphere(1.0, 64, 128);
+    let field: Vec<f64> = mesh.positions().iter().map(|p| p[2]).collect();
+    let mut scene = Scene::new(&mesh);
+    scene.vertex_colors = vec![[1.0, 1.0, 1.0]; mesh.n_vertices()];
+    scene.level_sets = extract_level_sets(&mesh, &field, &[-0.06]);
+    let o = RenderOptions {
+        line_width: 4.0,
+        ambient: 1.0,
+        diffuse: 0.0,
+        ..opts(200, 200)
+    };
+    let img = render_scene(&scene, &o).unwrap();
+    let dark = img
+        .rgba
+        .chunks_exact(4)
+        .filter(|c| c[0] < 100 && c[3] == 255)
+        .count();
+    assert_eq!(dark, 0, "hidden ring leaked {dark} dark pixels");
+    // The same ring just in front of the silhouette is drawn.
+    scene.level_sets = extract_level_sets(&mesh, &field, &[0.06]);
+    let img = render_scene(&scene, &o).unwrap();
+    let dark = img
+        .rgba
+        .chunks_exact(4)
+        .filter(|c| c[0] < 100 && c[3] == 255)
+        .count();
+    assert!(dark > 300, "{dark}");
+}
+
+#[test]
 fn markers_appear_at_projected_positions_when_visible() {
     let mesh = sphere(1.0, 32, 64);
     let mut scene = Scene::new(&mesh);
@@ -368,6 +400,20 @@ fn perspective_and_named_views_fit_the_shape() {
         }
     }
     assert!("sideways".parse::<View>().is_err());
+    assert_eq!(
+        "#ff8000".parse::<Background>().unwrap(),
+        Background::Color([255, 128, 0])
+    );
+    assert_eq!(
+        "transparent".parse::<Background>().unwrap(),
+        Background::Transparent
+    );
+    assert!("#ff80".parse::<Background>().is_err());
+    assert_eq!(
+        "perspective:30".parse::<Projection>().unwrap(),
+        Projection::Perspective { fov_deg: 30.0 }
+    );
+    assert!("fisheye".parse::<Projection>().is_err());
 }
 
 #[test]
@@ -388,6 +434,32 @@ fn bad_inputs_are_errors() {
     let field = vec![f64::NAN; mesh.n_vertices()];
     let s = Scene::with_field(&mesh, &field, Colormap::Turbo, None);
     assert!(render_scene(&s, &opts(20, 20)).is_ok());
+}
+
+#[test]
+fn tiny_and_odd_sizes_do_not_panic() {
+    let mesh = sphere(1.0, 8, 16);
+    let field: Vec<f64> = mesh.positions().iter().map(|p| p[0]).collect();
+    let mut scene = Scene::with_field(&mesh, &field, Colormap::Viridis, None);
+    scene.level_sets = extract_level_sets(&mesh, &field, &[0.0, 0.5]);
+    scene.markers = vec![Marker {
+        position: [1.0, 0.0, 0.0],
+        kind: MarkerKind::Maximum,
+    }];
+    for (w, h) in [(1, 1), (2, 3), (7, 1), (41, 5), (300, 17)] {
+        for ss in [1, 4] {
+            let o = RenderOptions {
+                supersample: ss,
+                marker_radius: 0.5,
+                line_width: 9.0,
+                ..opts(w, h)
+            };
+            let img = render_scene(&scene, &o).unwrap();
+            assert_eq!((img.width, img.height), (w, h));
+            assert_eq!(img.rgba.len(), (w * h * 4) as usize);
+            assert!(img.png_bytes().unwrap().starts_with(b"\x89PNG"));
+        }
+    }
 }
 
 #[test]

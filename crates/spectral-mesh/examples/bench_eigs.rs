@@ -12,10 +12,12 @@ use std::time::Instant;
 
 use spectral_mesh::Operators;
 use spectral_mesh::io::read_mesh;
+use spectral_mesh::linalg::{SparseEigenOptions, sparse_generalized_eigen};
 use spectral_mesh::operators::Laplacian;
 use spectral_mesh::spectral::eigenbasis::{
     EigenMethod, EigenParams, EigenProgress, compute_eigenbasis,
 };
+use spectral_mesh::spectral::store::{BasisMeta, save_npz};
 
 fn peak_rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")
@@ -47,6 +49,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..Default::default()
     };
     let mut verbose = false;
+    let mut raw_soft = false;
+    let mut raw_krylov = false;
+    let mut raw_basis = 0usize;
     let mut i = 2;
     while i < args.len() {
         match args[i].as_str() {
@@ -67,6 +72,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 i += 1;
             }
             "--verbose" => verbose = true,
+            "--tol" => {
+                params.tolerance = args[i + 1].parse()?;
+                i += 1;
+            }
+            "--soft" => raw_soft = true,
+            "--krylov" => raw_krylov = true,
+            "--basis" => {
+                raw_basis = args[i + 1].parse()?;
+                i += 1;
+            }
             other => lap = other.parse()?,
         }
         i += 1;
@@ -79,6 +94,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut iterations = 0;
     let mut solves = 0;
     let mut t_fact = 0.0;
+    if raw_soft || raw_krylov || raw_basis > 0 {
+        // Solver experiments: call the sparse solver directly.
+        let opts = SparseEigenOptions {
+            k,
+            tolerance: params.tolerance,
+            block_size: params.block_size,
+            max_basis: raw_basis,
+            locking: !raw_soft && !raw_krylov,
+            krylov: raw_krylov,
+            ..Default::default()
+        };
+        let r = sparse_generalized_eigen(&ops.stiffness, &ops.mass, &opts, &mut |e| {
+            if verbose {
+                eprintln!("{:8.3}s {e:?}", t1.elapsed().as_secs_f64());
+            }
+        })?;
+        println!(
+            "raw soft={raw_soft} krylov={raw_krylov} basis={raw_basis} n={} k={k} seconds={:.3} iterations={} solves={} max_residual={:.2e} lambda_k={:.6e} peak_rss_mib={:.0}",
+            ops.n(),
+            t1.elapsed().as_secs_f64(),
+            r.iterations,
+            r.solves,
+            r.residuals.iter().cloned().fold(0.0, f64::max),
+            r.values[k - 1],
+            peak_rss_mib()
+        );
+        return Ok(());
+    }
     let basis = compute_eigenbasis(&ops, &params, &mut |e| {
         match &e {
             EigenProgress::Iteration { .. } if t_fact == 0.0 => t_fact = t1.elapsed().as_secs_f64(),
@@ -116,7 +159,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         peak_rss_mib()
     );
     if let Some(o) = out {
-        std::fs::write(&o, format!("{:?}", basis.values))?;
+        let meta = BasisMeta::new(&basis, Some(&mesh), &params);
+        save_npz(&basis, &o, &meta)?;
     }
     Ok(())
 }

@@ -14,14 +14,17 @@ use spectral_mesh::fields::harmonic::{
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::spectral::distances::{distances_from, wfem_diffusion_distances_from};
 use spectral_mesh::spectral::eigenbasis::EigenParams;
-use spectral_mesh::spectral::filters::Filter;
 use spectral_mesh::spectral::heat::{HeatSolver, KernelKind, ScaleNormalization, normalize_basis};
 use spectral_mesh::{Laplacian, Mesh};
 
+use spectral_mesh::experiments::mesh_hash;
+use spectral_mesh::mesh::validate::{RepairOptions, repair};
+
 use crate::basis;
+use crate::expfile::{DistanceSpec, ExperimentFile, figure_file, parse_distance, relative_path};
 use crate::figure::{Figure, FigureArgs};
-use crate::input::{self, Input};
-use crate::output::{prepare_outputs, write_atomic};
+use crate::input::{self, Input, Source};
+use crate::output::{check_writable, prepare_outputs, write_atomic};
 
 /// The experiments.
 #[derive(Debug, clap::Subcommand)]
@@ -51,6 +54,10 @@ pub struct Common {
     /// Repair the mesh before computing.
     #[arg(long)]
     pub repair: bool,
+    /// Also write an experiment file that reproduces this run with `run FILE.toml` (every
+    /// parameter explicit, the mesh's hash included).
+    #[arg(long, value_name = "FILE.toml")]
+    pub save_experiment: Option<PathBuf>,
     #[command(flatten)]
     pub figure: FigureArgs,
 }
@@ -163,10 +170,45 @@ fn check_vertex(v: usize, mesh: &Mesh, what: &str) -> Result<()> {
     Ok(())
 }
 
-fn mesh_json(input: &Input) -> serde_json::Value {
+/// A loaded mesh with the hash of the mesh as read (before any repair).
+pub struct Loaded {
+    /// The input (repaired when asked).
+    pub input: Input,
+    /// `mesh_hash` of the mesh as read.
+    pub hash: String,
+}
+
+/// Loads a mesh or shape, hashes it, then repairs it when asked.
+pub fn load_mesh(spec: Option<&str>, do_repair: bool) -> Result<Loaded> {
+    let mut input = input::load(spec)?;
+    let hash = mesh_hash(&input.mesh);
+    if do_repair {
+        let r = repair(&input.mesh, &RepairOptions::default())
+            .with_context(|| format!("repairing {}", input.label()))?;
+        input.mesh = r.mesh;
+        input.notes.extend(r.log);
+    }
+    Ok(Loaded { input, hash })
+}
+
+/// The name of the mesh in summaries: the file name (not the path, so that a replay from
+/// another folder writes the same summary) or the shape spec.
+fn mesh_name(input: &Input) -> String {
+    match &input.source {
+        Source::File(p) => p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| input.label()),
+        Source::Shape(s) => s.clone(),
+    }
+}
+
+fn mesh_json(loaded: &Loaded) -> serde_json::Value {
+    let input = &loaded.input;
     let topo = Topology::new(&input.mesh);
     json!({
-        "source": input.label(),
+        "source": mesh_name(input),
+        "mesh_hash": loaded.hash,
         "vertices": input.mesh.n_vertices(),
         "triangles": input.mesh.n_triangles(),
         "components": topo.n_components(),
@@ -197,13 +239,75 @@ fn critical_json(cp: &CriticalPoints, chi: i64, closed: bool) -> serde_json::Val
     })
 }
 
+/// The `mesh` entry of an experiment file saved at `file`: a shape spec as is, a mesh
+/// file relative to the experiment file's folder.
+fn mesh_entry(input: &Input, file: &Path) -> String {
+    match &input.source {
+        Source::Shape(s) => s.clone(),
+        Source::File(p) => relative_path(p, &parent_dir(file))
+            .to_string_lossy()
+            .into_owned(),
+    }
+}
+
+/// The folder of `file` (`.` for a bare name).
+pub fn parent_dir(file: &Path) -> PathBuf {
+    match file.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// The skeleton of an experiment file for `common`'s output and figure options.
+fn experiment_file(
+    experiment: &str,
+    loaded: &Loaded,
+    common: &Common,
+    file: &Path,
+    laplacian: Laplacian,
+) -> ExperimentFile {
+    ExperimentFile {
+        experiment: experiment.into(),
+        mesh: mesh_entry(&loaded.input, file),
+        mesh_hash: Some(loaded.hash.clone()),
+        repair: Some(common.repair),
+        laplacian: Some(laplacian.name().into()),
+        k: None,
+        t: None,
+        normalize: None,
+        anchor: None,
+        distance: None,
+        source: None,
+        constraints: None,
+        order: None,
+        out: Some(
+            relative_path(&common.out, &parent_dir(file))
+                .to_string_lossy()
+                .into_owned(),
+        ),
+        figure: Some(figure_file(&common.figure)),
+    }
+}
+
+/// Writes an experiment file (refusing to overwrite without `force`).
+fn save_experiment(file: &Path, f: &ExperimentFile, force: bool) -> Result<()> {
+    check_writable(file, force)?;
+    let dir = parent_dir(file);
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| anyhow::anyhow!("{}: cannot create folder: {e}", dir.display()))?;
+    write_atomic(file, f.to_toml()?.as_bytes())?;
+    println!("saved the experiment to {}", file.display());
+    Ok(())
+}
+
 fn write_json(path: &Path, v: &serde_json::Value) -> Result<()> {
     write_atomic(path, (serde_json::to_string_pretty(v)? + "\n").as_bytes())
 }
 
-fn run_harmonic(a: HarmonicArgs) -> Result<()> {
-    let input = input::load_repaired(a.mesh.as_deref(), a.common.repair)?;
-    let mesh = &input.mesh;
+/// Runs `experiment harmonic`.
+pub fn run_harmonic(a: HarmonicArgs) -> Result<()> {
+    let loaded = load_mesh(a.mesh.as_deref(), a.common.repair)?;
+    let mesh = &loaded.input.mesh;
     let topo = Topology::new(mesh);
     let chi = topo.euler_characteristic();
     let closed = topo.boundary_loops.is_empty();
@@ -223,6 +327,7 @@ fn run_harmonic(a: HarmonicArgs) -> Result<()> {
         (None, false) => Some(a.explicit.clone()),
         (None, true) => None,
     };
+    let explicit_used = explicit.clone();
     let mut maps: Vec<(Vec<Constraint>, Vec<f64>, serde_json::Value)> = Vec::new();
     match explicit {
         Some(c) => {
@@ -304,13 +409,40 @@ fn run_harmonic(a: HarmonicArgs) -> Result<()> {
     }
     let summary = json!({
         "experiment": "harmonic",
-        "mesh": mesh_json(&input),
+        "mesh": mesh_json(&loaded),
         "order": a.order,
         "laplacian": a.laplacian.name(),
         "maps": summaries,
     });
     write_json(paths.last().context("no summary path")?, &summary)?;
     println!("wrote {} files to {}", names.len(), a.common.out.display());
+    if let Some(file) = &a.common.save_experiment {
+        let mut f = experiment_file("harmonic", &loaded, &a.common, file, a.laplacian);
+        f.order = Some(a.order);
+        f.constraints = Some(match &explicit_used {
+            Some(list) => toml::Value::Array(
+                list.iter()
+                    .map(|c| {
+                        toml::Value::Table(
+                            [
+                                ("vertex".to_string(), toml::Value::Integer(c.vertex as i64)),
+                                ("value".to_string(), toml::Value::Float(c.value)),
+                            ]
+                            .into_iter()
+                            .collect(),
+                        )
+                    })
+                    .collect(),
+            ),
+            None => toml::Value::Array(
+                a.constraints
+                    .iter()
+                    .map(|&c| toml::Value::Integer(c as i64))
+                    .collect(),
+            ),
+        });
+        save_experiment(file, &f, a.common.force)?;
+    }
     Ok(())
 }
 
@@ -321,9 +453,10 @@ fn eigen_params(k: usize) -> EigenParams {
     }
 }
 
-fn run_diffusion(a: DiffusionArgs) -> Result<()> {
-    let input = input::load_repaired(a.mesh.as_deref(), a.common.repair)?;
-    let mesh = &input.mesh;
+/// Runs `experiment diffusion-basis`.
+pub fn run_diffusion(a: DiffusionArgs) -> Result<()> {
+    let loaded = load_mesh(a.mesh.as_deref(), a.common.repair)?;
+    let mesh = &loaded.input.mesh;
     let anchor = a.anchor.unwrap_or_else(|| default_vertex(mesh));
     check_vertex(anchor, mesh, "anchor")?;
     if !(a.t.is_finite() && a.t > 0.0) {
@@ -355,7 +488,7 @@ fn run_diffusion(a: DiffusionArgs) -> Result<()> {
     let cp = critical_points(mesh, &f)?;
     let summary = json!({
         "experiment": "diffusion-basis",
-        "mesh": mesh_json(&input),
+        "mesh": mesh_json(&loaded),
         "laplacian": a.laplacian.name(),
         "kernel": "K_t = X D_t X^T B (B the discretization's mass)",
         "t": a.t,
@@ -363,7 +496,6 @@ fn run_diffusion(a: DiffusionArgs) -> Result<()> {
         "k": a.k,
         "anchor": anchor,
         "eigenvalues": tb.basis.values,
-        "eigen_seconds": tb.seconds,
         "max_relative_residual": res,
         "max_orthonormality_error": orth,
         "value_at_anchor": f[anchor],
@@ -380,32 +512,25 @@ fn run_diffusion(a: DiffusionArgs) -> Result<()> {
         tb.seconds,
         a.common.out.display()
     );
+    if let Some(file) = &a.common.save_experiment {
+        let mut e = experiment_file("diffusion-basis", &loaded, &a.common, file, a.laplacian);
+        e.k = Some(a.k);
+        e.t = Some(a.t);
+        e.anchor = Some(anchor);
+        e.normalize = Some(!a.no_normalize);
+        save_experiment(file, &e, a.common.force)?;
+    }
     Ok(())
 }
 
-fn run_distance(a: DistanceArgs) -> Result<()> {
-    let input = input::load_repaired(a.mesh.as_deref(), a.common.repair)?;
-    let mesh = &input.mesh;
+/// Runs `experiment spectral-distance`.
+pub fn run_distance(a: DistanceArgs) -> Result<()> {
+    let loaded = load_mesh(a.mesh.as_deref(), a.common.repair)?;
+    let mesh = &loaded.input.mesh;
     let source = a.source.unwrap_or_else(|| default_vertex(mesh));
     check_vertex(source, mesh, "source")?;
     // eq. 15 is not a filter of the form w(lambda); everything else is.
-    let wfem_t: Option<f64> = a
-        .distance
-        .strip_prefix("wfem-diffusion")
-        .map(|rest| {
-            let t = rest.trim_start_matches(':').trim_start_matches("t=").trim();
-            if t.is_empty() {
-                Ok(0.5)
-            } else {
-                t.parse::<f64>()
-                    .map_err(|_| anyhow::anyhow!("--distance {}: bad time '{t}'", a.distance))
-            }
-        })
-        .transpose()?;
-    let filter: Option<Filter> = match wfem_t {
-        Some(_) => None,
-        None => Some(a.distance.parse::<Filter>()?),
-    };
+    let spec = parse_distance(&a.distance).with_context(|| format!("--distance {}", a.distance))?;
     let names = [
         "filtered-spectral-distance.wrl",
         "filtered-spectral-distance.png",
@@ -420,10 +545,9 @@ fn run_distance(a: DistanceArgs) -> Result<()> {
         ScaleNormalization::UnitArea
     };
     let basis = normalize_basis(&tb.basis, norm);
-    let d = match (&filter, wfem_t) {
-        (Some(f), _) => distances_from(&basis, source, f)?,
-        (None, Some(t)) => wfem_diffusion_distances_from(&basis, source, t)?,
-        (None, None) => unreachable!("either a filter or eq. 15"),
+    let d = match &spec {
+        DistanceSpec::Filter(f) => distances_from(&basis, source, f)?,
+        DistanceSpec::Wfem(t) => wfem_diffusion_distances_from(&basis, source, *t)?,
     };
     let fig = Figure::new(mesh, &d, vec![source], &a.common.figure)?;
     fig.write_wrl(&paths[0], &a.common.figure)?;
@@ -432,14 +556,13 @@ fn run_distance(a: DistanceArgs) -> Result<()> {
     let (res, orth) = basis::quality(&tb.basis);
     let summary = json!({
         "experiment": "spectral-distance",
-        "mesh": mesh_json(&input),
+        "mesh": mesh_json(&loaded),
         "distance": a.distance,
         "weight_convention": "d(p,q)^2 = sum over nonzero eigenvalues of w(lambda) (x(p) - x(q))^2, w = 1/phi",
         "laplacian": a.laplacian.name(),
         "scale_normalization": if a.no_normalize { "none" } else { "unit area" },
         "k": a.k,
         "source": source,
-        "eigen_seconds": tb.seconds,
         "max_relative_residual": res,
         "max_orthonormality_error": orth,
         "max_distance": d.iter().copied().fold(0.0, f64::max),
@@ -454,12 +577,29 @@ fn run_distance(a: DistanceArgs) -> Result<()> {
         tb.seconds,
         a.common.out.display()
     );
+    if let Some(file) = &a.common.save_experiment {
+        let mut e = experiment_file("spectral-distance", &loaded, &a.common, file, a.laplacian);
+        e.k = Some(a.k);
+        e.distance = Some(a.distance.clone());
+        e.source = Some(source);
+        e.normalize = Some(!a.no_normalize);
+        save_experiment(file, &e, a.common.force)?;
+    }
     Ok(())
 }
 
 fn run_paper(a: PaperArgs) -> Result<()> {
+    // --save-experiment FILE.toml saves FILE-harmonic.toml, FILE-diffusion-basis.toml and
+    // FILE-spectral-distance.toml.
     let sub = |name: &str| Common {
         out: a.common.out.join(name),
+        save_experiment: a.common.save_experiment.as_ref().map(|f| {
+            let stem = f
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "experiment".into());
+            f.with_file_name(format!("{stem}-{name}.toml"))
+        }),
         ..a.common.clone()
     };
     run_harmonic(HarmonicArgs {

@@ -10,6 +10,8 @@ pub mod info;
 pub mod operators;
 pub mod perturb;
 pub mod render;
+pub mod run;
 pub mod segment;
 pub mod shapes;
 pub mod signature;
+pub mod study;

@@ -2,3 +2,8 @@
 //! `Default` is the paper's default.
 
 pub mod harmonic;
+pub mod replay;
+pub mod study;
+pub mod truncation;
+
+pub use replay::mesh_hash;

@@ -560,4 +560,38 @@ mod tests {
         let ls = extract_level_sets(&mesh, &field, &[1.0]).remove(0);
         assert!(ls.segments.is_empty());
     }
+
+    #[test]
+    fn saddle_exactly_at_the_value() {
+        // Grid on [-2, 2]^2 with f = x y: every axis vertex is exactly at 0, the origin a saddle.
+        let n = 4;
+        let mut p = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                p.push([i as f64 - 2.0, j as f64 - 2.0, 0.0]);
+            }
+        }
+        let mut t = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let a = j * (n + 1) + i;
+                t.push([a, a + 1, a + n + 2]);
+                t.push([a, a + n + 2, a + n + 1]);
+            }
+        }
+        let mesh = Mesh::new(p, t).unwrap();
+        let field: Vec<f64> = mesh.positions().iter().map(|q| q[0] * q[1]).collect();
+        let ls = extract_level_sets(&mesh, &field, &[0.0]).remove(0);
+        check_points(&mesh, &field, &ls);
+        assert_eq!(ls.polylines.len(), 2);
+        let on_boundary = |q: [f64; 3]| q[0].abs() == 2.0 || q[1].abs() == 2.0;
+        let mut n_seg = 0;
+        for pl in &ls.polylines {
+            assert!(!pl.closed);
+            assert!(on_boundary(pl.points[0]));
+            assert!(on_boundary(*pl.points.last().unwrap()));
+            n_seg += pl.points.len() - 1;
+        }
+        assert_eq!(n_seg, ls.segments.len());
+    }
 }

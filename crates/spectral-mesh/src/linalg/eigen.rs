@@ -55,6 +55,12 @@ pub struct SparseEigenOptions {
     /// `false` = Davidson (`K^-1` applied to the residuals of the lowest unconverged
     /// Ritz pairs).
     pub krylov: bool,
+    /// Hard locking: converged Ritz pairs leave the search space (which then stays small,
+    /// about 5 blocks) and new directions are only B-orthogonalized against them. Cheaper
+    /// per iteration but, as measured on a 38k-vertex mesh, it needs more solves and was
+    /// slower overall; `false` (default) keeps every converged vector in the Rayleigh-Ritz
+    /// space (soft locking).
+    pub locking: bool,
 }
 
 impl Default for SparseEigenOptions {
@@ -68,6 +74,7 @@ impl Default for SparseEigenOptions {
             seed: 0x5eed,
             max_iterations: 0,
             krylov: false,
+            locking: false,
         }
     }
 }
@@ -592,6 +599,27 @@ pub fn sparse_generalized_eigen(
     };
 
     let mut rng = Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
+    if opts.locking && !opts.krylov {
+        let ctx = Ctx {
+            s,
+            b,
+            chol: &chol,
+            n,
+            k,
+            p,
+            tol,
+            sn,
+            bn,
+            shift,
+            max_iter,
+        };
+        let ma_max = if opts.max_basis > 0 {
+            opts.max_basis
+        } else {
+            (5 * p).max(p + 24)
+        };
+        return locked(&ctx, ma_max, &mut rng, progress);
+    }
     let mut v = vec![0.0; n * m_max];
     let mut h = Mat::<f64>::zeros(m_max, m_max);
     let mut m = 0usize;
@@ -778,6 +806,260 @@ pub fn sparse_generalized_eigen(
         append(&mut v, &mut h, &mut m, &w, got, n, s)?;
         last = (m - got, got);
     }
+}
+
+struct Ctx<'a> {
+    s: &'a SparseMatrix,
+    b: &'a SparseMatrix,
+    chol: &'a SparseCholesky,
+    n: usize,
+    k: usize,
+    p: usize,
+    tol: f64,
+    sn: f64,
+    bn: f64,
+    shift: f64,
+    max_iter: usize,
+}
+
+/// Makes a new block orthogonal to `xl[:, :nl]` and `v[:, :m]`, B-orthonormal.
+#[allow(clippy::too_many_arguments)]
+fn new_block_locked(
+    w: &mut Vec<f64>,
+    xl: &[f64],
+    nl: usize,
+    v: &[f64],
+    m: usize,
+    n: usize,
+    c: usize,
+    b: &SparseMatrix,
+) -> Result<usize, SparseEigenError> {
+    let mut c = svqb_diag_normalize(w, n, c, b);
+    for _ in 0..2 {
+        orth_against(w, xl, n, nl, c, b);
+        orth_against(w, v, n, m, c, b);
+        c = svqb(w, n, c, b)?;
+    }
+    Ok(c)
+}
+
+/// Block Davidson with hard locking (see [`SparseEigenOptions::locking`]).
+fn locked(
+    ctx: &Ctx<'_>,
+    ma_max: usize,
+    rng: &mut Rng,
+    progress: &mut dyn FnMut(EigenProgress),
+) -> Result<PartialEigen, SparseEigenError> {
+    let Ctx {
+        s,
+        b,
+        chol,
+        n,
+        k,
+        p,
+        tol,
+        sn,
+        bn,
+        max_iter,
+        ..
+    } = *ctx;
+    let ma_max = ma_max.max(p + 1).min(n);
+    let mut xl: Vec<f64> = Vec::with_capacity(n * (k + p));
+    let mut ll: Vec<f64> = Vec::new();
+    let mut v = vec![0.0; n * ma_max];
+    let mut h = Mat::<f64>::zeros(ma_max, ma_max);
+    let mut m = 0usize;
+    let mut solves = 0usize;
+    let gap_abs = 1e-10 * sn / bn.max(f64::MIN_POSITIVE);
+
+    let random_block = |rng: &mut Rng, c: usize, solves: &mut usize| -> Vec<f64> {
+        let w: Vec<f64> = (0..n * c).map(|_| rng.next_f64()).collect();
+        let mut bw = sym_spmm(b, &w, c);
+        chol.solve_many_in_place(&mut bw, c);
+        *solves += c;
+        bw
+    };
+    let c0 = p.min(ma_max);
+    let mut w = random_block(rng, c0, &mut solves);
+    let c = new_block_locked(&mut w, &xl, 0, &v, 0, n, c0, b)?;
+    append(&mut v, &mut h, &mut m, &w, c, n, s)?;
+
+    let mut iteration = 0usize;
+    loop {
+        iteration += 1;
+        let nl = ll.len();
+        let (theta, y) = if m > 0 {
+            sym_eig(h.as_ref().submatrix(0, 0, m, m))?
+        } else {
+            (Vec::new(), Mat::<f64>::zeros(0, 0))
+        };
+        let win = p.min(m);
+        let mut ywin = Mat::<f64>::zeros(m, win);
+        for j in 0..win {
+            for i in 0..m {
+                ywin[(i, j)] = y[(i, j)];
+            }
+        }
+        let xw = product(&v[..n * m], ywin.as_ref(), n);
+        let sx = sym_spmm(s, &xw, win);
+        let bx = sym_spmm(b, &xw, win);
+        let th: Vec<f64> = theta[..win].to_vec();
+        let res = residuals_from(&sx, &bx, &xw, &th, n, sn, bn);
+        if res.iter().any(|r| !r.is_finite()) {
+            return Err(SparseEigenError::NonFinite);
+        }
+        let full_space = nl + m >= n;
+        let mut nf = 0;
+        while nf < win && (res[nf] <= tol || full_space) {
+            nf += 1;
+        }
+        if full_space {
+            nf = m;
+        }
+        if nf > 0 {
+            // Lock: the first nf Ritz vectors leave V; V becomes the remaining Ritz basis.
+            if nf <= win {
+                xl.extend_from_slice(&xw[..n * nf.min(win)]);
+            }
+            if nf > win {
+                let mut yl = Mat::<f64>::zeros(m, nf);
+                for j in 0..nf {
+                    for i in 0..m {
+                        yl[(i, j)] = y[(i, j)];
+                    }
+                }
+                xl.extend_from_slice(&product(&v[..n * m], yl.as_ref(), n));
+            }
+            ll.extend_from_slice(&theta[..nf]);
+            let rest = m - nf;
+            let mut yr = Mat::<f64>::zeros(m, rest);
+            for j in 0..rest {
+                for i in 0..m {
+                    yr[(i, j)] = y[(i, nf + j)];
+                }
+            }
+            let vr = product(&v[..n * m], yr.as_ref(), n);
+            v[..n * rest].copy_from_slice(&vr);
+            h.fill(0.0);
+            for j in 0..rest {
+                h[(j, j)] = theta[nf + j];
+            }
+            m = rest;
+        }
+        let nl = ll.len();
+        progress(EigenProgress::Iteration {
+            iteration,
+            converged: nl.min(k),
+            wanted: k,
+            basis: m,
+        });
+        // Stop when k are locked, the cluster at the k-th is closed and nothing left in V
+        // lies below it.
+        if nl >= k {
+            let mut sorted = ll.clone();
+            sorted.sort_by(f64::total_cmp);
+            let lk = sorted[k - 1];
+            let gap = 1e-3 * lk.abs() + gap_abs;
+            let closed = nl >= n || nl + m >= n || sorted[nl - 1] > lk + gap;
+            let below = (nf..m.max(nf)).any(|j| j < theta.len() && theta[j] <= lk + gap);
+            if closed && (!below || nl + m >= n) {
+                return finish(ctx, xl, ll, iteration, solves, progress);
+            }
+        }
+        if iteration >= max_iter {
+            return Err(SparseEigenError::NoConvergence {
+                converged: nl.min(k),
+                wanted: k,
+                iterations: iteration,
+            });
+        }
+        // Expansion: K^-1 r for the unconverged pairs of the window (now at V[:, 0..]).
+        let cols: Vec<usize> = (nf..win).filter(|&jj| res[jj] > tol).collect();
+        let mut c = cols.len();
+        let mut w = vec![0.0; n * c];
+        for (q, &jj) in cols.iter().enumerate() {
+            let t = th[jj];
+            let dst = &mut w[q * n..(q + 1) * n];
+            for i in 0..n {
+                dst[i] = sx[jj * n + i] - t * bx[jj * n + i];
+            }
+        }
+        if c > 0 {
+            chol.solve_many_in_place(&mut w[..n * c], c);
+            solves += c;
+        }
+        // Room in V: truncate to the best Ritz vectors (rotating V if it is not already
+        // the Ritz basis).
+        if m + c.max(1) > ma_max {
+            let keep = ma_max.saturating_sub(c.max(1)).min(m);
+            if nf == 0 {
+                let mut yk = Mat::<f64>::zeros(m, keep);
+                for j in 0..keep {
+                    for i in 0..m {
+                        yk[(i, j)] = y[(i, j)];
+                    }
+                }
+                let vk = product(&v[..n * m], yk.as_ref(), n);
+                v[..n * keep].copy_from_slice(&vk);
+                h.fill(0.0);
+                for j in 0..keep {
+                    h[(j, j)] = theta[j];
+                }
+            }
+            m = keep;
+        }
+        c = c.min(ma_max - m).min(n - nl - m);
+        w.truncate(n * c);
+        let mut got = if c > 0 {
+            new_block_locked(&mut w, &xl, nl, &v, m, n, c, b)?
+        } else {
+            0
+        };
+        if got == 0 && m < ma_max && nl + m < n {
+            let cr = p.min(ma_max - m).min(n - nl - m);
+            w = random_block(rng, cr, &mut solves);
+            got = new_block_locked(&mut w, &xl, nl, &v, m, n, cr, b)?;
+        }
+        append(&mut v, &mut h, &mut m, &w, got, n, s)?;
+    }
+}
+
+/// Sorts the locked pairs, keeps the first k, reports.
+fn finish(
+    ctx: &Ctx<'_>,
+    xl: Vec<f64>,
+    ll: Vec<f64>,
+    iterations: usize,
+    solves: usize,
+    progress: &mut dyn FnMut(EigenProgress),
+) -> Result<PartialEigen, SparseEigenError> {
+    let (n, k) = (ctx.n, ctx.k);
+    let mut order: Vec<usize> = (0..ll.len()).collect();
+    order.sort_by(|&a, &b| ll[a].total_cmp(&ll[b]));
+    let mut values = Vec::with_capacity(k);
+    let mut vectors = Vec::with_capacity(n * k);
+    for &j in order.iter().take(k) {
+        values.push(ll[j]);
+        vectors.extend_from_slice(&xl[j * n..(j + 1) * n]);
+    }
+    let residuals = relative_residuals(ctx.s, ctx.b, &values, &vectors);
+    let orthogonality_error = b_orthogonality_error(ctx.b, &vectors, k);
+    let max_residual = residuals.iter().cloned().fold(0.0, f64::max);
+    progress(EigenProgress::Finished {
+        iterations,
+        solves,
+        max_residual,
+        orthogonality_error,
+    });
+    Ok(PartialEigen {
+        values,
+        vectors,
+        residuals,
+        orthogonality_error,
+        iterations,
+        solves,
+        shift: ctx.shift,
+    })
 }
 
 /// Appends the `c` B-orthonormal columns `w` (already orthogonal to `v[:, :m]`) to the

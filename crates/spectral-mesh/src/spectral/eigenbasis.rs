@@ -114,10 +114,10 @@ impl Default for EigenParams {
 
 /// Problems up to this many (free) vertices always use the dense path under
 /// [`EigenMethod::Auto`].
-pub const DENSE_MAX_N: usize = 1000;
+pub const DENSE_MAX_N: usize = 300;
 /// Problems up to this size use the dense path under [`EigenMethod::Auto`] when `k` is more
 /// than a third of `n`.
-pub const DENSE_MAX_N_LARGE_K: usize = 4000;
+pub const DENSE_MAX_N_LARGE_K: usize = 1500;
 
 /// The `k` smallest pairs of `S x = lambda B x` (S positive semi-definite, B the mass of
 /// `ops`): eigenvalues ascending, eigenvectors B-orthonormal with the sign rule of
@@ -634,6 +634,58 @@ mod tests {
             compute_eigenbasis(&ops, &bad, &mut |_| {}),
             Err(EigenError::DirichletOutOfRange { .. })
         ));
+    }
+
+    #[test]
+    fn hard_locking_variant_agrees() {
+        use crate::linalg::{SparseEigenOptions, sparse_generalized_eigen};
+        let mesh = icosphere(3, 1.0);
+        let ops = Operators::new(&mesh, Laplacian::Fem);
+        let mk = |locking| SparseEigenOptions {
+            k: 30,
+            locking,
+            ..Default::default()
+        };
+        let a =
+            sparse_generalized_eigen(&ops.stiffness, &ops.mass, &mk(true), &mut |_| {}).unwrap();
+        let b =
+            sparse_generalized_eigen(&ops.stiffness, &ops.mass, &mk(false), &mut |_| {}).unwrap();
+        for j in 0..30 {
+            assert!((a.values[j] - b.values[j]).abs() < 1e-9 * b.values[29]);
+        }
+        assert!(a.orthogonality_error < 1e-10 && a.residuals.iter().all(|&r| r <= 1e-10));
+    }
+
+    /// Icospheres at three resolutions: the first 16 eigenvalues (l = 0..3, multiplicities
+    /// 1, 3, 5, 7) approach l(l+1) with order about 2 in the edge length.
+    #[test]
+    fn analytic_sphere_convergence() {
+        let exact = |j: usize| {
+            let l = (j as f64).sqrt().floor();
+            l * (l + 1.0)
+        };
+        let mut errs = Vec::new();
+        for level in [2usize, 3, 4] {
+            let ops = Operators::new(&icosphere(level, 1.0), Laplacian::Fem);
+            let b = compute_eigenbasis(&ops, &iterative(16), &mut |_| {}).unwrap();
+            // Each group stays within 10% of l(l+1) (coarsest mesh: 8% for l = 3).
+            for j in 1..16 {
+                assert!(
+                    (b.values[j] - exact(j)).abs() < 0.1 * exact(j),
+                    "{:?}",
+                    b.values
+                );
+            }
+            let e = (1..16)
+                .map(|j| (b.values[j] - exact(j)).abs() / exact(j))
+                .fold(0.0, f64::max);
+            errs.push(e);
+        }
+        let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+        eprintln!("sphere relative errors {errs:?}, orders {orders:?}");
+        for o in orders {
+            assert!((1.7..2.3).contains(&o), "order {o}");
+        }
     }
 
     #[test]

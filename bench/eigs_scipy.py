@@ -1,0 +1,126 @@
+#!/usr/bin/env python3
+"""SciPy reference for the eigenbasis benchmark.
+
+Builds the cotangent stiffness S (positive semi-definite) and a mass matrix B from an OFF
+file with NumPy (the formulas of MATH.md), then times scipy.sparse.linalg.eigsh in
+shift-invert mode (SuperLU, or CHOLMOD through scikit-sparse when --cholmod is given and
+installed). Prints one `key=value` line like the Rust example `bench_eigs`.
+
+usage: eigs_scipy.py MESH.off K [--mass fem|voronoi-cot|cot] [--sigma S] [--cholmod]
+                     [--save OUT.npz]
+"""
+import argparse
+import resource
+import sys
+import time
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as sla
+
+
+def read_off(path):
+    toks = []
+    with open(path) as f:
+        for line in f:
+            line = line.split("#", 1)[0].strip()
+            if line:
+                toks.extend(line.split())
+    i = 0
+    head = toks[i]
+    i += 1
+    if head.upper() != "OFF":
+        raise SystemExit(f"{path}: only plain OFF is supported here")
+    nv, nf = int(toks[i]), int(toks[i + 1])
+    i += 3
+    v = np.array(toks[i:i + 3 * nv], dtype=float).reshape(nv, 3)
+    i += 3 * nv
+    faces = []
+    for _ in range(nf):
+        c = int(toks[i])
+        idx = [int(t) for t in toks[i + 1:i + 1 + c]]
+        i += 1 + c
+        for j in range(1, c - 1):  # fan triangulation
+            faces.append((idx[0], idx[j], idx[j + 1]))
+    return v, np.array(faces, dtype=np.int64)
+
+
+def operators(v, f, mass="fem"):
+    n = len(v)
+    p0, p1, p2 = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    area = 0.5 * np.linalg.norm(np.cross(p1 - p0, p2 - p0), axis=1)
+    rows, cols, vals = [], [], []
+    # cot of the angle at corner c, opposite edge (a, b)
+    for c, a, b in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        u = v[f[:, a]] - v[f[:, c]]
+        w = v[f[:, b]] - v[f[:, c]]
+        cot = np.einsum("ij,ij->i", u, w) / np.linalg.norm(np.cross(u, w), axis=1)
+        h = 0.5 * cot
+        rows += [f[:, a], f[:, b], f[:, a], f[:, b]]
+        cols += [f[:, b], f[:, a], f[:, a], f[:, b]]
+        vals += [-h, -h, h, h]
+    S = sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+    if mass == "fem":
+        r, c, x = [], [], []
+        for a in range(3):
+            for b in range(3):
+                r.append(f[:, a]); c.append(f[:, b])
+                x.append(area / 6.0 if a == b else area / 12.0)
+        B = sp.csc_matrix((np.concatenate(x), (np.concatenate(r), np.concatenate(c))), shape=(n, n))
+    elif mass == "voronoi-cot":
+        d = np.zeros(n)
+        for a in range(3):
+            np.add.at(d, f[:, a], area / 3.0)
+        B = sp.diags(d).tocsc()
+    else:
+        B = sp.identity(n, format="csc")
+    S.sum_duplicates(); B.sum_duplicates()
+    return S, B
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("mesh")
+    ap.add_argument("k", type=int)
+    ap.add_argument("--mass", default="fem")
+    ap.add_argument("--sigma", type=float, default=None)
+    ap.add_argument("--cholmod", action="store_true")
+    ap.add_argument("--save", default=None)
+    a = ap.parse_args()
+    v, f = read_off(a.mesh)
+    t0 = time.perf_counter()
+    S, B = operators(v, f, a.mass)
+    t_ops = time.perf_counter() - t0
+    # Same scale-aware shift as ours by default: -max(0.01 / total mass, 1e-10 ||S||_1/||B||_1)
+    sn = abs(S).sum(axis=0).max(); bn = abs(B).sum(axis=0).max()
+    sigma = a.sigma if a.sigma is not None else -max(0.01 / B.sum(), 1e-10 * sn / bn)
+    t1 = time.perf_counter()
+    route = "superlu"
+    if a.cholmod:
+        try:
+            from sksparse.cholmod import cholesky
+            fac = cholesky((S - sigma * B).tocsc())
+            op = sla.LinearOperator(S.shape, matvec=fac, dtype=float)
+            lam, X = sla.eigsh(S, a.k, M=B, sigma=sigma, which="LM", OPinv=op)
+            route = "cholmod"
+        except ImportError:
+            print("scikit-sparse not installed: SuperLU used", file=sys.stderr)
+            lam, X = sla.eigsh(S, a.k, M=B, sigma=sigma, which="LM")
+    else:
+        lam, X = sla.eigsh(S, a.k, M=B, sigma=sigma, which="LM")
+    secs = time.perf_counter() - t1
+    order = np.argsort(lam)
+    lam, X = lam[order], X[:, order]
+    R = S @ X - (B @ X) * lam
+    res = np.linalg.norm(R, axis=0) / ((sn + np.abs(lam) * bn) * np.linalg.norm(X, axis=0))
+    G = X.T @ (B @ X)
+    orth = abs(G - np.eye(a.k)).max()
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    print(f"mesh={a.mesh} n={len(v)} k={a.k} route=scipy-{route} seconds={secs:.3f} assembly={t_ops:.3f} "
+          f"max_residual={res.max():.2e} orth_error={orth:.2e} lambda_k={lam[-1]:.6e} peak_rss_mib={peak:.0f}")
+    if a.save:
+        np.savez(a.save, eigenvalues=lam, eigenvectors=X)
+
+
+if __name__ == "__main__":
+    main()
