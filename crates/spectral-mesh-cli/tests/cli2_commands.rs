@@ -1,5 +1,6 @@
 //! End-to-end tests of `eigs`, `heat`, `distance`, `signature`, `segment`, `embed` and
 //! `perturb`: the numbers in the files and the summaries, and the errors.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -532,4 +533,93 @@ fn outputs_are_never_overwritten_without_force() {
         e.contains("h.jpg") && e.contains("unknown output type"),
         "{e}"
     );
+}
+
+#[test]
+fn eigs_npz_reads_back_with_the_same_eigenvalues() {
+    let dir = tempfile::tempdir().unwrap();
+    let npz = dir.path().join("basis.npz");
+    let ev = dir.path().join("ev.txt");
+    ok(&[
+        "eigs",
+        SPHERE,
+        "-k",
+        "12",
+        "--laplacian",
+        "voronoi-cot",
+        "-o",
+        s(&npz),
+        "--eigenvalues-txt",
+        s(&ev),
+    ]);
+    let (basis, meta) = spectral_mesh::spectral::store::load_npz(&npz).unwrap();
+    let v = values(&ev);
+    assert_eq!(
+        basis.values, v,
+        "the text and the archive agree bit for bit"
+    );
+    assert_eq!(basis.n, 162);
+    assert_eq!(meta.k, 12);
+    assert_eq!(basis.laplacian.name(), "voronoi-cot");
+    assert!(basis.values[0].abs() < 1e-8);
+    // No temporary file is left behind.
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(names.len(), 2);
+    // Refuses to overwrite, and a wrong extension.
+    let e = err(&["eigs", SPHERE, "-k", "3", "-o", s(&npz)]);
+    assert!(e.contains("already exists"), "{e}");
+    let e = err(&[
+        "eigs",
+        SPHERE,
+        "-k",
+        "3",
+        "-o",
+        s(&dir.path().join("b.npy")),
+    ]);
+    assert!(e.contains(".npz"), "{e}");
+    // NumPy reads it, when available.
+    let script = format!(
+        "import numpy as np\nf = np.load(r'{}')\nprint(f['eigenvalues'].shape, f['eigenvectors'].shape)\nprint(repr(float(f['eigenvalues'][5])))",
+        npz.display()
+    );
+    match Command::new("python3").args(["-c", &script]).output() {
+        Ok(o) if o.status.success() => {
+            let text = String::from_utf8_lossy(&o.stdout);
+            assert!(text.contains("(12,) (162, 12)"), "{text}");
+            let last: f64 = text.lines().last().unwrap().trim().parse().unwrap();
+            assert_eq!(last, v[5]);
+        }
+        _ => eprintln!("skipped the NumPy check: python3 with numpy is not available"),
+    }
+}
+
+#[test]
+fn cache_is_filled_then_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let a = dir.path().join("a.txt");
+    let b = dir.path().join("b.txt");
+    let first = ok(&[
+        "distance",
+        SPHERE,
+        "-k",
+        "8",
+        "--cache",
+        s(&cache),
+        "-o",
+        s(&a),
+    ]);
+    assert!(first.contains("computed and stored in"), "{first}");
+    let second = ok(&[
+        "distance",
+        SPHERE,
+        "-k",
+        "8",
+        "--cache",
+        s(&cache),
+        "-o",
+        s(&b),
+    ]);
+    assert!(second.contains("loaded from"), "{second}");
+    assert_eq!(values(&a), values(&b));
 }

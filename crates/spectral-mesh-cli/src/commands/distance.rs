@@ -27,6 +27,7 @@ d(p,q)^2 = sum over non-zero eigenvalues of w(lambda) (x(p) - x(q))^2.
   band:1,4,5             suppress eigenpairs 1, 4, 5 (0-based): w = |prod (s - lambda_i)|
   custom-w:EXPR;name=v   EXPR is the weight w(s), e.g. custom-w:exp(-s*t)/s;t=0.1
   custom-phi:EXPR;name=v EXPR is the filter map phi(s); w = 1/phi
+  wfem-diffusion:t=0.5   (distance only) the paper's eq. 15, all pairs incl. lambda = 0
 Expressions: numbers, s, pi, named parameters, + - * / ^, parentheses, exp log sqrt abs \
 sin cos tanh, pow min max. Every non-zero eigenvalue must get a positive finite weight, \
 or the filter is refused.";

@@ -3,18 +3,21 @@
 //! `distance`, `signature`, `segment` and `embed`.
 
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use spectral_mesh::linalg::EigenProgress;
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::spectral::Eigenbasis;
 use spectral_mesh::spectral::eigenbasis::EigenParams;
 use spectral_mesh::spectral::filters::ZERO_EIGENVALUE_EPS;
 use spectral_mesh::spectral::heat::{ScaleNormalization, normalize_basis};
-use spectral_mesh::{Laplacian, Mesh};
+use spectral_mesh::spectral::store::{BasisMeta, load_or_compute, save_npz};
+use spectral_mesh::{Laplacian, Mesh, Operators};
 
 use crate::basis::{self, TimedBasis};
-use crate::input;
 use crate::output::{check_writable, field_text, write_atomic};
+use crate::{input, progress};
 
 /// How to compute the eigenbasis a command works on.
 #[derive(Debug, Clone, clap::Args)]
@@ -68,13 +71,42 @@ impl BasisArgs {
     }
 }
 
+/// `store::load_or_compute` with the progress bar of [`basis::compute`]; says on stdout
+/// whether the basis came from the cache.
 fn cached(
-    _dir: &Path,
+    dir: &Path,
     mesh: &Mesh,
     laplacian: Laplacian,
     params: &EigenParams,
 ) -> Result<TimedBasis> {
-    basis::compute(mesh, laplacian, params)
+    let ops = Operators::new(mesh, laplacian);
+    let bar = progress::bar(params.k as u64, "eigenpairs");
+    let t0 = Instant::now();
+    let mut cb = |p: EigenProgress| match p {
+        EigenProgress::Dense { .. } => bar.set_message("dense eigen"),
+        EigenProgress::Factorization { .. } => bar.set_message("factoring"),
+        EigenProgress::Iteration { converged, .. } => {
+            bar.set_message("iterating");
+            bar.set_position(converged as u64);
+        }
+        _ => {}
+    };
+    let (basis, hit) = load_or_compute(dir, mesh, &ops, params, &mut cb)
+        .with_context(|| format!("--cache {}", dir.display()))?;
+    bar.finish_and_clear();
+    println!(
+        "eigenbasis {} cache {}",
+        if hit {
+            "loaded from"
+        } else {
+            "computed and stored in"
+        },
+        dir.display()
+    );
+    Ok(TimedBasis {
+        basis,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
 }
 
 /// `--no-normalize` as a normalisation.
@@ -341,9 +373,24 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn save(_b: &Eigenbasis, _mesh: &Mesh, _params: &EigenParams, p: &Path) -> Result<()> {
-    bail!(
-        "{}: saving .npz needs spectral::store, not available yet",
-        p.display()
-    )
+/// Saves through a temporary file in the same folder and a rename.
+fn save(b: &Eigenbasis, mesh: &Mesh, params: &EigenParams, p: &Path) -> Result<()> {
+    let dir = p
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = p
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "basis.npz".into());
+    let tmp = dir.join(format!(".{name}.tmp-{}.npz", std::process::id()));
+    let meta = BasisMeta::new(b, Some(mesh), params);
+    if let Err(e) = save_npz(b, &tmp, &meta) {
+        let _ = std::fs::remove_file(&tmp);
+        bail!("{}: cannot save the basis: {e}", p.display());
+    }
+    std::fs::rename(&tmp, p).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        anyhow::anyhow!("{}: cannot write: {e}", p.display())
+    })
 }

@@ -21,6 +21,17 @@ pub enum Kernel {
     Standard,
 }
 
+impl Kernel {
+    /// The name typed on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kernel::Wfem => "wfem",
+            Kernel::VoronoiCot => "voronoi-cot",
+            Kernel::Standard => "standard",
+        }
+    }
+}
+
 impl From<Kernel> for KernelKind {
     fn from(k: Kernel) -> Self {
         match k {
@@ -153,7 +164,7 @@ pub fn run(args: Args) -> Result<()> {
         );
     let fmin = f.iter().copied().fold(f64::INFINITY, f64::min);
     println!(
-        "{}: n = {}; {what}, t = {}{}, kernel {:?}, k = {} ({}), eigenpairs in {:.2} s",
+        "{}: n = {}; {what}, t = {}{}, kernel {}, k = {} ({}), eigenpairs in {:.2} s",
         input.label(),
         n,
         args.t,
@@ -162,7 +173,7 @@ pub fn run(args: Args) -> Result<()> {
         } else {
             " (unit-area shape)"
         },
-        args.kernel,
+        args.kernel.name(),
         tb.basis.k(),
         tb.basis.laplacian,
         tb.seconds
