@@ -60,6 +60,7 @@ pub fn router(state: Arc<AppState>) -> Router {
         .route("/style.css", get(style_css))
         .route("/vendor/three.module.js", get(three_js))
         .route("/vendor/OrbitControls.js", get(orbit_js))
+        .route("/favicon.ico", get(|| async { StatusCode::NO_CONTENT }))
         .route("/api/health", get(health))
         .route("/api/shapes", get(shapes))
         .route("/api/mesh", post(load_mesh))
