@@ -7,11 +7,13 @@
 //! mass B); operators give an eigenbasis; the basis (or a direct solve) gives fields.
 //! Conventions are those of the project's `MATH.md`.
 
+pub mod experiments;
 pub mod fields;
 pub mod io;
 pub mod linalg;
 pub mod mesh;
 pub mod operators;
+pub mod perturb;
 pub mod shapes;
 pub mod spectral;
 

@@ -1,1 +1,452 @@
-//! critical_points (to be written).
+//! Critical points of a piecewise-linear function (Banchoff's rule, Sect. 3 of the paper).
+//!
+//! For each vertex v the triangles around it are walked into their ordered link (the ring
+//! of neighbours), and each neighbour u is marked *above* or *below* v. Ties are broken by
+//! vertex index (symbolic perturbation), so every field is "general":
+//!
+//! ```text
+//! u is above v  <=>  f(u) > f(v)  or  (f(u) == f(v) and u > v)
+//! ```
+//!
+//! (a NaN value compares as a tie, so the index decides). Along a **closed** link (an
+//! interior vertex) the number c of sign changes is even: c = 0 with every neighbour above
+//! is a minimum, c = 0 with every neighbour below a maximum, c = 2 a regular point and
+//! c = 2m + 2 a saddle of multiplicity m. For a closed surface
+//! `minima - saddles (with multiplicity) + maxima = Euler characteristic`.
+//!
+//! ## Boundary vertices
+//! The link of a boundary vertex is an open path. Two rules are offered ([`BoundaryRule`]):
+//!
+//! - [`BoundaryRule::Double`] (default): reflect the surface across its boundary (this is
+//!   exactly what the natural, Neumann, boundary condition of a harmonic map means). The
+//!   doubled link is the path followed by its mirror, so c changes along the open path
+//!   become 2c around the doubled link: c = 0 is a minimum or maximum, c = 1 regular, c >= 2
+//!   a saddle of multiplicity c - 1. The check is on the doubled surface, whose Euler
+//!   characteristic is 2 chi: `2 (m_i - s_i + M_i) + (m_b - s_b + M_b) = 2 chi`, where `_i`
+//!   counts interior and `_b` boundary critical points
+//!   ([`CriticalPoints::euler_check_doubled`]).
+//! - [`BoundaryRule::LowerLink`]: Morse theory of sublevel sets. A boundary vertex is a
+//!   minimum when every neighbour is above; otherwise, with k runs of "below" neighbours
+//!   along the path, it is regular for k = 1 (this includes a vertex with every neighbour
+//!   below: a boundary maximum is *not* critical) and a saddle of multiplicity k - 1 for
+//!   k >= 2. Then `m - s + M = chi` holds for bordered surfaces too
+//!   ([`CriticalPoints::euler_check`]), at the price of an asymmetric rule.
+//!
+//! ## Non-manifold vertices
+//! The triangles around a vertex are split into fans, joined through edges `(v, u)` that
+//! exactly two of them share. A vertex with more than one fan (a pinch), or whose link is
+//! not a simple path or cycle, is listed in [`CriticalPoints::non_manifold`] and classified
+//! conservatively: minimum if every neighbour is above, maximum if every neighbour is
+//! below, otherwise a saddle of multiplicity `k - 1` when its lower link (the link
+//! restricted to the neighbours below) has k > 1 connected pieces, else regular. The Euler
+//! checks are not guaranteed on such meshes.
+//!
+//! Vertices no triangle uses are never critical. Several components are handled
+//! naturally: pass the total Euler characteristic (the sum over components) to the checks.
+
+use crate::mesh::Mesh;
+use crate::mesh::topology::{UnionFind, VertexTriangles};
+
+/// How boundary vertices are classified (see the module documentation).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum BoundaryRule {
+    /// Reflect the surface across its boundary (symmetric in min and max; the default).
+    #[default]
+    Double,
+    /// Sublevel-set (lower link) rule: boundary maxima are not critical; `m - s + M = chi`.
+    LowerLink,
+}
+
+/// Errors from [`critical_points`].
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum CriticalPointsError {
+    /// The field does not have one value per vertex.
+    #[error("the field has {got} values but the mesh has {expected} vertices")]
+    LengthMismatch {
+        /// Number of vertices.
+        expected: usize,
+        /// Number of values.
+        got: usize,
+    },
+}
+
+/// The critical points of a field, each list ascending by vertex index.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+pub struct CriticalPoints {
+    /// Local minima.
+    pub minima: Vec<usize>,
+    /// Local maxima.
+    pub maxima: Vec<usize>,
+    /// Saddles with their multiplicity (>= 1).
+    pub saddles: Vec<(usize, usize)>,
+    /// Critical points (of any kind) on the boundary, i.e. classified from an open link.
+    pub on_boundary: Vec<usize>,
+    /// Non-manifold vertices (classified conservatively; see the module documentation).
+    pub non_manifold: Vec<usize>,
+    /// The boundary rule used.
+    pub boundary_rule: BoundaryRule,
+}
+
+impl CriticalPoints {
+    /// Number of saddles counted with multiplicity.
+    pub fn saddle_count(&self) -> usize {
+        self.saddles.iter().map(|s| s.1).sum()
+    }
+
+    /// `(minima - saddles + maxima, chi)`: equal for a closed surface of Euler characteristic
+    /// `chi` (and for bordered surfaces under [`BoundaryRule::LowerLink`]).
+    pub fn euler_check(&self, chi: i64) -> (i64, i64) {
+        let m = self.minima.len() as i64;
+        let big_m = self.maxima.len() as i64;
+        (m - self.saddle_count() as i64 + big_m, chi)
+    }
+
+    /// The count on the surface doubled across its boundary, `(2 (m_i - s_i + M_i) + (m_b -
+    /// s_b + M_b), 2 chi)`: equal for any manifold surface, closed or bordered, under
+    /// [`BoundaryRule::Double`] (`_i` interior, `_b` boundary critical points).
+    pub fn euler_check_doubled(&self, chi: i64) -> (i64, i64) {
+        let w = |v: usize| -> i64 {
+            if self.on_boundary.binary_search(&v).is_ok() {
+                1
+            } else {
+                2
+            }
+        };
+        let mut sum = 0i64;
+        sum += self.minima.iter().map(|&v| w(v)).sum::<i64>();
+        sum += self.maxima.iter().map(|&v| w(v)).sum::<i64>();
+        sum -= self
+            .saddles
+            .iter()
+            .map(|&(v, k)| w(v) * k as i64)
+            .sum::<i64>();
+        (sum, 2 * chi)
+    }
+}
+
+/// Critical points of `field` (one value per vertex) with the default boundary rule
+/// ([`BoundaryRule::Double`]).
+pub fn critical_points(mesh: &Mesh, field: &[f64]) -> Result<CriticalPoints, CriticalPointsError> {
+    critical_points_with(mesh, field, BoundaryRule::default())
+}
+
+/// What one vertex is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Regular,
+    Min,
+    Max,
+    Saddle(usize),
+}
+
+/// Critical points of `field` with the given boundary rule.
+pub fn critical_points_with(
+    mesh: &Mesh,
+    field: &[f64],
+    rule: BoundaryRule,
+) -> Result<CriticalPoints, CriticalPointsError> {
+    let n = mesh.n_vertices();
+    if field.len() != n {
+        return Err(CriticalPointsError::LengthMismatch {
+            expected: n,
+            got: field.len(),
+        });
+    }
+    let vt = VertexTriangles::new(mesh);
+    let tris = mesh.triangles();
+    let mut out = CriticalPoints {
+        boundary_rule: rule,
+        ..Default::default()
+    };
+    let mut edges: Vec<(usize, usize)> = Vec::new();
+    for v in 0..n {
+        let ts = vt.of(v);
+        if ts.is_empty() {
+            continue;
+        }
+        edges.clear();
+        for &t in ts {
+            let tri = tris[t];
+            let k = tri.iter().position(|&x| x == v).unwrap_or(0);
+            edges.push((tri[(k + 1) % 3], tri[(k + 2) % 3]));
+        }
+        let above = |u: usize| -> bool {
+            match field[u].partial_cmp(&field[v]) {
+                Some(std::cmp::Ordering::Greater) => true,
+                Some(std::cmp::Ordering::Less) => false,
+                _ => u > v,
+            }
+        };
+        let (kind, open, nonman) = classify(&edges, &above, rule);
+        if nonman {
+            out.non_manifold.push(v);
+        }
+        if kind != Kind::Regular && open {
+            out.on_boundary.push(v);
+        }
+        match kind {
+            Kind::Regular => {}
+            Kind::Min => out.minima.push(v),
+            Kind::Max => out.maxima.push(v),
+            Kind::Saddle(m) => out.saddles.push((v, m)),
+        }
+    }
+    Ok(out)
+}
+
+/// The link of one vertex, split into fans; each fan walked into an ordered sequence.
+struct Link {
+    /// Ordered neighbour sequences, with `true` for a closed (cyclic) one.
+    fans: Vec<(Vec<usize>, bool)>,
+    /// True when the link is not a single simple cycle or path.
+    non_manifold: bool,
+}
+
+fn build_link(edges: &[(usize, usize)]) -> Link {
+    // Link vertices and how many link edges touch each.
+    let mut verts: Vec<usize> = edges.iter().flat_map(|&(a, b)| [a, b]).collect();
+    verts.sort_unstable();
+    let mut deg: Vec<(usize, usize)> = Vec::new();
+    for &u in &verts {
+        match deg.last_mut() {
+            Some((w, c)) if *w == u => *c += 1,
+            _ => deg.push((u, 1)),
+        }
+    }
+    // Join edges through link vertices of degree exactly 2 (manifold edges (v, u)).
+    let mut uf = UnionFind::new(edges.len());
+    for &(u, d) in &deg {
+        if d == 2 {
+            let mut it = edges
+                .iter()
+                .enumerate()
+                .filter(|(_, e)| e.0 == u || e.1 == u)
+                .map(|(i, _)| i);
+            if let (Some(a), Some(b)) = (it.next(), it.next()) {
+                uf.union(a, b);
+            }
+        }
+    }
+    let mut groups: Vec<(usize, Vec<usize>)> = Vec::new();
+    for i in 0..edges.len() {
+        let r = uf.find(i);
+        match groups.iter_mut().find(|g| g.0 == r) {
+            Some(g) => g.1.push(i),
+            None => groups.push((r, vec![i])),
+        }
+    }
+    let mut non_manifold = groups.len() > 1 || deg.iter().any(|d| d.1 > 2);
+    let mut fans = Vec::with_capacity(groups.len());
+    for (_, group) in &groups {
+        // Degrees within the fan.
+        let fan_deg = |u: usize| {
+            group
+                .iter()
+                .filter(|&&i| edges[i].0 == u || edges[i].1 == u)
+                .count()
+        };
+        if group
+            .iter()
+            .any(|&i| fan_deg(edges[i].0) > 2 || fan_deg(edges[i].1) > 2)
+        {
+            non_manifold = true;
+        }
+        // Start at an end of a path (fan degree 1) if there is one.
+        let start = group
+            .iter()
+            .flat_map(|&i| [edges[i].0, edges[i].1])
+            .find(|&u| fan_deg(u) == 1);
+        let closed = start.is_none();
+        let mut cur = start.unwrap_or(edges[group[0]].0);
+        let mut used = vec![false; group.len()];
+        let mut seq = vec![cur];
+        loop {
+            let next = group
+                .iter()
+                .enumerate()
+                .find(|&(k, &i)| !used[k] && (edges[i].0 == cur || edges[i].1 == cur));
+            let Some((k, &i)) = next else { break };
+            used[k] = true;
+            cur = if edges[i].0 == cur {
+                edges[i].1
+            } else {
+                edges[i].0
+            };
+            seq.push(cur);
+        }
+        if used.iter().any(|&u| !u) {
+            non_manifold = true;
+        }
+        if closed && seq.len() > 1 && seq.first() == seq.last() {
+            seq.pop();
+        }
+        fans.push((seq, closed));
+    }
+    Link { fans, non_manifold }
+}
+
+fn changes(s: &[bool], closed: bool) -> usize {
+    let mut c = s.windows(2).filter(|w| w[0] != w[1]).count();
+    if closed && s.len() > 1 && s[0] != s[s.len() - 1] {
+        c += 1;
+    }
+    c
+}
+
+/// Lower-link rule for non-manifold vertices: min/max when all neighbours are on one side,
+/// otherwise saddle of multiplicity (pieces of the lower link - 1).
+fn conservative(edges: &[(usize, usize)], above: &dyn Fn(usize) -> bool) -> Kind {
+    let mut nb: Vec<usize> = edges.iter().flat_map(|&(a, b)| [a, b]).collect();
+    nb.sort_unstable();
+    nb.dedup();
+    let below: Vec<usize> = nb.iter().copied().filter(|&u| !above(u)).collect();
+    if below.is_empty() {
+        return Kind::Min;
+    }
+    if below.len() == nb.len() {
+        return Kind::Max;
+    }
+    let mut uf = UnionFind::new(below.len());
+    for &(a, b) in edges {
+        if let (Ok(i), Ok(j)) = (below.binary_search(&a), below.binary_search(&b)) {
+            uf.union(i, j);
+        }
+    }
+    let pieces = (0..below.len()).filter(|&i| uf.find(i) == i).count();
+    if pieces > 1 {
+        Kind::Saddle(pieces - 1)
+    } else {
+        Kind::Regular
+    }
+}
+
+/// Classifies one vertex from its link edges; returns (kind, link is open, non-manifold).
+fn classify(
+    edges: &[(usize, usize)],
+    above: &dyn Fn(usize) -> bool,
+    rule: BoundaryRule,
+) -> (Kind, bool, bool) {
+    let link = build_link(edges);
+    if link.non_manifold || link.fans.len() != 1 {
+        let open = link.fans.iter().any(|f| !f.1);
+        return (conservative(edges, above), open, true);
+    }
+    let (seq, closed) = &link.fans[0];
+    let s: Vec<bool> = seq.iter().map(|&u| above(u)).collect();
+    let c = changes(&s, *closed);
+    let kind = if *closed {
+        match c {
+            0 if s.iter().all(|&a| a) => Kind::Min,
+            0 => Kind::Max,
+            2 => Kind::Regular,
+            _ => Kind::Saddle(c / 2 - 1),
+        }
+    } else {
+        match rule {
+            BoundaryRule::Double => match c {
+                0 if s.iter().all(|&a| a) => Kind::Min,
+                0 => Kind::Max,
+                1 => Kind::Regular,
+                _ => Kind::Saddle(c - 1),
+            },
+            BoundaryRule::LowerLink => {
+                // Runs of "below" neighbours along the open path.
+                let runs = s
+                    .iter()
+                    .enumerate()
+                    .filter(|&(i, &a)| !a && (i == 0 || s[i - 1]))
+                    .count();
+                match runs {
+                    0 => Kind::Min,
+                    1 => Kind::Regular,
+                    k => Kind::Saddle(k - 1),
+                }
+            }
+        }
+    };
+    (kind, !*closed, false)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fan of `k` triangles around vertex 0 at the origin (closed when `closed`).
+    fn fan(k: usize, closed: bool) -> Mesh {
+        let mut p = vec![[0.0, 0.0, 0.0]];
+        let m = if closed { k } else { k + 1 };
+        for i in 0..m {
+            let a = i as f64 * std::f64::consts::TAU / k as f64 * if closed { 1.0 } else { 0.5 };
+            p.push([a.cos(), a.sin(), 0.0]);
+        }
+        let t: Vec<[usize; 3]> = (0..k).map(|i| [0, 1 + i, 1 + (i + 1) % m]).collect();
+        Mesh::new(p, t).unwrap()
+    }
+
+    #[test]
+    fn interior_vertex_kinds() {
+        let m = fan(8, true);
+        let kind_of_center = |f: Vec<f64>| {
+            let cp = critical_points(&m, &f).unwrap();
+            if cp.minima.contains(&0) {
+                "min".to_string()
+            } else if cp.maxima.contains(&0) {
+                "max".to_string()
+            } else if let Some(s) = cp.saddles.iter().find(|s| s.0 == 0) {
+                format!("saddle{}", s.1)
+            } else {
+                "regular".to_string()
+            }
+        };
+        let ring = |g: &dyn Fn(usize) -> f64| -> Vec<f64> {
+            std::iter::once(0.0).chain((0..8).map(g)).collect()
+        };
+        assert_eq!(kind_of_center(ring(&|_| 1.0)), "min");
+        assert_eq!(kind_of_center(ring(&|_| -1.0)), "max");
+        assert_eq!(
+            kind_of_center(ring(&|i| if i < 4 { 1.0 } else { -1.0 })),
+            "regular"
+        );
+        // x^2 - y^2: four sign changes -> simple saddle.
+        assert_eq!(
+            kind_of_center(ring(
+                &|i| (i as f64 * std::f64::consts::FRAC_PI_4 * 2.0).cos()
+            )),
+            "saddle1"
+        );
+        // Eight sign changes: a saddle of multiplicity 3.
+        assert_eq!(
+            kind_of_center(ring(&|i| if i % 2 == 0 && i < 6 {
+                1.0
+            } else if i < 6 {
+                -1.0
+            } else if i == 6 {
+                1.0
+            } else {
+                -1.0
+            })),
+            "saddle3"
+        );
+        // Ties broken by index: all neighbours equal to the centre (index 0) are above.
+        assert_eq!(kind_of_center(ring(&|_| 0.0)), "min");
+    }
+
+    #[test]
+    fn boundary_rules() {
+        let m = fan(4, false); // open fan: path 1..5
+        // x^2 - y^2 restricted to the half plane y >= 0: above, below, above -> c = 2.
+        let f = vec![0.0, 1.0, 0.5, -1.0, 0.5, 1.0];
+        let cp = critical_points(&m, &f).unwrap();
+        assert_eq!(cp.saddles, vec![(0, 1)]);
+        assert_eq!(cp.on_boundary.first(), Some(&0));
+        // All below: a boundary maximum under Double, regular under LowerLink.
+        let g = vec![0.0, -1.0, -1.0, -1.0, -1.0, -1.0];
+        assert!(critical_points(&m, &g).unwrap().maxima.contains(&0));
+        let ll = critical_points_with(&m, &g, BoundaryRule::LowerLink).unwrap();
+        assert!(!ll.maxima.contains(&0) && !ll.saddles.iter().any(|s| s.0 == 0));
+        assert!(critical_points(&m, &[0.0]).is_err());
+    }
+}

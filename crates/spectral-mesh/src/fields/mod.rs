@@ -3,3 +3,4 @@
 pub mod critical_points;
 pub mod harmonic;
 pub mod level_sets;
+pub mod segmentation;

@@ -20,12 +20,12 @@ pub enum DenseEigenError {
     NoConvergence,
 }
 
-fn to_dense(a: &SparseMatrix) -> Mat<f64> {
+fn to_dense(a: &SparseMatrix, scale: f64) -> Mat<f64> {
     let mut m = Mat::<f64>::zeros(a.nrows(), a.ncols());
     for c in 0..a.ncols() {
         let (rows, vals) = a.col(c);
         for (&r, &v) in rows.iter().zip(vals) {
-            m[(r, c)] = v;
+            m[(r, c)] = v / scale;
         }
     }
     m
@@ -39,8 +39,13 @@ pub fn dense_generalized_eigen(
     b: &SparseMatrix,
 ) -> Result<(Vec<f64>, Vec<f64>), DenseEigenError> {
     let n = s.nrows();
-    let sd = to_dense(s);
-    let bd = to_dense(b);
+    // Work on unit-scaled copies: faer's dense eigensolver is not invariant to the
+    // overall scale of its input (entries near 1e-12 or 1e20 lose all accuracy), and a
+    // mesh scaled by alpha scales B by alpha^2. The eigenvalues are scaled back below.
+    let s_scale = s.max_abs().max(f64::MIN_POSITIVE);
+    let b_scale = b.max_abs().max(f64::MIN_POSITIVE);
+    let sd = to_dense(s, s_scale);
+    let bd = to_dense(b, b_scale);
     let llt = bd
         .llt(Side::Lower)
         .map_err(|_| DenseEigenError::MassNotPositiveDefinite)?;
@@ -61,13 +66,16 @@ pub fn dense_generalized_eigen(
     let evd = c
         .self_adjoint_eigen(Side::Lower)
         .map_err(|_| DenseEigenError::NoConvergence)?;
-    let values: Vec<f64> = (0..n).map(|i| evd.S()[i]).collect();
+    let ratio = s_scale / b_scale;
+    let values: Vec<f64> = (0..n).map(|i| evd.S()[i] * ratio).collect();
     let mut x = evd.U().to_owned();
     solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::rayon(0));
     let mut out = vec![0.0; n * n];
+    // x is orthonormal in the scaled B: rescale to X^T B X = I.
+    let xs = 1.0 / b_scale.sqrt();
     for j in 0..n {
         for i in 0..n {
-            out[j * n + i] = x[(i, j)];
+            out[j * n + i] = x[(i, j)] * xs;
         }
     }
     Ok((values, out))

@@ -1,11 +1,16 @@
 //! Linear algebra: the sparse matrix type, sparse Cholesky, and the generalized
-//! symmetric eigensolver. This is the only module that names `faer`.
+//! symmetric eigensolvers (dense for small problems, block shift-invert for large ones).
+//! This is the only module that names `faer`.
 
 pub mod cholesky;
+pub mod dense_eigen;
+pub mod eigen;
 pub mod sparse;
 
 pub use cholesky::{CholeskyError, SparseCholesky};
-pub use sparse::SparseMatrix;
-pub mod dense_eigen;
-
 pub use dense_eigen::{DenseEigenError, dense_generalized_eigen};
+pub use eigen::{
+    EigenProgress, PartialEigen, SparseEigenError, SparseEigenOptions, b_orthogonality_error,
+    relative_residuals, sparse_generalized_eigen, sym_spmm,
+};
+pub use sparse::SparseMatrix;

@@ -186,13 +186,12 @@ impl SparseMatrix {
         self.values.iter().fold(0.0, |m, v| m.max(v.abs()))
     }
 
-    /// `y = A x`. For a symmetric matrix this is computed by columns in parallel as
-    /// `y_i = sum_j A(j, i) x_j` (a row of A^T), which equals `A x`.
+    /// `y = A x` (serial, by columns). For a symmetric matrix
+    /// [`SparseMatrix::transpose_mul_vec`] gives the same product in parallel.
     pub fn mul_vec(&self, x: &[f64]) -> Vec<f64> {
         assert_eq!(x.len(), self.ncols);
         let mut y = vec![0.0; self.nrows];
-        for c in 0..self.ncols {
-            let xc = x[c];
+        for (c, &xc) in x.iter().enumerate() {
             if xc != 0.0 {
                 let (rows, vals) = self.col(c);
                 for (&r, &v) in rows.iter().zip(vals) {
@@ -275,13 +274,14 @@ impl SparseMatrix {
         Self::from_triplets(rows.len(), cols.len(), &t)
     }
 
-    /// Dense copy, column-major `nrows x ncols` (for tests and tiny problems).
+    /// Dense copy as rows, `d[r][c]` (for tests and tiny problems).
     pub fn to_dense(&self) -> Vec<Vec<f64>> {
         let mut d = vec![vec![0.0; self.ncols]; self.nrows];
         for c in 0..self.ncols {
             let (rows, vals) = self.col(c);
             for (&r, &v) in rows.iter().zip(vals) {
-                d[r][c] = v;
+                let row: &mut Vec<f64> = &mut d[r];
+                row[c] = v;
             }
         }
         d

@@ -6,22 +6,41 @@
 //! symmetric to the last bit.
 
 use crate::linalg::SparseMatrix;
-use crate::mesh::{Mesh, cross, dot, norm, sub};
+use crate::mesh::{Mesh, dot, sub};
 
-/// Cotangent of the angle at corner `k` of triangle `(i, j, k)` with the edge `(i, j)`
-/// opposite, or `None` when the triangle has no area.
-pub fn cot_at(pk: [f64; 3], pi: [f64; 3], pj: [f64; 3]) -> Option<f64> {
-    let u = sub(pi, pk);
-    let v = sub(pj, pk);
-    let c = norm(cross(u, v));
-    let d = dot(u, v);
-    // A triangle whose doubled area is at rounding level of its squared edge lengths
-    // has no well-defined angles; it contributes nothing (reported by `validate`).
-    if c <= f64::EPSILON * (dot(u, u) + dot(v, v)) * 0.5 || !c.is_finite() {
-        None
-    } else {
-        Some(d / c)
+/// Twice the area of a triangle with edge lengths `l`, by Kahan's numerically stable
+/// form of Heron's formula (negative rounding inside the root is clamped to zero).
+pub fn double_area_from_lengths(l: [f64; 3]) -> f64 {
+    let mut s = l;
+    s.sort_by(|a, b| b.total_cmp(a));
+    let [a, b, c] = s;
+    let arg = (a + (b + c)) * (c - (a - b)) * (c + (a - b)) * (a + (b - c));
+    0.5 * arg.max(0.0).sqrt()
+}
+
+/// Half the cotangent of each corner of a triangle, `[c_0, c_1, c_2]` where `c_k` is
+/// `cot(angle at corner k) / 2`, the weight of the opposite edge. Computed from the
+/// squared edge lengths and Kahan's Heron area, the same route as libigl's
+/// `cotmatrix_entries`, so that the two agree to rounding.
+///
+/// Returns `None` for a triangle whose area is at rounding level of its squared edge
+/// lengths: it has no well-defined angles and contributes nothing (reported by
+/// `mesh::validate`).
+pub fn half_cotangents(p: [[f64; 3]; 3]) -> Option<[f64; 3]> {
+    let l2 = [
+        dot(sub(p[1], p[2]), sub(p[1], p[2])),
+        dot(sub(p[2], p[0]), sub(p[2], p[0])),
+        dot(sub(p[0], p[1]), sub(p[0], p[1])),
+    ];
+    let dbl = double_area_from_lengths([l2[0].sqrt(), l2[1].sqrt(), l2[2].sqrt()]);
+    let scale = l2[0] + l2[1] + l2[2];
+    if !dbl.is_finite() || dbl <= f64::EPSILON * scale {
+        return None;
     }
+    Some(std::array::from_fn(|k| {
+        let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+        (l2[i] + l2[j] - l2[k]) / dbl / 4.0
+    }))
 }
 
 /// Assembles a symmetric matrix from per-edge off-diagonal weights `w_ij` so that
@@ -57,13 +76,11 @@ pub(crate) fn assemble_laplacian(n: usize, edge_weights: &[(usize, usize, f64)])
 /// Zero-area triangles contribute nothing. Runs in O(m).
 pub fn cotan_stiffness(mesh: &Mesh) -> SparseMatrix {
     let mut w = Vec::with_capacity(3 * mesh.n_triangles());
-    for tri in mesh.triangles() {
-        for k in 0..3 {
-            let (a, b, c) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
-            let p = mesh.positions();
-            if let Some(ct) = cot_at(p[c], p[a], p[b]) {
-                let (i, j) = (a.min(b), a.max(b));
-                w.push((i, j, 0.5 * ct));
+    for (t, tri) in mesh.triangles().iter().enumerate() {
+        if let Some(c) = half_cotangents(mesh.corners(t)) {
+            for k in 0..3 {
+                let (a, b) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
+                w.push((a.min(b), a.max(b), c[k]));
             }
         }
     }

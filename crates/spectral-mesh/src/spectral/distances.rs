@@ -1,1 +1,256 @@
-//! distances (to be written).
+//! Filtered spectral distances and the generalized Green kernel (Sect. 5 of the paper;
+//! `MATH.md`, "Filtered spectral distances").
+//!
+//! With the weights `w_k = w(lambda_k)` of a [`Filter`] (`w = 1/phi`; zero eigenvalues get
+//! weight 0 and are skipped):
+//!
+//! ```text
+//! d(p,q)^2 = sum_k w_k (x_k(p) - x_k(q))^2,     G = X diag(w) X^T,
+//! d(p,q)^2 = G(p,p) - 2 G(p,q) + G(q,q),        spectral function p -> G(p,p).
+//! ```
+//!
+//! Everything is computed on the basis as given; for scale-invariant values normalise the
+//! basis first ([`super::heat::normalize_basis`]). Under a uniform scaling of the shape by
+//! `alpha` (eigenvalues `/ alpha^2`, eigenvectors `/ alpha`):
+//! - commute-time distances are invariant,
+//! - bi-harmonic distances scale by `alpha` (`d' = alpha d`),
+//! - diffusion distances at time `alpha^2 t` scale by `1/alpha`,
+//! - with the unit-area normalisation all of them are invariant.
+//!
+//! The wFEM diffusion distance of eq. 15 ([`wfem_diffusion_distances_from`]) uses
+//! `S_t = B X D_t X^T B` over **all** pairs of the basis, the zero eigenvalue included (it
+//! is what makes `S_t` positive definite).
+
+use rayon::prelude::*;
+
+use super::Eigenbasis;
+use super::filters::{Filter, FilterError};
+
+/// Errors of the distance functions.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum DistanceError {
+    /// The filter is refused on this spectrum.
+    #[error(transparent)]
+    Filter(#[from] FilterError),
+    /// A vertex index is out of range.
+    #[error("vertex {vertex} is out of range: the mesh has {n} vertices")]
+    VertexOutOfRange {
+        /// The index given.
+        vertex: usize,
+        /// Number of vertices.
+        n: usize,
+    },
+    /// The time is not finite and `>= 0`.
+    #[error("the diffusion time must be finite and >= 0, got {0}")]
+    InvalidTime(f64),
+    /// The all-pairs matrix would be too large.
+    #[error("all-pairs distances need an n x n matrix; n = {n} exceeds the limit {limit}")]
+    TooLarge {
+        /// Vertices.
+        n: usize,
+        /// The limit.
+        limit: usize,
+    },
+}
+
+/// Largest `n` for which [`all_pairs`] builds its `n x n` matrix (8 * n^2 bytes: 800 MB at
+/// the limit).
+pub const ALL_PAIRS_LIMIT: usize = 10_000;
+
+fn check_vertex(basis: &Eigenbasis, v: usize) -> Result<(), DistanceError> {
+    if v >= basis.n {
+        Err(DistanceError::VertexOutOfRange {
+            vertex: v,
+            n: basis.n,
+        })
+    } else {
+        Ok(())
+    }
+}
+
+/// Squared distances from `source` with per-pair weights `w` on the vectors `x` (column-major
+/// `n x k`), O(nk), parallel over blocks of rows.
+fn weighted_sq_from(x: &[f64], n: usize, w: &[f64], source: usize) -> Vec<f64> {
+    let mut d = vec![0.0; n];
+    const BLOCK: usize = 2048;
+    let work = |(b, chunk): (usize, &mut [f64])| {
+        let start = b * BLOCK;
+        let len = chunk.len();
+        for (j, &wj) in w.iter().enumerate() {
+            if wj != 0.0 {
+                let col = &x[j * n..(j + 1) * n];
+                let xs = col[source];
+                for (di, xi) in chunk.iter_mut().zip(&col[start..start + len]) {
+                    let e = xi - xs;
+                    *di += wj * e * e;
+                }
+            }
+        }
+    };
+    if n * w.len() > 200_000 {
+        d.par_chunks_mut(BLOCK).enumerate().for_each(work);
+    } else {
+        d.chunks_mut(BLOCK).enumerate().for_each(work);
+    }
+    d
+}
+
+/// Filtered spectral distances from `source` to every vertex (`n` values), O(nk):
+/// `d(p,q) = sqrt(sum_{lambda_k > 0} w(lambda_k) (x_k(p) - x_k(q))^2)`.
+pub fn distances_from(
+    basis: &Eigenbasis,
+    source: usize,
+    filter: &Filter,
+) -> Result<Vec<f64>, DistanceError> {
+    check_vertex(basis, source)?;
+    let w = filter.weights(&basis.values)?;
+    let mut d = weighted_sq_from(&basis.vectors, basis.n, &w, source);
+    d.iter_mut().for_each(|v| *v = v.sqrt());
+    Ok(d)
+}
+
+/// Distances from each of `sources` (one `n`-vector per source), parallel over sources.
+pub fn distances_from_many(
+    basis: &Eigenbasis,
+    sources: &[usize],
+    filter: &Filter,
+) -> Result<Vec<Vec<f64>>, DistanceError> {
+    for &s in sources {
+        check_vertex(basis, s)?;
+    }
+    let w = filter.weights(&basis.values)?;
+    Ok(sources
+        .par_iter()
+        .map(|&s| {
+            let mut d = weighted_sq_from(&basis.vectors, basis.n, &w, s);
+            d.iter_mut().for_each(|v| *v = v.sqrt());
+            d
+        })
+        .collect())
+}
+
+/// Row-major `n x m` embedding with the pairs of non-zero weight scaled by `sqrt(w)`.
+fn weighted_rows(basis: &Eigenbasis, w: &[f64]) -> (Vec<f64>, usize) {
+    let n = basis.n;
+    let used: Vec<usize> = (0..w.len()).filter(|&j| w[j] > 0.0).collect();
+    let m = used.len();
+    let mut e = vec![0.0; n * m];
+    e.par_chunks_mut(m.max(1)).enumerate().for_each(|(i, row)| {
+        for (c, &j) in used.iter().enumerate() {
+            row[c] = w[j].sqrt() * basis.vectors[j * n + i];
+        }
+    });
+    (e, m)
+}
+
+/// All pairwise distances, a symmetric row-major `n x n` matrix with an exact zero
+/// diagonal. O(n^2 k), parallel over rows; refused above [`ALL_PAIRS_LIMIT`] vertices.
+/// Each entry is computed from differences (not from the Gram matrix), so small distances
+/// keep their relative accuracy.
+pub fn all_pairs(basis: &Eigenbasis, filter: &Filter) -> Result<Vec<f64>, DistanceError> {
+    let n = basis.n;
+    if n > ALL_PAIRS_LIMIT {
+        return Err(DistanceError::TooLarge {
+            n,
+            limit: ALL_PAIRS_LIMIT,
+        });
+    }
+    let w = filter.weights(&basis.values)?;
+    let (e, m) = weighted_rows(basis, &w);
+    let mut out = vec![0.0; n * n];
+    out.par_chunks_mut(n).enumerate().for_each(|(i, row)| {
+        let ei = &e[i * m..(i + 1) * m];
+        for (j, r) in row.iter_mut().enumerate().take(i) {
+            let ej = &e[j * m..(j + 1) * m];
+            let s: f64 = ei.iter().zip(ej).map(|(a, b)| (a - b) * (a - b)).sum();
+            *r = s.sqrt();
+        }
+    });
+    // Mirror the lower triangle.
+    for i in 0..n {
+        for j in 0..i {
+            out[j * n + i] = out[i * n + j];
+        }
+    }
+    Ok(out)
+}
+
+/// The row `G(p, .)` of the generalized Green kernel `G = X diag(w) X^T` (`n` values).
+pub fn green_row(basis: &Eigenbasis, p: usize, filter: &Filter) -> Result<Vec<f64>, DistanceError> {
+    check_vertex(basis, p)?;
+    let w = filter.weights(&basis.values)?;
+    let n = basis.n;
+    let c: Vec<f64> = w
+        .iter()
+        .enumerate()
+        .map(|(j, wj)| wj * basis.vectors[j * n + p])
+        .collect();
+    Ok(super::heat::combine_columns(&basis.vectors, n, &c))
+}
+
+/// The generalized spectral function `p -> G(p,p) = sum_k w_k x_k(p)^2` (`n` values). With
+/// the diffusion filter this is the auto-diffusion function.
+pub fn spectral_function(basis: &Eigenbasis, filter: &Filter) -> Result<Vec<f64>, DistanceError> {
+    let w = filter.weights(&basis.values)?;
+    let n = basis.n;
+    let mut g = vec![0.0; n];
+    for (j, &wj) in w.iter().enumerate() {
+        if wj != 0.0 {
+            for (gi, x) in g.iter_mut().zip(&basis.vectors[j * n..(j + 1) * n]) {
+                *gi += wj * x * x;
+            }
+        }
+    }
+    Ok(g)
+}
+
+/// The wFEM diffusion distances of eq. 15 from `source`:
+/// `d_t(i,j)^2 = (e_i - e_j)^T S_t (e_i - e_j)`, `S_t = B X D_t X^T B`, all `k` pairs
+/// (including the zero eigenvalue), O(nk + nnz(B) k).
+pub fn wfem_diffusion_distances_from(
+    basis: &Eigenbasis,
+    source: usize,
+    t: f64,
+) -> Result<Vec<f64>, DistanceError> {
+    check_vertex(basis, source)?;
+    if !(t.is_finite() && t >= 0.0) {
+        return Err(DistanceError::InvalidTime(t));
+    }
+    let n = basis.n;
+    let k = basis.k();
+    // Y = B X, column-major n x k.
+    let mut y = vec![0.0; n * k];
+    y.par_chunks_mut(n.max(1)).enumerate().for_each(|(j, col)| {
+        col.copy_from_slice(&basis.mass.mul_vec(&basis.vectors[j * n..(j + 1) * n]));
+    });
+    let w: Vec<f64> = basis.values.iter().map(|l| (-l * t).exp()).collect();
+    let mut d = weighted_sq_from(&y, n, &w, source);
+    d.iter_mut().for_each(|v| *v = v.max(0.0).sqrt());
+    Ok(d)
+}
+
+/// The wFEM diffusion kernel matrix entries `S_t(source, .)` (`n` values) of eq. 15.
+pub fn wfem_diffusion_kernel_row(
+    basis: &Eigenbasis,
+    source: usize,
+    t: f64,
+) -> Result<Vec<f64>, DistanceError> {
+    check_vertex(basis, source)?;
+    if !(t.is_finite() && t >= 0.0) {
+        return Err(DistanceError::InvalidTime(t));
+    }
+    let n = basis.n;
+    // S_t e_s = B X D_t (X^T B e_s).
+    let bs: Vec<f64> = {
+        let mut e = vec![0.0; n];
+        e[source] = 1.0;
+        basis.mass.mul_vec(&e)
+    };
+    let mut c = super::heat::project(&basis.vectors, n, &bs);
+    for (cj, l) in c.iter_mut().zip(&basis.values) {
+        *cj *= (-l * t).exp();
+    }
+    Ok(basis
+        .mass
+        .mul_vec(&super::heat::combine_columns(&basis.vectors, n, &c)))
+}

@@ -1,6 +1,9 @@
 //! The k smallest generalized eigenpairs of (S, B): `S X = B X Lambda`, `X^T B X = I`.
 
-use crate::linalg::{SparseMatrix, dense_generalized_eigen};
+use crate::linalg::{
+    SparseEigenError, SparseEigenOptions, SparseMatrix, b_orthogonality_error,
+    dense_generalized_eigen, relative_residuals, sparse_generalized_eigen,
+};
 use crate::operators::{Laplacian, Operators};
 
 /// Errors of the eigenbasis computation.
@@ -20,6 +23,202 @@ pub enum EigenError {
     /// A numerical failure, with what failed.
     #[error("eigensolver failed: {0}")]
     Numerical(String),
+    /// A Dirichlet vertex index is out of range.
+    #[error("Dirichlet vertex {vertex} does not exist (the mesh has {n} vertices)")]
+    DirichletOutOfRange {
+        /// The offending index.
+        vertex: usize,
+        /// Vertices.
+        n: usize,
+    },
+    /// The iterative solver stopped before every wanted pair converged.
+    #[error(
+        "the eigensolver did not converge: {converged} of {wanted} pairs after {iterations} iterations"
+    )]
+    NoConvergence {
+        /// Converged pairs.
+        converged: usize,
+        /// Wanted pairs.
+        wanted: usize,
+        /// Iterations used.
+        iterations: usize,
+    },
+}
+
+impl From<SparseEigenError> for EigenError {
+    fn from(e: SparseEigenError) -> Self {
+        match e {
+            SparseEigenError::NoConvergence {
+                converged,
+                wanted,
+                iterations,
+            } => EigenError::NoConvergence {
+                converged,
+                wanted,
+                iterations,
+            },
+            other => EigenError::Numerical(other.to_string()),
+        }
+    }
+}
+
+pub use crate::linalg::EigenProgress;
+
+/// Which eigensolver [`compute_eigenbasis`] uses.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum EigenMethod {
+    /// Dense for small problems (or `k` close to `n`), block shift-invert otherwise.
+    #[default]
+    Auto,
+    /// All pairs by the dense O(n^3) solver, truncated to `k` (small meshes only).
+    Dense,
+    /// Block Davidson with a sparse Cholesky shift-invert preconditioner
+    /// ([`crate::linalg::sparse_generalized_eigen`]).
+    ShiftInvertBlock,
+}
+
+/// Parameters of [`compute_eigenbasis`].
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct EigenParams {
+    /// Number of pairs (the smallest eigenvalues). Default 100, the paper's default.
+    pub k: usize,
+    /// Target relative residual of every pair (see [`Eigenbasis::compute_residuals`]).
+    /// Default `1e-10`.
+    pub tolerance: f64,
+    /// Dirichlet boundary vertices: the problem is solved on the other vertices and the
+    /// eigenvectors are zero on these. `None` (default): natural boundary conditions.
+    pub dirichlet: Option<Vec<usize>>,
+    /// The solver. Default [`EigenMethod::Auto`].
+    pub method: EigenMethod,
+    /// Seed of the iterative solver's start block (results are deterministic).
+    pub seed: u64,
+    /// Block size of the iterative solver; `0` (default) chooses from `k`.
+    pub block_size: usize,
+}
+
+impl Default for EigenParams {
+    fn default() -> Self {
+        Self {
+            k: 100,
+            tolerance: 1e-10,
+            dirichlet: None,
+            method: EigenMethod::Auto,
+            seed: 0x5eed,
+            block_size: 0,
+        }
+    }
+}
+
+/// Problems up to this many (free) vertices always use the dense path under
+/// [`EigenMethod::Auto`].
+pub const DENSE_MAX_N: usize = 1000;
+/// Problems up to this size use the dense path under [`EigenMethod::Auto`] when `k` is more
+/// than a third of `n`.
+pub const DENSE_MAX_N_LARGE_K: usize = 4000;
+
+/// The `k` smallest pairs of `S x = lambda B x` (S positive semi-definite, B the mass of
+/// `ops`): eigenvalues ascending, eigenvectors B-orthonormal with the sign rule of
+/// [`Eigenbasis::fix_signs`], residuals filled in. With `params.dirichlet` the problem is
+/// solved on the free vertices and the vectors are zero on the Dirichlet ones.
+///
+/// A mesh with `c` components has `c` (numerically) zero eigenvalues under natural
+/// boundary conditions. Repeated eigenvalues are resolved: if the `k`-th eigenvalue lies
+/// in a cluster, the iterative solver converges past the cluster before returning `k`
+/// pairs. Progress (factorization, iterations with the converged count) goes to
+/// `progress`.
+pub fn compute_eigenbasis(
+    ops: &Operators,
+    params: &EigenParams,
+    progress: &mut dyn FnMut(EigenProgress),
+) -> Result<Eigenbasis, EigenError> {
+    let n = ops.n();
+    let k = params.k;
+    if k == 0 {
+        return Err(EigenError::Zero);
+    }
+    // The free vertices.
+    let free: Option<Vec<usize>> = match &params.dirichlet {
+        None => None,
+        Some(d) => {
+            let mut fixed = vec![false; n];
+            for &v in d {
+                if v >= n {
+                    return Err(EigenError::DirichletOutOfRange { vertex: v, n });
+                }
+                fixed[v] = true;
+            }
+            Some((0..n).filter(|&i| !fixed[i]).collect())
+        }
+    };
+    let (s_sub, b_sub);
+    let (s, b) = match &free {
+        None => (&ops.stiffness, &ops.mass),
+        Some(f) => {
+            s_sub = ops.stiffness.submatrix(f, f);
+            b_sub = ops.mass.submatrix(f, f);
+            (&s_sub, &b_sub)
+        }
+    };
+    let nf = s.ncols();
+    if k > nf {
+        return Err(EigenError::TooMany { k, n: nf });
+    }
+    let dense = match params.method {
+        EigenMethod::Dense => true,
+        EigenMethod::ShiftInvertBlock => false,
+        EigenMethod::Auto => nf <= DENSE_MAX_N || (3 * k > nf && nf <= DENSE_MAX_N_LARGE_K),
+    };
+    let (values, vecs, residuals) = if dense {
+        progress(EigenProgress::Dense { n: nf });
+        let (vals, vecs) =
+            dense_generalized_eigen(s, b).map_err(|e| EigenError::Numerical(e.to_string()))?;
+        let values = vals[..k].to_vec();
+        let vecs = vecs[..nf * k].to_vec();
+        let residuals = relative_residuals(s, b, &values, &vecs);
+        let orthogonality_error = b_orthogonality_error(b, &vecs, k);
+        progress(EigenProgress::Finished {
+            iterations: 0,
+            solves: 0,
+            max_residual: residuals.iter().cloned().fold(0.0, f64::max),
+            orthogonality_error,
+        });
+        (values, vecs, residuals)
+    } else {
+        let opts = SparseEigenOptions {
+            k,
+            tolerance: params.tolerance,
+            block_size: params.block_size,
+            seed: params.seed,
+            ..Default::default()
+        };
+        let r = sparse_generalized_eigen(s, b, &opts, progress)?;
+        (r.values, r.vectors, r.residuals)
+    };
+    let vectors = match &free {
+        None => vecs,
+        Some(f) => {
+            let mut full = vec![0.0; n * k];
+            for j in 0..k {
+                for (q, &i) in f.iter().enumerate() {
+                    full[j * n + i] = vecs[j * nf + q];
+                }
+            }
+            full
+        }
+    };
+    let mut basis = Eigenbasis {
+        laplacian: ops.laplacian,
+        n,
+        values,
+        vectors,
+        mass: ops.mass.clone(),
+        residuals,
+    };
+    basis.fix_signs();
+    Ok(basis)
 }
 
 /// A generalized eigenbasis: `k` pairs, eigenvalues ascending, eigenvectors B-orthonormal
@@ -36,8 +235,8 @@ pub struct Eigenbasis {
     pub vectors: Vec<f64>,
     /// The mass matrix B the vectors are orthonormal in.
     pub mass: SparseMatrix,
-    /// Relative residuals `||S x - lambda B x|| / (||S||_1 ||x||_B)` per pair (empty
-    /// when not computed).
+    /// Relative residuals `||S x - lambda B x||_2 / ((||S||_1 + |lambda| ||B||_1) ||x||_2)`
+    /// per pair (empty when not computed; on the free block for Dirichlet problems).
     pub residuals: Vec<f64>,
 }
 
@@ -94,27 +293,364 @@ impl Eigenbasis {
         Ok(b)
     }
 
-    /// Relative residual of every pair against the stiffness `s`:
-    /// `||S x - lambda B x||_2 / (||S||_1 * ||x||_B)`.
+    /// Relative residual of every pair against the stiffness `s` (positive
+    /// semi-definite) and this basis' mass:
+    /// `||S x - lambda B x||_2 / ((||S||_1 + |lambda| ||B||_1) ||x||_2)`, a normwise backward
+    /// error that does not change when the mesh is scaled.
     pub fn compute_residuals(&self, s: &SparseMatrix) -> Vec<f64> {
-        let snorm = (0..s.ncols())
-            .map(|c| s.col(c).1.iter().map(|v| v.abs()).sum::<f64>())
-            .fold(0.0, f64::max)
-            .max(f64::MIN_POSITIVE);
-        (0..self.k())
-            .map(|j| {
-                let x = self.vector(j);
-                let sx = s.mul_vec(x);
-                let bx = self.mass.mul_vec(x);
-                let r: f64 = sx
+        relative_residuals(s, &self.mass, &self.values, &self.vectors)
+    }
+
+    /// `max |X^T B X - I|` over the stored vectors (zero for an exactly B-orthonormal basis).
+    pub fn orthogonality_error(&self) -> f64 {
+        b_orthogonality_error(&self.mass, &self.vectors, self.k())
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod test_meshes {
+    //! Small meshes built in code for the tests.
+    use crate::mesh::Mesh;
+    use std::collections::HashMap;
+
+    /// An icosphere of radius `r` with `level` subdivisions (12, 42, 162, 642, ... vertices).
+    pub fn icosphere(level: usize, r: f64) -> Mesh {
+        let t = (1.0 + 5f64.sqrt()) / 2.0;
+        let mut p: Vec<[f64; 3]> = vec![
+            [-1.0, t, 0.0],
+            [1.0, t, 0.0],
+            [-1.0, -t, 0.0],
+            [1.0, -t, 0.0],
+            [0.0, -1.0, t],
+            [0.0, 1.0, t],
+            [0.0, -1.0, -t],
+            [0.0, 1.0, -t],
+            [t, 0.0, -1.0],
+            [t, 0.0, 1.0],
+            [-t, 0.0, -1.0],
+            [-t, 0.0, 1.0],
+        ];
+        let mut f: Vec<[usize; 3]> = vec![
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ];
+        let proj = |v: [f64; 3]| {
+            let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            [v[0] / l, v[1] / l, v[2] / l]
+        };
+        for v in p.iter_mut() {
+            *v = proj(*v);
+        }
+        for _ in 0..level {
+            let mut mid: HashMap<(usize, usize), usize> = HashMap::new();
+            let mut nf = Vec::with_capacity(f.len() * 4);
+            for tri in &f {
+                let mut m = [0usize; 3];
+                for e in 0..3 {
+                    let (a, b) = (tri[e], tri[(e + 1) % 3]);
+                    let key = (a.min(b), a.max(b));
+                    m[e] = *mid.entry(key).or_insert_with(|| {
+                        let q = proj([
+                            (p[a][0] + p[b][0]) / 2.0,
+                            (p[a][1] + p[b][1]) / 2.0,
+                            (p[a][2] + p[b][2]) / 2.0,
+                        ]);
+                        p.push(q);
+                        p.len() - 1
+                    });
+                }
+                nf.push([tri[0], m[0], m[2]]);
+                nf.push([tri[1], m[1], m[0]]);
+                nf.push([tri[2], m[2], m[1]]);
+                nf.push([m[0], m[1], m[2]]);
+            }
+            f = nf;
+        }
+        let p = p
+            .into_iter()
+            .map(|v| [v[0] * r, v[1] * r, v[2] * r])
+            .collect();
+        Mesh::new(p, f).unwrap()
+    }
+
+    /// A disk of radius 1 triangulated from a polar-ish grid: `rings` rings of `6 * ring`
+    /// vertices around the centre (a bordered surface).
+    pub fn disk(rings: usize) -> Mesh {
+        let mut p = vec![[0.0, 0.0, 0.0]];
+        let mut start = vec![0usize];
+        for r in 1..=rings {
+            start.push(p.len());
+            let m = 6 * r;
+            for j in 0..m {
+                let a = 2.0 * std::f64::consts::PI * j as f64 / m as f64;
+                let rad = r as f64 / rings as f64;
+                p.push([rad * a.cos(), rad * a.sin(), 0.0]);
+            }
+        }
+        let mut f = Vec::new();
+        // Ring 1 to the centre.
+        for j in 0..6 {
+            f.push([0, 1 + j, 1 + (j + 1) % 6]);
+        }
+        for r in 1..rings {
+            let (ia, ib) = (start[r], start[r + 1]);
+            let (ma, mb) = (6 * r, 6 * (r + 1));
+            // Merge-walk the two rings by angle.
+            let (mut a, mut b) = (0usize, 0usize);
+            while a < ma || b < mb {
+                let ang_a = (a + 1) as f64 / ma as f64;
+                let ang_b = (b + 1) as f64 / mb as f64;
+                if b < mb && (a >= ma || ang_b <= ang_a) {
+                    f.push([ia + a % ma, ib + b, ib + (b + 1) % mb]);
+                    b += 1;
+                } else {
+                    f.push([ia + a, ib + b % mb, ia + (a + 1) % ma]);
+                    a += 1;
+                }
+            }
+        }
+        Mesh::new(p, f).unwrap()
+    }
+
+    /// Disjoint union of meshes (vertex indices shifted), with the given offsets.
+    pub fn union(parts: &[(Mesh, [f64; 3])]) -> Mesh {
+        let mut p = Vec::new();
+        let mut f = Vec::new();
+        for (m, off) in parts {
+            let base = p.len();
+            p.extend(
+                m.positions()
                     .iter()
-                    .zip(&bx)
-                    .map(|(a, b)| (a - self.values[j] * b).powi(2))
-                    .sum::<f64>()
-                    .sqrt();
-                let xb: f64 = x.iter().zip(&bx).map(|(a, b)| a * b).sum::<f64>().sqrt();
-                r / (snorm * xb.max(f64::MIN_POSITIVE))
-            })
-            .collect()
+                    .map(|v| [v[0] + off[0], v[1] + off[1], v[2] + off[2]]),
+            );
+            f.extend(
+                m.triangles()
+                    .iter()
+                    .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+            );
+        }
+        Mesh::new(p, f).unwrap()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_meshes::*;
+    use super::*;
+
+    fn iterative(k: usize) -> EigenParams {
+        EigenParams {
+            k,
+            method: EigenMethod::ShiftInvertBlock,
+            ..Default::default()
+        }
+    }
+
+    fn check_against_dense(ops: &Operators, k: usize) {
+        let dense = compute_eigenbasis(
+            ops,
+            &EigenParams {
+                k,
+                method: EigenMethod::Dense,
+                ..Default::default()
+            },
+            &mut |_| {},
+        )
+        .unwrap();
+        let it = compute_eigenbasis(ops, &iterative(k), &mut |_| {}).unwrap();
+        let scale = dense.values[k - 1].abs().max(1e-300);
+        for j in 0..k {
+            assert!(
+                (it.values[j] - dense.values[j]).abs() <= 1e-9 * scale,
+                "{}: pair {j}: {} vs dense {}",
+                ops.laplacian,
+                it.values[j],
+                dense.values[j]
+            );
+        }
+        assert!(
+            it.residuals.iter().all(|&r| r <= 1e-8),
+            "{:?}",
+            it.residuals
+        );
+        assert_eq!(it.residuals, it.compute_residuals(&ops.stiffness));
+        assert!(it.orthogonality_error() <= 1e-10);
+        // Sign rule holds.
+        for j in 0..k {
+            let x = it.vector(j);
+            let big = x
+                .iter()
+                .cloned()
+                .fold(0.0f64, |m, v| if v.abs() > m.abs() { v } else { m });
+            assert!(big > 0.0);
+        }
+    }
+
+    #[test]
+    fn iterative_matches_dense_for_every_mass() {
+        let mesh = disk(12); // bordered, 469 vertices
+        for lap in [Laplacian::Fem, Laplacian::VoronoiCot, Laplacian::Cot] {
+            let ops = Operators::new(&mesh, lap);
+            check_against_dense(&ops, 30);
+        }
+    }
+
+    #[test]
+    fn sphere_multiplicities() {
+        let mesh = icosphere(3, 1.0); // 642 vertices
+        let ops = Operators::new(&mesh, Laplacian::Fem);
+        let b9 = compute_eigenbasis(&ops, &iterative(9), &mut |_| {}).unwrap();
+        let l = |i: usize| match i {
+            0 => 0.0,
+            1..=3 => 2.0,
+            _ => 6.0,
+        };
+        for j in 0..9 {
+            assert!(
+                (b9.values[j] - l(j)).abs() < 0.05 * l(j).max(1.0),
+                "{:?}",
+                b9.values
+            );
+        }
+        let b4 = compute_eigenbasis(&ops, &iterative(4), &mut |_| {}).unwrap();
+        for j in 0..4 {
+            assert!((b4.values[j] - b9.values[j]).abs() < 1e-9 * b9.values[8]);
+        }
+        // k = 3 cuts the l = 1 triple: still the right values.
+        let b3 = compute_eigenbasis(&ops, &iterative(3), &mut |_| {}).unwrap();
+        for j in 0..3 {
+            assert!((b3.values[j] - b9.values[j]).abs() < 1e-9 * b9.values[8]);
+        }
+        assert!(b3.residuals.iter().all(|&r| r <= 1e-8));
+        // Large k through many clusters agrees with dense.
+        check_against_dense(&ops, 60);
+    }
+
+    #[test]
+    fn components_give_zero_eigenvalues() {
+        let s = icosphere(2, 1.0);
+        let mesh = union(&[
+            (s.clone(), [0.0; 3]),
+            (s.clone(), [3.0, 0.0, 0.0]),
+            (s, [0.0, 3.0, 0.0]),
+        ]);
+        let ops = Operators::new(&mesh, Laplacian::Fem);
+        let b = compute_eigenbasis(&ops, &iterative(8), &mut |_| {}).unwrap();
+        for j in 0..3 {
+            assert!(b.values[j].abs() < 1e-8, "{:?}", b.values);
+        }
+        assert!(b.values[3] > 1.0);
+        assert!(b.orthogonality_error() < 1e-10);
+    }
+
+    #[test]
+    fn k_larger_than_n_is_an_error() {
+        let mesh = icosphere(0, 1.0);
+        let ops = Operators::new(&mesh, Laplacian::Fem);
+        let e = compute_eigenbasis(
+            &ops,
+            &EigenParams {
+                k: 13,
+                ..Default::default()
+            },
+            &mut |_| {},
+        );
+        assert_eq!(e.unwrap_err(), EigenError::TooMany { k: 13, n: 12 });
+        // Auto on a tiny mesh with k = n works (dense path).
+        let b = compute_eigenbasis(
+            &ops,
+            &EigenParams {
+                k: 12,
+                ..Default::default()
+            },
+            &mut |_| {},
+        )
+        .unwrap();
+        assert_eq!(b.k(), 12);
+        // The iterative path also handles k = n.
+        let b2 = compute_eigenbasis(&ops, &iterative(12), &mut |_| {}).unwrap();
+        for j in 0..12 {
+            assert!((b.values[j] - b2.values[j]).abs() < 1e-9 * b.values[11]);
+        }
+    }
+
+    #[test]
+    fn dirichlet_disk() {
+        let mesh = disk(12);
+        let ops = Operators::new(&mesh, Laplacian::Fem);
+        let n = ops.n();
+        let boundary: Vec<usize> = (n - 6 * 12..n).collect();
+        let params = EigenParams {
+            k: 6,
+            dirichlet: Some(boundary.clone()),
+            method: EigenMethod::ShiftInvertBlock,
+            ..Default::default()
+        };
+        let b = compute_eigenbasis(&ops, &params, &mut |_| {}).unwrap();
+        // Unit disk, Dirichlet: lambda_1 = j_{0,1}^2 = 5.783; then j_{1,1}^2 = 14.68 (x2).
+        assert!((b.values[0] - 5.783).abs() < 0.1, "{:?}", b.values);
+        assert!((b.values[1] - 14.68).abs() < 0.4 && (b.values[2] - 14.68).abs() < 0.4);
+        for j in 0..6 {
+            for &i in &boundary {
+                assert_eq!(b.vector(j)[i], 0.0);
+            }
+        }
+        assert!(b.orthogonality_error() < 1e-10);
+        let dense = compute_eigenbasis(
+            &ops,
+            &EigenParams {
+                method: EigenMethod::Dense,
+                ..params.clone()
+            },
+            &mut |_| {},
+        )
+        .unwrap();
+        for j in 0..6 {
+            assert!((b.values[j] - dense.values[j]).abs() < 1e-9 * dense.values[5]);
+        }
+        let bad = EigenParams {
+            dirichlet: Some(vec![n]),
+            ..params
+        };
+        assert!(matches!(
+            compute_eigenbasis(&ops, &bad, &mut |_| {}),
+            Err(EigenError::DirichletOutOfRange { .. })
+        ));
+    }
+
+    #[test]
+    fn progress_reports_phases() {
+        let mesh = icosphere(3, 1.0);
+        let ops = Operators::new(&mesh, Laplacian::Fem);
+        let mut events = Vec::new();
+        compute_eigenbasis(&ops, &iterative(10), &mut |e| events.push(e)).unwrap();
+        assert!(matches!(events[0], EigenProgress::Factorization { .. }));
+        assert!(
+            events
+                .iter()
+                .any(|e| matches!(e, EigenProgress::Iteration { .. }))
+        );
+        assert!(matches!(
+            events.last(),
+            Some(EigenProgress::Finished { .. })
+        ));
     }
 }

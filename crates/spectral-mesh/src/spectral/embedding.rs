@@ -1,1 +1,67 @@
-//! embedding (to be written).
+//! Spectral embeddings `p -> (sqrt(w(lambda_k)) x_k(p))_k` (Sect. 5 of the paper): the
+//! Euclidean distance between embedded points is the filtered spectral distance.
+
+use super::Eigenbasis;
+use super::distances::DistanceError;
+use super::filters::Filter;
+use crate::mesh::{Mesh, MeshError};
+
+/// Errors of the embeddings.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum EmbeddingError {
+    /// The filter is refused on this spectrum.
+    #[error(transparent)]
+    Distance(#[from] DistanceError),
+    /// The embedded mesh could not be built.
+    #[error("cannot build the embedded mesh: {0}")]
+    Mesh(#[from] MeshError),
+    /// The basis does not match the mesh.
+    #[error("the basis has {basis} vertices but the mesh has {mesh}")]
+    SizeMismatch {
+        /// Vertices of the basis.
+        basis: usize,
+        /// Vertices of the mesh.
+        mesh: usize,
+    },
+}
+
+/// The spectral embedding: one vector of `min(dims, number of non-zero pairs)` coordinates
+/// per vertex, coordinate `c` = `sqrt(w(lambda)) x(p)` of the `c`-th pair with non-zero
+/// weight (zero eigenvalues and suppressed pairs are skipped), in basis order.
+pub fn spectral_embedding(
+    basis: &Eigenbasis,
+    filter: &Filter,
+    dims: usize,
+) -> Result<Vec<Vec<f64>>, EmbeddingError> {
+    let w = filter.weights(&basis.values).map_err(DistanceError::from)?;
+    let n = basis.n;
+    let used: Vec<usize> = (0..w.len()).filter(|&j| w[j] > 0.0).take(dims).collect();
+    Ok((0..n)
+        .map(|i| {
+            used.iter()
+                .map(|&j| w[j].sqrt() * basis.vectors[j * n + i])
+                .collect()
+        })
+        .collect())
+}
+
+/// The mesh with the same triangles whose positions are the first three coordinates of
+/// the spectral embedding (missing coordinates are 0).
+pub fn embedding_mesh(
+    mesh: &Mesh,
+    basis: &Eigenbasis,
+    filter: &Filter,
+) -> Result<Mesh, EmbeddingError> {
+    if mesh.n_vertices() != basis.n {
+        return Err(EmbeddingError::SizeMismatch {
+            basis: basis.n,
+            mesh: mesh.n_vertices(),
+        });
+    }
+    let e = spectral_embedding(basis, filter, 3)?;
+    let pos: Vec<[f64; 3]> = e
+        .iter()
+        .map(|v| std::array::from_fn(|d| v.get(d).copied().unwrap_or(0.0)))
+        .collect();
+    Ok(Mesh::new(pos, mesh.triangles().to_vec())?)
+}

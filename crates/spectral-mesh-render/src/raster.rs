@@ -1,0 +1,814 @@
+//! A headless software renderer: z-buffered, Gouraud-shaded triangles with per-vertex
+//! colours, two-sided Lambert + ambient lighting, supersampling anti-aliasing, level-set
+//! lines and critical-point markers with depth tests, and an optional colour bar.
+//!
+//! # Camera
+//!
+//! World `y` is up. A view is an azimuth `a` about `y` and an elevation `e` above the
+//! `xz` plane; the camera sits in the direction `d = (cos e sin a, sin e, cos e cos a)`
+//! from the centre of the mesh's bounding sphere and looks back at it, with screen-right
+//! `(cos a, 0, -sin a)` and screen-up `d × right`. Named views: `front` = (0°, 0°) looks
+//! down `-z`; `side` = (90°, 0°) looks down `-x`; `top` = (0°, 90°) looks down `-y`
+//! (screen-up is `-z`); `iso` = (45°, 35.26°). The bounding sphere (centre of the bounding
+//! box, radius to the farthest vertex) is fitted into the shape's viewport minus a margin.
+//!
+//! # Pixels
+//!
+//! The picture is drawn at `supersample` times the output size and box-filtered down.
+//! Pixel `(x, y)` has its centre at `(x + 0.5, y + 0.5)`, `y` downwards.
+
+use crate::colormap::{Colormap, to_u8};
+use crate::text;
+use crate::{Image, RenderError};
+use spectral_mesh::Mesh;
+use spectral_mesh::fields::level_sets::LevelSet;
+use spectral_mesh::mesh::{cross, dot, norm, normalize, sub};
+use std::str::FromStr;
+
+/// Largest number of output pixels accepted (`width * height`).
+pub const MAX_PIXELS: u64 = 1 << 26;
+/// Largest number of supersampled samples; `supersample` is lowered to stay under it.
+pub const MAX_SAMPLES: u64 = 1 << 26;
+
+/// Viewing direction.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum View {
+    /// Azimuth 0°, elevation 0°: looking down `-z`, `y` up.
+    Front,
+    /// Azimuth 90°, elevation 0°: looking down `-x`.
+    Side,
+    /// Azimuth 0°, elevation 90°: looking down `-y`.
+    Top,
+    /// Azimuth 45°, elevation 35.264° (the cube diagonal).
+    #[default]
+    Iso,
+    /// Explicit angles in degrees.
+    Angles {
+        /// Rotation about the world `y` axis.
+        azimuth_deg: f64,
+        /// Angle above the `xz` plane, in `[-90, 90]`.
+        elevation_deg: f64,
+    },
+}
+
+impl View {
+    /// `(azimuth, elevation)` in degrees.
+    pub fn angles(self) -> (f64, f64) {
+        match self {
+            View::Front => (0.0, 0.0),
+            View::Side => (90.0, 0.0),
+            View::Top => (0.0, 90.0),
+            View::Iso => (45.0, (1.0f64 / 2f64.sqrt()).atan().to_degrees()),
+            View::Angles {
+                azimuth_deg,
+                elevation_deg,
+            } => (azimuth_deg, elevation_deg),
+        }
+    }
+}
+
+impl FromStr for View {
+    type Err = RenderError;
+
+    /// `front | side | top | iso | AZ,EL` (degrees).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let low = s.trim().to_ascii_lowercase();
+        match low.as_str() {
+            "front" => return Ok(View::Front),
+            "side" => return Ok(View::Side),
+            "top" => return Ok(View::Top),
+            "iso" => return Ok(View::Iso),
+            _ => {}
+        }
+        let bad = || RenderError::InvalidOption(format!("unknown view '{s}'"));
+        let (a, e) = low.split_once(',').ok_or_else(bad)?;
+        let a: f64 = a.trim().parse().map_err(|_| bad())?;
+        let e: f64 = e.trim().parse().map_err(|_| bad())?;
+        if !a.is_finite() || !e.is_finite() {
+            return Err(bad());
+        }
+        Ok(View::Angles {
+            azimuth_deg: a,
+            elevation_deg: e,
+        })
+    }
+}
+
+/// Projection model.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Projection {
+    /// Parallel projection.
+    #[default]
+    Orthographic,
+    /// Pinhole camera with the given full field of view (degrees, clamped to `[1, 150]`).
+    Perspective {
+        /// Full field of view in degrees.
+        fov_deg: f64,
+    },
+}
+
+/// What is behind the shape.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Background {
+    /// Opaque white.
+    #[default]
+    White,
+    /// Alpha 0 (the shape's edges get fractional alpha from anti-aliasing).
+    Transparent,
+    /// Opaque colour.
+    Color([u8; 3]),
+}
+
+/// Rendering parameters. `Default`: 800×800, iso view, orthographic, white background,
+/// 3×3 supersampling.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderOptions {
+    /// Output width in pixels.
+    pub width: u32,
+    /// Output height in pixels.
+    pub height: u32,
+    /// Viewing direction.
+    pub view: View,
+    /// Projection model.
+    pub projection: Projection,
+    /// Background.
+    pub background: Background,
+    /// Supersampling factor per axis (1 = no anti-aliasing; clamped to `1..=4`).
+    pub supersample: u32,
+    /// Ambient light intensity.
+    pub ambient: f32,
+    /// Diffuse (Lambert) light intensity; lighting is two-sided.
+    pub diffuse: f32,
+    /// Level-set line width in output pixels.
+    pub line_width: f32,
+    /// Level-set line colour.
+    pub line_color: [u8; 3],
+    /// Marker disc radius as a fraction of `min(width, height)`.
+    pub marker_radius: f32,
+    /// Empty margin around the fitted bounding sphere, as a fraction of the viewport.
+    pub margin: f32,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self {
+            width: 800,
+            height: 800,
+            view: View::Iso,
+            projection: Projection::Orthographic,
+            background: Background::White,
+            supersample: 3,
+            ambient: 0.35,
+            diffuse: 0.65,
+            line_width: 1.5,
+            line_color: [15, 15, 15],
+            marker_radius: 0.012,
+            margin: 0.04,
+        }
+    }
+}
+
+/// Kind of a marked point; decides its colour.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MarkerKind {
+    /// Local minimum: blue.
+    Minimum,
+    /// Local maximum: red.
+    Maximum,
+    /// Saddle: green.
+    Saddle,
+    /// Source / anchor vertex: yellow.
+    Source,
+}
+
+impl MarkerKind {
+    /// Fill colour of the marker.
+    pub fn color(self) -> [u8; 3] {
+        match self {
+            MarkerKind::Minimum => [30, 80, 255],
+            MarkerKind::Maximum => [230, 20, 20],
+            MarkerKind::Saddle => [20, 190, 40],
+            MarkerKind::Source => [255, 225, 0],
+        }
+    }
+}
+
+/// A point to mark on the surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Marker {
+    /// Position in world coordinates (normally a vertex).
+    pub position: [f64; 3],
+    /// Its kind.
+    pub kind: MarkerKind,
+}
+
+/// A colour bar: the map and the field values at its two ends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ColorBar {
+    /// Value at the bottom of the bar.
+    pub min: f64,
+    /// Value at the top of the bar.
+    pub max: f64,
+    /// The map.
+    pub colormap: Colormap,
+}
+
+/// Everything drawn in one picture.
+#[derive(Debug, Clone)]
+pub struct Scene<'a> {
+    /// The surface.
+    pub mesh: &'a Mesh,
+    /// One RGB colour in `[0, 1]` per vertex.
+    pub vertex_colors: Vec<[f32; 3]>,
+    /// Level-set lines drawn over the surface.
+    pub level_sets: Vec<LevelSet>,
+    /// Critical points and anchors.
+    pub markers: Vec<Marker>,
+    /// Optional colour bar beside the shape.
+    pub colorbar: Option<ColorBar>,
+}
+
+impl<'a> Scene<'a> {
+    /// A light-grey surface with no overlays.
+    pub fn new(mesh: &'a Mesh) -> Self {
+        Self {
+            mesh,
+            vertex_colors: vec![[0.8, 0.8, 0.8]; mesh.n_vertices()],
+            level_sets: Vec::new(),
+            markers: Vec::new(),
+            colorbar: None,
+        }
+    }
+
+    /// A surface coloured by `field` through `colormap` over `range` (see
+    /// [`field_range`] for `None`), with the matching colour bar.
+    pub fn with_field(
+        mesh: &'a Mesh,
+        field: &[f64],
+        colormap: Colormap,
+        range: Option<(f64, f64)>,
+    ) -> Self {
+        let (lo, hi) = range.unwrap_or_else(|| field_range(field, colormap));
+        Self {
+            mesh,
+            vertex_colors: field_colors(field, colormap, Some((lo, hi))),
+            level_sets: Vec::new(),
+            markers: Vec::new(),
+            colorbar: Some(ColorBar {
+                min: lo,
+                max: hi,
+                colormap,
+            }),
+        }
+    }
+
+    /// The camera [`render_scene`] uses for this scene and these options.
+    pub fn camera(&self, opts: &RenderOptions) -> Camera {
+        let (vw, _) = layout(opts, self.colorbar.is_some());
+        Camera::fit(self.mesh, opts, vw)
+    }
+}
+
+/// The range used for `field` when none is given: `[min, max]` of the finite values,
+/// or `[-m, m]` with `m = max |f|` for a diverging map. `(0, 1)` if nothing is finite.
+pub fn field_range(field: &[f64], colormap: Colormap) -> (f64, f64) {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for &x in field.iter().filter(|x| x.is_finite()) {
+        lo = lo.min(x);
+        hi = hi.max(x);
+    }
+    if lo > hi {
+        return (0.0, 1.0);
+    }
+    if colormap.is_diverging() {
+        let m = lo.abs().max(hi.abs());
+        return (-m, m);
+    }
+    (lo, hi)
+}
+
+/// Per-vertex colours of `field` through `colormap`: `t = (f - lo) / (hi - lo)` with
+/// `(lo, hi) = range` or [`field_range`]. A constant range maps to `t = 0.5`; non-finite
+/// values are mid-grey.
+pub fn field_colors(field: &[f64], colormap: Colormap, range: Option<(f64, f64)>) -> Vec<[f32; 3]> {
+    let (lo, hi) = range.unwrap_or_else(|| field_range(field, colormap));
+    let span = hi - lo;
+    field
+        .iter()
+        .map(|&f| {
+            if !f.is_finite() {
+                return [0.5, 0.5, 0.5];
+            }
+            let t = if span > 0.0 && span.is_finite() {
+                (f - lo) / span
+            } else {
+                0.5
+            };
+            colormap.map_f32(t)
+        })
+        .collect()
+}
+
+/// Renders a mesh with per-vertex colours and no overlays.
+pub fn render(mesh: &Mesh, colors: &[[f32; 3]], opts: &RenderOptions) -> Result<Image, RenderError> {
+    let mut scene = Scene::new(mesh);
+    scene.vertex_colors = colors.to_vec();
+    render_scene(&scene, opts)
+}
+
+/// A fitted camera; maps world points to output-image pixel coordinates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Centre of the fitted bounding sphere.
+    pub center: [f64; 3],
+    /// Its radius.
+    pub radius: f64,
+    /// Screen-right direction in world coordinates.
+    pub right: [f64; 3],
+    /// Screen-up direction.
+    pub up: [f64; 3],
+    /// Direction from the centre towards the camera.
+    pub toward_camera: [f64; 3],
+    /// Orthographic: pixels per world unit. Perspective: focal length in pixels.
+    pub scale: f64,
+    /// Perspective: distance from the camera to the centre; `None` for orthographic.
+    pub distance: Option<f64>,
+    /// Pixel position of the centre, `x`.
+    pub cx: f64,
+    /// Pixel position of the centre, `y`.
+    pub cy: f64,
+}
+
+impl Camera {
+    /// Fits the mesh's bounding sphere into a viewport of `viewport_width × opts.height`
+    /// pixels at the left of the image.
+    pub fn fit(mesh: &Mesh, opts: &RenderOptions, viewport_width: u32) -> Self {
+        let (lo, hi) = mesh.bounding_box();
+        let center = [
+            0.5 * (lo[0] + hi[0]),
+            0.5 * (lo[1] + hi[1]),
+            0.5 * (lo[2] + hi[2]),
+        ];
+        let mut radius = mesh
+            .positions()
+            .iter()
+            .map(|&p| norm(sub(p, center)))
+            .fold(0.0, f64::max);
+        if radius <= 0.0 || !radius.is_finite() {
+            radius = 1.0;
+        }
+        let (az, el) = opts.view.angles();
+        let (a, e) = (az.to_radians(), el.clamp(-90.0, 90.0).to_radians());
+        let toward_camera = [e.cos() * a.sin(), e.sin(), e.cos() * a.cos()];
+        let right = [a.cos(), 0.0, -a.sin()];
+        let up = cross(toward_camera, right);
+        let margin = f64::from(opts.margin).clamp(0.0, 0.45);
+        let half = 0.5 * f64::from(viewport_width.min(opts.height)) * (1.0 - 2.0 * margin);
+        let (scale, distance) = match opts.projection {
+            Projection::Orthographic => (half / radius, None),
+            Projection::Perspective { fov_deg } => {
+                let h = 0.5 * fov_deg.clamp(1.0, 150.0).to_radians();
+                (half / h.tan(), Some(radius / h.sin()))
+            }
+        };
+        Self {
+            center,
+            radius,
+            right,
+            up,
+            toward_camera,
+            scale,
+            distance,
+            cx: 0.5 * f64::from(viewport_width),
+            cy: 0.5 * f64::from(opts.height),
+        }
+    }
+
+    /// `[x, y, depth]`: pixel coordinates in the output image and the camera-space depth
+    /// (larger is nearer the viewer).
+    pub fn project(&self, p: [f64; 3]) -> [f64; 3] {
+        let q = sub(p, self.center);
+        let x = dot(q, self.right);
+        let y = dot(q, self.up);
+        let z = dot(q, self.toward_camera);
+        match self.distance {
+            None => [self.cx + self.scale * x, self.cy - self.scale * y, z],
+            Some(d) => {
+                let w = (d - z).max(1e-9 * d);
+                [
+                    self.cx + self.scale * x / w,
+                    self.cy - self.scale * y / w,
+                    z,
+                ]
+            }
+        }
+    }
+
+    /// Approximate pixels per world unit near the centre.
+    pub fn pixels_per_unit(&self) -> f64 {
+        match self.distance {
+            None => self.scale,
+            Some(d) => self.scale / d,
+        }
+    }
+
+    fn inv_w(&self, z: f64) -> f64 {
+        match self.distance {
+            None => 1.0,
+            Some(d) => 1.0 / (d - z).max(1e-9 * d),
+        }
+    }
+}
+
+/// Splits the width into the shape's viewport and the colour bar's strip.
+fn layout(opts: &RenderOptions, bar: bool) -> (u32, u32) {
+    if !bar {
+        return (opts.width, 0);
+    }
+    let bar_w = (opts.width / 6).max(40).min(opts.width / 2);
+    (opts.width - bar_w, bar_w)
+}
+
+struct Buffers {
+    w: usize,
+    h: usize,
+    rgba: Vec<[u8; 4]>,
+    depth: Vec<f32>,
+}
+
+/// Renders a scene. Errors on a zero or oversized image and on a colour count that
+/// differs from the vertex count.
+pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Image, RenderError> {
+    let (w, h) = (u64::from(opts.width), u64::from(opts.height));
+    if w == 0 || h == 0 || w * h > MAX_PIXELS {
+        return Err(RenderError::InvalidSize {
+            width: opts.width,
+            height: opts.height,
+        });
+    }
+    let mesh = scene.mesh;
+    if scene.vertex_colors.len() != mesh.n_vertices() {
+        return Err(RenderError::ColorCount {
+            expected: mesh.n_vertices(),
+            got: scene.vertex_colors.len(),
+        });
+    }
+    let mut ss = u64::from(opts.supersample.clamp(1, 4));
+    while ss > 1 && w * h * ss * ss > MAX_SAMPLES {
+        ss -= 1;
+    }
+    let ss_f = ss as f64;
+    let (vw, bar_w) = layout(opts, scene.colorbar.is_some());
+    let cam = Camera::fit(mesh, opts, vw);
+    let mut buf = Buffers {
+        w: (w * ss) as usize,
+        h: (h * ss) as usize,
+        rgba: vec![[0, 0, 0, 0]; (w * h * ss * ss) as usize],
+        depth: vec![f32::NEG_INFINITY; (w * h * ss * ss) as usize],
+    };
+
+    // Per-vertex projection and shading.
+    let light = normalize([
+        -0.35 * cam.right[0] + 0.45 * cam.up[0] + cam.toward_camera[0],
+        -0.35 * cam.right[1] + 0.45 * cam.up[1] + cam.toward_camera[1],
+        -0.35 * cam.right[2] + 0.45 * cam.up[2] + cam.toward_camera[2],
+    ]);
+    let normals = mesh.vertex_normals();
+    let (amb, dif) = (opts.ambient.max(0.0), opts.diffuse.max(0.0));
+    let verts: Vec<RVert> = mesh
+        .positions()
+        .iter()
+        .zip(&normals)
+        .zip(&scene.vertex_colors)
+        .map(|((&p, &n), &c)| {
+            let [x, y, z] = cam.project(p);
+            let lam = if n == [0.0; 3] {
+                1.0
+            } else {
+                dot(n, light).abs() as f32
+            };
+            let s = amb + dif * lam;
+            let sane = |v: f32| if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.5 };
+            RVert {
+                x: x * ss_f,
+                y: y * ss_f,
+                z,
+                iw: cam.inv_w(z),
+                c: [sane(c[0]) * s, sane(c[1]) * s, sane(c[2]) * s],
+            }
+        })
+        .collect();
+    for tri in mesh.triangles() {
+        raster_triangle(
+            &mut buf,
+            &verts[tri[0]],
+            &verts[tri[1]],
+            &verts[tri[2]],
+        );
+    }
+
+    // Level-set lines.
+    let ppu = cam.pixels_per_unit();
+    let line_half = 0.5 * f64::from(opts.line_width.max(0.0)) * ss_f;
+    let line_bias = (0.01 * cam.radius + 2.5 * f64::from(opts.line_width) / ppu) as f32;
+    let lc = opts.line_color;
+    for ls in &scene.level_sets {
+        for seg in &ls.segments {
+            let a = cam.project(seg[0]);
+            let b = cam.project(seg[1]);
+            draw_segment(
+                &mut buf,
+                [a[0] * ss_f, a[1] * ss_f, a[2]],
+                [b[0] * ss_f, b[1] * ss_f, b[2]],
+                line_half,
+                line_bias,
+                lc,
+            );
+        }
+    }
+
+    // Markers.
+    let r_px = f64::from(opts.marker_radius.max(0.0)) * f64::from(opts.width.min(opts.height));
+    let r = r_px.max(1.5) * ss_f;
+    let marker_bias = (0.02 * cam.radius + 2.0 * r_px / ppu) as f32;
+    for m in &scene.markers {
+        let [x, y, z] = cam.project(m.position);
+        let (sx, sy) = (x * ss_f, y * ss_f);
+        if !sx.is_finite() || !sy.is_finite() {
+            continue;
+        }
+        if marker_visible(&buf, sx, sy, z as f32, marker_bias) {
+            draw_disc(&mut buf, sx, sy, r, ss_f, m.kind.color());
+        }
+    }
+
+    let mut img = downsample(&buf, ss as usize, opts.background);
+    if let Some(bar) = scene.colorbar {
+        draw_colorbar(&mut img, vw, bar_w, &bar);
+    }
+    Ok(img)
+}
+
+#[derive(Debug, Clone, Copy)]
+struct RVert {
+    x: f64,
+    y: f64,
+    z: f64,
+    iw: f64,
+    c: [f32; 3],
+}
+
+fn raster_triangle(buf: &mut Buffers, v0: &RVert, v1: &RVert, v2: &RVert) {
+    let area = (v1.x - v0.x) * (v2.y - v0.y) - (v2.x - v0.x) * (v1.y - v0.y);
+    if area.abs() < 1e-12 || !area.is_finite() {
+        return;
+    }
+    let inv_area = 1.0 / area;
+    let xmin = v0.x.min(v1.x).min(v2.x).floor().max(0.0);
+    let ymin = v0.y.min(v1.y).min(v2.y).floor().max(0.0);
+    let xmax = v0.x.max(v1.x).max(v2.x).ceil().min(buf.w as f64 - 1.0);
+    let ymax = v0.y.max(v1.y).max(v2.y).ceil().min(buf.h as f64 - 1.0);
+    if xmin > xmax || ymin > ymax {
+        return;
+    }
+    let (x0, x1) = (xmin as usize, xmax as usize);
+    let (y0, y1) = (ymin as usize, ymax as usize);
+    // Edge functions (normalised barycentrics): b_i = A_i x + B_i y + C_i.
+    let ef = |a: &RVert, b: &RVert| {
+        let aa = (a.y - b.y) * inv_area;
+        let bb = (b.x - a.x) * inv_area;
+        let cc = (a.x * b.y - b.x * a.y) * inv_area;
+        (aa, bb, cc)
+    };
+    let e0 = ef(v1, v2);
+    let e1 = ef(v2, v0);
+    let e2 = ef(v0, v1);
+    let persp = v0.iw != 1.0 || v1.iw != 1.0 || v2.iw != 1.0;
+    let eps = -1e-9;
+    for py in y0..=y1 {
+        let y = py as f64 + 0.5;
+        let row = py * buf.w;
+        let xs = x0 as f64 + 0.5;
+        let mut b0 = e0.0 * xs + e0.1 * y + e0.2;
+        let mut b1 = e1.0 * xs + e1.1 * y + e1.2;
+        let mut b2 = e2.0 * xs + e2.1 * y + e2.2;
+        for px in x0..=x1 {
+            if b0 >= eps && b1 >= eps && b2 >= eps {
+                let (w0, w1, w2) = if persp {
+                    let (a, b, c) = (b0 * v0.iw, b1 * v1.iw, b2 * v2.iw);
+                    let s = a + b + c;
+                    (a / s, b / s, c / s)
+                } else {
+                    (b0, b1, b2)
+                };
+                let z = (w0 * v0.z + w1 * v1.z + w2 * v2.z) as f32;
+                let i = row + px;
+                if z > buf.depth[i] {
+                    buf.depth[i] = z;
+                    let (w0, w1, w2) = (w0 as f32, w1 as f32, w2 as f32);
+                    let c = |k: usize| to_u8(w0 * v0.c[k] + w1 * v1.c[k] + w2 * v2.c[k]);
+                    buf.rgba[i] = [c(0), c(1), c(2), 255];
+                }
+            }
+            b0 += e0.0;
+            b1 += e1.0;
+            b2 += e2.0;
+        }
+    }
+}
+
+/// A thick segment (capsule of half-width `half` samples) in the supersampled buffer,
+/// depth-tested against the surface with `bias`.
+fn draw_segment(buf: &mut Buffers, a: [f64; 3], b: [f64; 3], half: f64, bias: f32, c: [u8; 3]) {
+    if half <= 0.0 || a.iter().chain(&b).any(|v| !v.is_finite()) {
+        return;
+    }
+    let xmin = (a[0].min(b[0]) - half).floor().max(0.0);
+    let ymin = (a[1].min(b[1]) - half).floor().max(0.0);
+    let xmax = (a[0].max(b[0]) + half).ceil().min(buf.w as f64 - 1.0);
+    let ymax = (a[1].max(b[1]) + half).ceil().min(buf.h as f64 - 1.0);
+    if xmin > xmax || ymin > ymax {
+        return;
+    }
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let h2 = half * half;
+    for py in ymin as usize..=ymax as usize {
+        let y = py as f64 + 0.5;
+        for px in xmin as usize..=xmax as usize {
+            let x = px as f64 + 0.5;
+            let u = if len2 > 0.0 {
+                (((x - a[0]) * dx + (y - a[1]) * dy) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let (qx, qy) = (a[0] + u * dx - x, a[1] + u * dy - y);
+            if qx * qx + qy * qy > h2 {
+                continue;
+            }
+            let z = (a[2] + u * (b[2] - a[2])) as f32;
+            let i = py * buf.w + px;
+            let d = buf.depth[i];
+            if d == f32::NEG_INFINITY || z + bias >= d {
+                buf.rgba[i] = [c[0], c[1], c[2], 255];
+            }
+        }
+    }
+}
+
+/// A marker is visible when the surface at its centre is not in front of it by more than `bias`.
+fn marker_visible(buf: &Buffers, x: f64, y: f64, z: f32, bias: f32) -> bool {
+    if x < 0.0 || y < 0.0 || x >= buf.w as f64 || y >= buf.h as f64 {
+        return false;
+    }
+    let d = buf.depth[y as usize * buf.w + x as usize];
+    d == f32::NEG_INFINITY || z + bias >= d
+}
+
+/// A filled disc of radius `r` samples with a dark outline.
+fn draw_disc(buf: &mut Buffers, cx: f64, cy: f64, r: f64, ss: f64, fill: [u8; 3]) {
+    let outline = (0.3 * r).max(1.2 * ss).min(0.6 * r);
+    let inner2 = (r - outline).max(0.0).powi(2);
+    let r2 = r * r;
+    let xmin = (cx - r).floor().max(0.0) as usize;
+    let ymin = (cy - r).floor().max(0.0) as usize;
+    let xmax = (cx + r).ceil().min(buf.w as f64 - 1.0);
+    let ymax = (cy + r).ceil().min(buf.h as f64 - 1.0);
+    if xmax < 0.0 || ymax < 0.0 {
+        return;
+    }
+    for py in ymin..=ymax as usize {
+        for px in xmin..=xmax as usize {
+            let (dx, dy) = (px as f64 + 0.5 - cx, py as f64 + 0.5 - cy);
+            let d2 = dx * dx + dy * dy;
+            if d2 > r2 {
+                continue;
+            }
+            let c = if d2 <= inner2 { fill } else { [20, 20, 20] };
+            buf.rgba[py * buf.w + px] = [c[0], c[1], c[2], 255];
+        }
+    }
+}
+
+/// Box filter of `ss × ss` samples, composited over the background.
+fn downsample(buf: &Buffers, ss: usize, bg: Background) -> Image {
+    let (w, h) = (buf.w / ss, buf.h / ss);
+    let n = (ss * ss) as f32;
+    let mut rgba = vec![0u8; w * h * 4];
+    for y in 0..h {
+        for x in 0..w {
+            let mut acc = [0f32; 3];
+            let mut cover = 0f32;
+            for sy in 0..ss {
+                let row = (y * ss + sy) * buf.w + x * ss;
+                for s in &buf.rgba[row..row + ss] {
+                    if s[3] != 0 {
+                        cover += 1.0;
+                        acc[0] += f32::from(s[0]);
+                        acc[1] += f32::from(s[1]);
+                        acc[2] += f32::from(s[2]);
+                    }
+                }
+            }
+            let o = (y * w + x) * 4;
+            let px = match bg {
+                Background::Transparent => {
+                    if cover == 0.0 {
+                        [0, 0, 0, 0]
+                    } else {
+                        let q = |v: f32| (v / cover).round().clamp(0.0, 255.0) as u8;
+                        let a = (255.0 * cover / n).round() as u8;
+                        [q(acc[0]), q(acc[1]), q(acc[2]), a]
+                    }
+                }
+                Background::White | Background::Color(_) => {
+                    let b = match bg {
+                        Background::Color(c) => c,
+                        _ => [255, 255, 255],
+                    };
+                    let empty = n - cover;
+                    let q = |v: f32, k: usize| {
+                        ((v + empty * f32::from(b[k])) / n)
+                            .round()
+                            .clamp(0.0, 255.0) as u8
+                    };
+                    [q(acc[0], 0), q(acc[1], 1), q(acc[2], 2), 255]
+                }
+            };
+            rgba[o..o + 4].copy_from_slice(&px);
+        }
+    }
+    Image {
+        width: w as u32,
+        height: h as u32,
+        rgba,
+    }
+}
+
+/// The colour bar in the strip `[x0, x0 + strip_w)`: a vertical gradient, max at the top,
+/// framed, with the end values written above and below it.
+fn draw_colorbar(img: &mut Image, x0: u32, strip_w: u32, bar: &ColorBar) {
+    let (w, h) = (img.width as i64, img.height as i64);
+    let strip_w = i64::from(strip_w);
+    let x0 = i64::from(x0);
+    let scale = ((h as f64 / 350.0).round() as i64).clamp(1, 4) as usize;
+    let text_h = (text::GLYPH_H * scale) as i64;
+    let top = (h as f64 * 0.12) as i64 + text_h;
+    let bottom = h - (h as f64 * 0.12) as i64 - text_h;
+    if bottom - top < 4 {
+        return;
+    }
+    let bar_w = (strip_w / 4).max(6);
+    let bx0 = x0 + (strip_w - bar_w) / 2;
+    let bx1 = bx0 + bar_w;
+    let dark = [20u8, 20, 20, 255];
+    for y in top..bottom {
+        let t = (bottom - 1 - y) as f64 / ((bottom - 1 - top).max(1)) as f64;
+        let c = bar.colormap.map(t);
+        for x in bx0..bx1 {
+            img.put(x, y, [c[0], c[1], c[2], 255]);
+        }
+    }
+    for x in bx0 - 1..=bx1 {
+        img.put(x, top - 1, dark);
+        img.put(x, bottom, dark);
+    }
+    for y in top - 1..=bottom {
+        img.put(bx0 - 1, y, dark);
+        img.put(bx1, y, dark);
+    }
+    let label = |img: &mut Image, s: &str, y: i64| {
+        let mut sc = scale;
+        while sc > 1 && text::text_width(s, sc) as i64 > strip_w - 4 {
+            sc -= 1;
+        }
+        let tw = text::text_width(s, sc) as i64;
+        let cx = bx0 + bar_w / 2;
+        let lx = (cx - tw / 2).min(w - tw - 2).max(x0 + 1);
+        draw_text(img, s, lx, y, sc, dark);
+    };
+    let gap = 2 * scale as i64 + 2;
+    label(img, &text::format_number(bar.max), top - 1 - gap - text_h);
+    label(img, &text::format_number(bar.min), bottom + 1 + gap);
+}
+
+/// Draws `s` with its top-left corner at `(x, y)` at integer `scale`.
+pub(crate) fn draw_text(img: &mut Image, s: &str, x: i64, y: i64, scale: usize, c: [u8; 4]) {
+    let sc = scale as i64;
+    for (k, ch) in s.chars().enumerate() {
+        let gx = x + k as i64 * (text::GLYPH_W as i64 + 1) * sc;
+        for fy in 0..text::GLYPH_H {
+            for fx in 0..text::GLYPH_W {
+                if !text::ink(ch, fx, fy) {
+                    continue;
+                }
+                for dy in 0..sc {
+                    for dx in 0..sc {
+                        img.put(gx + fx as i64 * sc + dx, y + fy as i64 * sc + dy, c);
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,286 @@
+//! PLY (ASCII, binary little and big endian), read through `ply-rs-bw`, written by hand.
+
+use std::io::Write;
+
+use ply_rs_bw::parser::Parser;
+use ply_rs_bw::ply::{DefaultElement, Property};
+
+use super::{Ctx, IoError, LoadedMesh, MeshFormat, RawFaces, WriteOptions, assemble, fmt_f64};
+use crate::mesh::Mesh;
+
+/// Number of header lines (through `end_header`) and whether the payload is binary.
+fn header_info(bytes: &[u8]) -> (Option<usize>, bool) {
+    let mut binary = false;
+    for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let l = String::from_utf8_lossy(line);
+        let l = l.trim();
+        if l.starts_with("format") && l.contains("binary") {
+            binary = true;
+        }
+        if l == "end_header" {
+            return (Some(i + 1), binary);
+        }
+        if i > 10_000 {
+            break;
+        }
+    }
+    (None, binary)
+}
+
+fn scalar(p: &Property) -> Option<f64> {
+    Some(match *p {
+        Property::Char(v) => f64::from(v),
+        Property::UChar(v) => f64::from(v),
+        Property::Short(v) => f64::from(v),
+        Property::UShort(v) => f64::from(v),
+        Property::Int(v) => f64::from(v),
+        Property::UInt(v) => f64::from(v),
+        Property::Float(v) => f64::from(v),
+        Property::Double(v) => v,
+        _ => return None,
+    })
+}
+
+fn index_list(p: &Property) -> Option<Vec<i64>> {
+    Some(match p {
+        Property::ListChar(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        Property::ListUChar(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        Property::ListShort(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        Property::ListUShort(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        Property::ListInt(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        Property::ListUInt(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        _ => return None,
+    })
+}
+
+fn color_component(p: &Property) -> Option<f32> {
+    let x = scalar(p)?;
+    let integer = !matches!(p, Property::Float(_) | Property::Double(_));
+    let c = if integer { x / 255.0 } else { x };
+    c.is_finite().then_some(c.clamp(0.0, 1.0) as f32)
+}
+
+pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
+    let (header_lines, binary) = header_info(bytes);
+    let parser = Parser::<DefaultElement>::new();
+    let mut cursor = std::io::Cursor::new(bytes);
+    let ply = parser.read_ply(&mut cursor).map_err(|e| {
+        let msg = e.to_string();
+        let msg = match e.line() {
+            Some(l) => msg
+                .strip_prefix(&format!("Line {l}: "))
+                .unwrap_or(&msg)
+                .to_string(),
+            None => msg,
+        };
+        // ply-rs nests "... Error: ..." messages; the innermost one is the useful part.
+        let first = msg.lines().next().unwrap_or("").trim().to_string();
+        let msg = match msg.rfind("Error: ") {
+            Some(k) => format!("{first} ({})", &msg[k + 7..]),
+            None => msg,
+        };
+        let msg = msg.split_whitespace().collect::<Vec<_>>().join(" ");
+        let line = match (e.line(), header_lines) {
+            (Some(l), Some(h)) if binary && l > h => None,
+            (l, _) => l,
+        };
+        let prefix = if binary && line.is_none() {
+            "binary PLY payload: "
+        } else {
+            "PLY: "
+        };
+        ctx.invalid(line, format!("{prefix}{msg}"))
+    })?;
+    let mut warnings = Vec::new();
+    let elements = &ply.header.elements;
+    let Some(vdef) = elements.get("vertex") else {
+        return Err(ctx.invalid(None, "the PLY file has no 'vertex' element"));
+    };
+    for p in ["x", "y", "z"] {
+        if !vdef.properties.contains_key(p) {
+            return Err(ctx.invalid(
+                None,
+                format!("the PLY vertex element has no '{p}' property"),
+            ));
+        }
+    }
+    let Some(fdef) = elements.get("face") else {
+        return Err(ctx.invalid(
+            None,
+            "the PLY file has no 'face' element (a point cloud is not a mesh)",
+        ));
+    };
+    let list_name = ["vertex_indices", "vertex_index"]
+        .into_iter()
+        .find(|k| fdef.properties.contains_key(*k));
+    let Some(list_name) = list_name else {
+        return Err(ctx.invalid(
+            None,
+            "the PLY face element has neither 'vertex_indices' nor 'vertex_index'",
+        ));
+    };
+    let others: Vec<&str> = elements
+        .keys()
+        .map(String::as_str)
+        .filter(|k| *k != "vertex" && *k != "face")
+        .collect();
+    if !others.is_empty() {
+        warnings.push(format!("PLY elements ignored: {}", others.join(", ")));
+    }
+    // Line of record k of element `name` in an ASCII file.
+    let line_of = |name: &str, k: usize| -> Option<usize> {
+        if binary {
+            return None;
+        }
+        let h = header_lines?;
+        let mut before = 0usize;
+        for (key, def) in elements {
+            if key == name {
+                return Some(h + before + k + 1);
+            }
+            before += def.count;
+        }
+        None
+    };
+
+    let empty = Vec::new();
+    let verts = ply.payload.get("vertex").unwrap_or(&empty);
+    let has_color = ["red", "green", "blue"]
+        .iter()
+        .all(|k| vdef.properties.contains_key(*k));
+    let mut positions = Vec::with_capacity(verts.len());
+    let mut colors = Vec::new();
+    let mut colors_ok = has_color;
+    for (v, e) in verts.iter().enumerate() {
+        let mut p = [0.0; 3];
+        for (d, key) in ["x", "y", "z"].into_iter().enumerate() {
+            p[d] = e.get(key).and_then(scalar).ok_or_else(|| {
+                ctx.invalid(
+                    line_of("vertex", v),
+                    format!("vertex {v}: property '{key}' is missing or not a number"),
+                )
+            })?;
+        }
+        if let Some(d) = p.iter().position(|c| !c.is_finite()) {
+            return Err(ctx.invalid(
+                line_of("vertex", v),
+                format!(
+                    "vertex {v} has a non-finite coordinate ({} = {})",
+                    ["x", "y", "z"][d],
+                    p[d]
+                ),
+            ));
+        }
+        positions.push(p);
+        if colors_ok {
+            let c: Vec<Option<f32>> = ["red", "green", "blue"]
+                .iter()
+                .map(|k| e.get(*k).and_then(color_component))
+                .collect();
+            match (c[0], c[1], c[2]) {
+                (Some(r), Some(g), Some(b)) => colors.push([r, g, b]),
+                _ => colors_ok = false,
+            }
+        }
+    }
+    if has_color && !colors_ok {
+        warnings.push("malformed vertex colours dropped".to_string());
+    }
+    let vertex_colors = (colors_ok && colors.len() == positions.len()).then_some(colors);
+
+    let face_elems = ply.payload.get("face").unwrap_or(&empty);
+    let mut faces = RawFaces::new();
+    for (f, e) in face_elems.iter().enumerate() {
+        let list = e.get(list_name).and_then(index_list).ok_or_else(|| {
+            ctx.invalid(
+                line_of("face", f),
+                format!("face {f}: '{list_name}' is missing or not a list of integers"),
+            )
+        })?;
+        faces.push(&list, line_of("face", f));
+    }
+    assemble(
+        ctx,
+        MeshFormat::Ply,
+        positions,
+        None,
+        &faces,
+        0,
+        vertex_colors,
+        warnings,
+    )
+}
+
+pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, opts: &WriteOptions) -> std::io::Result<()> {
+    let n = mesh.n_vertices();
+    if n > i32::MAX as usize {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "too many vertices for 32-bit PLY indices",
+        ));
+    }
+    let colors = opts.vertex_colors.as_deref();
+    let scalar = opts.vertex_scalar.as_ref();
+    writeln!(w, "ply")?;
+    writeln!(
+        w,
+        "format {} 1.0",
+        if opts.binary {
+            "binary_little_endian"
+        } else {
+            "ascii"
+        }
+    )?;
+    writeln!(w, "comment written by spectral-mesh")?;
+    writeln!(w, "element vertex {n}")?;
+    for c in ["x", "y", "z"] {
+        writeln!(w, "property double {c}")?;
+    }
+    if colors.is_some() {
+        for c in ["red", "green", "blue"] {
+            writeln!(w, "property uchar {c}")?;
+        }
+    }
+    if let Some((name, _)) = scalar {
+        writeln!(w, "property double {name}")?;
+    }
+    writeln!(w, "element face {}", mesh.n_triangles())?;
+    writeln!(w, "property list uchar int vertex_indices")?;
+    writeln!(w, "end_header")?;
+    let pos = mesh.positions();
+    if opts.binary {
+        for v in 0..n {
+            for c in pos[v] {
+                w.write_all(&c.to_le_bytes())?;
+            }
+            if let Some(c) = colors {
+                w.write_all(&c[v])?;
+            }
+            if let Some((_, s)) = scalar {
+                w.write_all(&s[v].to_le_bytes())?;
+            }
+        }
+        for t in mesh.triangles() {
+            w.write_all(&[3u8])?;
+            for &i in t {
+                w.write_all(&(i as i32).to_le_bytes())?;
+            }
+        }
+    } else {
+        for v in 0..n {
+            let p = pos[v];
+            write!(w, "{} {} {}", fmt_f64(p[0]), fmt_f64(p[1]), fmt_f64(p[2]))?;
+            if let Some(c) = colors {
+                write!(w, " {} {} {}", c[v][0], c[v][1], c[v][2])?;
+            }
+            if let Some((_, s)) = scalar {
+                write!(w, " {}", fmt_f64(s[v]))?;
+            }
+            writeln!(w)?;
+        }
+        for t in mesh.triangles() {
+            writeln!(w, "3 {} {} {}", t[0], t[1], t[2])?;
+        }
+    }
+    Ok(())
+}

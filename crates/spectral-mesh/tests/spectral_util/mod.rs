@@ -1,0 +1,250 @@
+//! Shared helpers of the spectral tests: small meshes and dense linear algebra.
+#![allow(dead_code)]
+
+use spectral_mesh::{Laplacian, Mesh, Operators, SparseMatrix};
+
+/// Deterministic pseudo-random numbers in [0, 1).
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    pub fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    pub fn index(&mut self, n: usize) -> usize {
+        ((self.next() * n as f64) as usize).min(n - 1)
+    }
+}
+
+fn normalize(p: [f64; 3]) -> [f64; 3] {
+    let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+    [p[0] / r, p[1] / r, p[2] / r]
+}
+
+/// Icosphere of radius 1 with `level` subdivisions (12, 42, 162, 642 vertices).
+pub fn icosphere(level: usize) -> Mesh {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut pos: Vec<[f64; 3]> = vec![
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
+    ]
+    .into_iter()
+    .map(normalize)
+    .collect();
+    let mut tris: Vec<[usize; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..level {
+        let mut mid = std::collections::HashMap::new();
+        let mut next = Vec::with_capacity(tris.len() * 4);
+        let mut m = |a: usize, b: usize, pos: &mut Vec<[f64; 3]>| -> usize {
+            let key = (a.min(b), a.max(b));
+            *mid.entry(key).or_insert_with(|| {
+                let (p, q) = (pos[a], pos[b]);
+                pos.push(normalize([
+                    (p[0] + q[0]) / 2.0,
+                    (p[1] + q[1]) / 2.0,
+                    (p[2] + q[2]) / 2.0,
+                ]));
+                pos.len() - 1
+            })
+        };
+        for [a, b, c] in tris {
+            let ab = m(a, b, &mut pos);
+            let bc = m(b, c, &mut pos);
+            let ca = m(c, a, &mut pos);
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        tris = next;
+    }
+    Mesh::new(pos, tris).unwrap()
+}
+
+/// Torus grid with `nu x nv` vertices, radii `big` and `small`, optionally jittered.
+pub fn torus(nu: usize, nv: usize, big: f64, small: f64, jitter: f64, seed: u64) -> Mesh {
+    let mut rng = Lcg(seed);
+    let mut pos = Vec::new();
+    for i in 0..nu {
+        for j in 0..nv {
+            let u = (i as f64 + jitter * (rng.next() - 0.5)) / nu as f64 * std::f64::consts::TAU;
+            let v = (j as f64 + jitter * (rng.next() - 0.5)) / nv as f64 * std::f64::consts::TAU;
+            pos.push([
+                (big + small * v.cos()) * u.cos(),
+                (big + small * v.cos()) * u.sin(),
+                small * v.sin(),
+            ]);
+        }
+    }
+    let id = |i: usize, j: usize| (i % nu) * nv + (j % nv);
+    let mut tris = Vec::new();
+    for i in 0..nu {
+        for j in 0..nv {
+            tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    Mesh::new(pos, tris).unwrap()
+}
+
+/// An irregular planar patch (bordered): a jittered `m x m` grid with alternating
+/// diagonals and a slight bump so the mesh is not symmetric.
+pub fn planar_patch(m: usize, seed: u64) -> Mesh {
+    let mut rng = Lcg(seed);
+    let mut pos = Vec::new();
+    for i in 0..m {
+        for j in 0..m {
+            let jx = if i > 0 && i + 1 < m {
+                0.3 * (rng.next() - 0.5)
+            } else {
+                0.0
+            };
+            let jy = if j > 0 && j + 1 < m {
+                0.3 * (rng.next() - 0.5)
+            } else {
+                0.0
+            };
+            let x = (i as f64 + jx) / (m - 1) as f64 * 1.3;
+            let y = (j as f64 + jy) / (m - 1) as f64;
+            pos.push([x, y, 0.1 * (x * x - 0.5 * y)]);
+        }
+    }
+    let id = |i: usize, j: usize| i * m + j;
+    let mut tris = Vec::new();
+    for i in 0..m - 1 {
+        for j in 0..m - 1 {
+            if (i + j) % 2 == 0 {
+                tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            } else {
+                tris.push([id(i, j), id(i + 1, j), id(i, j + 1)]);
+                tris.push([id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+    }
+    Mesh::new(pos, tris).unwrap()
+}
+
+pub fn fem(mesh: &Mesh) -> Operators {
+    Operators::new(mesh, Laplacian::Fem)
+}
+
+/// Dense row-major copy.
+pub fn dense(a: &SparseMatrix) -> Vec<Vec<f64>> {
+    a.to_dense()
+}
+
+/// Inverse of a symmetric positive definite matrix by Cholesky (row-major, small n);
+/// `None` when not positive definite.
+pub fn cholesky(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
+    let n = a.len();
+    let mut l = vec![vec![0.0; n]; n];
+    for i in 0..n {
+        for j in 0..=i {
+            let mut s = a[i][j];
+            for k in 0..j {
+                s -= l[i][k] * l[j][k];
+            }
+            if i == j {
+                if s <= 0.0 {
+                    return None;
+                }
+                l[i][i] = s.sqrt();
+            } else {
+                l[i][j] = s / l[j][j];
+            }
+        }
+    }
+    Some(l)
+}
+
+/// Inverse of an SPD matrix through its Cholesky factor.
+pub fn spd_inverse(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let n = a.len();
+    let l = cholesky(a).expect("SPD");
+    let mut inv = vec![vec![0.0; n]; n];
+    for c in 0..n {
+        // Solve L y = e_c, then L^T x = y.
+        let mut y = vec![0.0; n];
+        for i in 0..n {
+            let mut s = if i == c { 1.0 } else { 0.0 };
+            for k in 0..i {
+                s -= l[i][k] * y[k];
+            }
+            y[i] = s / l[i][i];
+        }
+        let mut x = vec![0.0; n];
+        for i in (0..n).rev() {
+            let mut s = y[i];
+            for k in i + 1..n {
+                s -= l[k][i] * x[k];
+            }
+            x[i] = s / l[i][i];
+        }
+        for i in 0..n {
+            inv[i][c] = x[i];
+        }
+    }
+    inv
+}
+
+pub fn matmul(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let (n, m, p) = (a.len(), b.len(), b[0].len());
+    let mut c = vec![vec![0.0; p]; n];
+    for i in 0..n {
+        for k in 0..m {
+            let aik = a[i][k];
+            if aik != 0.0 {
+                for j in 0..p {
+                    c[i][j] += aik * b[k][j];
+                }
+            }
+        }
+    }
+    c
+}
+
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+pub fn max_abs(a: &[f64]) -> f64 {
+    a.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+pub fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+}
