@@ -14,6 +14,7 @@ use serde::Deserialize;
 use serde_json::json;
 use spectral_mesh::mesh::topology::{Topology, VertexTriangles};
 use spectral_mesh::{Eigenbasis, Laplacian, Mesh};
+use spectral_mesh_render as render;
 
 use crate::compute::{self, BadRequest, Experiment, FieldParams};
 use crate::state::{AppState, Item, Job, Key, MeshEntry, basis_bytes, mesh_bytes};
@@ -145,9 +146,12 @@ async fn health(State(s): St) -> Json<serde_json::Value> {
 }
 
 async fn shapes() -> Json<serde_json::Value> {
-    let list: Vec<_> = crate::fallback::shape_names()
+    let list: Vec<_> = spectral_mesh::shapes::shape_names()
         .into_iter()
-        .map(|(name, description)| json!({"name": name, "description": description}))
+        .map(|s| {
+            json!({"name": s.name, "description": s.description,
+                   "default_vertices": s.default_vertices, "vertex_formula": s.vertex_formula})
+        })
         .collect();
     Json(json!({ "shapes": list }))
 }
@@ -181,39 +185,9 @@ fn mesh_id(mesh: &Mesh) -> String {
 }
 
 fn info_json(mesh: &Mesh, topo: &Topology) -> serde_json::Value {
-    let mut problems = Vec::new();
-    if !topo.unreferenced_vertices.is_empty() {
-        problems.push(format!(
-            "{} unreferenced vertices",
-            topo.unreferenced_vertices.len()
-        ));
-    }
-    if !topo.non_manifold_edges.is_empty() {
-        problems.push(format!(
-            "{} non-manifold edges",
-            topo.non_manifold_edges.len()
-        ));
-    }
-    if !topo.non_manifold_vertices.is_empty() {
-        problems.push(format!(
-            "{} non-manifold vertices",
-            topo.non_manifold_vertices.len()
-        ));
-    }
-    if topo.inconsistently_oriented_edges > 0 {
-        problems.push(format!(
-            "{} inconsistently oriented edges",
-            topo.inconsistently_oriented_edges
-        ));
-    }
-    if !topo.orientable {
-        problems.push("not orientable".into());
-    }
-    let zero_area = mesh.triangle_areas().iter().filter(|a| **a <= 0.0).count();
-    if zero_area > 0 {
-        problems.push(format!("{zero_area} zero-area triangles"));
-    }
-    let (lo, hi) = mesh.bounding_box();
+    let report = spectral_mesh::mesh::validate::report(mesh);
+    let problems = report.problems();
+    let (lo, hi) = (report.bbox_min, report.bbox_max);
     let genus: Option<i64> = topo
         .components
         .iter()
@@ -222,17 +196,18 @@ fn info_json(mesh: &Mesh, topo: &Topology) -> serde_json::Value {
     json!({
         "vertices": mesh.n_vertices(),
         "triangles": mesh.n_triangles(),
-        "edges": topo.edges.len(),
-        "components": topo.n_components(),
-        "euler_characteristic": topo.euler_characteristic(),
+        "edges": report.edges,
+        "components": report.components,
+        "euler_characteristic": report.euler_characteristic,
         "genus": genus,
-        "boundary_loops": topo.boundary_loops.len(),
-        "closed_manifold": topo.is_closed_manifold(),
-        "area": mesh.area(),
+        "boundary_loops": report.boundary_loops,
+        "closed_manifold": report.closed_manifold,
+        "area": report.area,
         "bbox_min": lo,
         "bbox_max": hi,
+        "smallest_angle_degrees": report.smallest_angle_degrees,
         "problems": problems,
-        "component_list": topo.components,
+        "component_list": report.component_details,
     })
 }
 
@@ -246,7 +221,15 @@ fn mesh_reply(e: &MeshEntry) -> serde_json::Value {
     })
 }
 
-fn insert_mesh(s: &AppState, mesh: Mesh, source: String) -> ApiResult<serde_json::Value> {
+/// Largest built-in shape the web app builds (a resolution typo must not exhaust memory).
+pub const MAX_SHAPE_VERTICES: usize = 2_000_000;
+
+fn insert_mesh(
+    s: &AppState,
+    mesh: Mesh,
+    source: String,
+    notes: Vec<String>,
+) -> ApiResult<serde_json::Value> {
     let id = mesh_id(&mesh);
     if let Some(item) = s.mesh(&id)
         && let Item::Mesh(e) = &*item
@@ -255,7 +238,8 @@ fn insert_mesh(s: &AppState, mesh: Mesh, source: String) -> ApiResult<serde_json
     }
     let topo = Topology::new(&mesh);
     let vt = VertexTriangles::new(&mesh);
-    let info = info_json(&mesh, &topo);
+    let mut info = info_json(&mesh, &topo);
+    info["reader_notes"] = json!(notes);
     let bytes = mesh_bytes(&mesh);
     let entry = MeshEntry {
         id: id.clone(),
@@ -307,8 +291,16 @@ async fn load_mesh(
             return Err(ApiError::bad("the shape spec is too long"));
         }
         tokio::task::spawn_blocking(move || {
-            let mesh = crate::fallback::build_shape(&req.shape).map_err(ApiError::bad)?;
-            insert_mesh(&s2, mesh, req.shape.clone())
+            let mesh = spectral_mesh::shapes::build_str(&req.shape)
+                .map_err(|e| ApiError::bad(format!("shape '{}': {e}", req.shape)))?;
+            if mesh.n_vertices() > MAX_SHAPE_VERTICES {
+                return Err(ApiError::unprocessable(format!(
+                    "shape '{}' has {} vertices, more than the web app's limit of {MAX_SHAPE_VERTICES}",
+                    req.shape,
+                    mesh.n_vertices()
+                )));
+            }
+            insert_mesh(&s2, mesh, req.shape.clone(), Vec::new())
         })
         .await
         .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))??
@@ -325,9 +317,16 @@ async fn load_mesh(
             return Err(ApiError::bad("the upload is empty"));
         }
         tokio::task::spawn_blocking(move || {
-            let mesh = crate::fallback::read_off(&body)
-                .map_err(|e| ApiError::unprocessable(format!("{name}: {e}")))?;
-            insert_mesh(&s2, mesh, name)
+            let loaded = spectral_mesh::io::read_mesh_from_bytes(&body, &name)
+                .map_err(|e| ApiError::unprocessable(e.to_string()))?;
+            let mut notes = loaded.warnings;
+            if loaded.polygons_triangulated > 0 {
+                notes.push(format!(
+                    "{} polygons were split into triangles",
+                    loaded.polygons_triangulated
+                ));
+            }
+            insert_mesh(&s2, loaded.mesh, name, notes)
         })
         .await
         .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))??
@@ -405,24 +404,31 @@ fn parse_laplacian(s: Option<&str>) -> ApiResult<Laplacian> {
     }
 }
 
-/// Largest mesh the dense fallback eigensolver is used on.
-pub const DENSE_LIMIT: usize = 2500;
-
 fn compute_basis(
     ops: &spectral_mesh::Operators,
     k: usize,
     progress: &mut dyn FnMut(f64, String),
 ) -> Result<Eigenbasis, String> {
-    let n = ops.n();
-    if n > DENSE_LIMIT {
-        return Err(format!(
-            "this build computes eigenbases of meshes up to {DENSE_LIMIT} vertices only (this one has {n})"
-        ));
-    }
-    progress(0.05, "dense eigensolver".into());
-    let b = Eigenbasis::dense(ops, k).map_err(|e| e.to_string())?;
-    progress(1.0, "done".into());
-    Ok(b)
+    use spectral_mesh::spectral::eigenbasis::{EigenParams, EigenProgress, compute_eigenbasis};
+    let params = EigenParams {
+        k,
+        ..Default::default()
+    };
+    let mut cb = |p: EigenProgress| match p {
+        EigenProgress::Dense { n } => progress(0.1, format!("dense solver, n = {n}")),
+        EigenProgress::Factorization { n, .. } => progress(0.02, format!("factoring, n = {n}")),
+        EigenProgress::Iteration {
+            iteration,
+            converged,
+            wanted,
+            ..
+        } => progress(
+            0.05 + 0.9 * converged as f64 / wanted.max(1) as f64,
+            format!("iteration {iteration}: {converged} of {wanted} pairs converged"),
+        ),
+        _ => progress(0.99, "finishing".into()),
+    };
+    compute_eigenbasis(ops, &params, &mut cb).map_err(|e| e.to_string())
 }
 
 async fn start_basis(
@@ -566,6 +572,10 @@ pub struct FieldOutput {
     pub header: serde_json::Value,
     /// Level-set segments.
     pub segments: Vec<f32>,
+    /// Level sets (for the picture downloads).
+    pub level_sets: Vec<render::LevelSet>,
+    /// Critical points (for the picture downloads).
+    pub critical: spectral_mesh::fields::critical_points::CriticalPoints,
 }
 
 fn compute_field(s: &AppState, e: &MeshEntry, p: &FieldParams) -> ApiResult<FieldOutput> {
@@ -609,8 +619,13 @@ fn compute_field(s: &AppState, e: &MeshEntry, p: &FieldParams) -> ApiResult<Fiel
                 "cache mix-up".into(),
             ));
         };
-        let cons = compute::parse_constraints(p.constraints.as_deref().unwrap_or("2"), &e.mesh)?;
-        let f = compute::harmonic(ops, &e.topo, &cons)?;
+        let spec = compute::parse_constraints(p.constraints.as_deref().unwrap_or("2"), n)?;
+        let cons = spec
+            .resolve(&e.mesh)
+            .map_err(|err| ApiError::unprocessable(err.to_string()))?;
+        let f =
+            spectral_mesh::fields::harmonic::harmonic_map_with_operators(&e.mesh, ops, &cons, 1)
+                .map_err(|err| ApiError::unprocessable(err.to_string()))?;
         basis_info = json!({"laplacian": lap.name(), "constraints": cons});
         f
     };
@@ -621,8 +636,34 @@ fn compute_field(s: &AppState, e: &MeshEntry, p: &FieldParams) -> ApiResult<Fiel
     }
     let compute_ms = start.elapsed().as_secs_f64() * 1e3;
     let (lo, hi) = compute::min_max(&values);
-    let cp = compute::critical_points(&e.mesh, &e.topo, &e.vt, &values);
-    let (isos, counts, segments) = compute::level_sets(&e.mesh, &values, c.levels);
+    let cp = spectral_mesh::fields::critical_points::critical_points(&e.mesh, &values)
+        .map_err(|err| ApiError(StatusCode::INTERNAL_SERVER_ERROR, err.to_string()))?;
+    let chi = e.topo.euler_characteristic();
+    let bordered = !e.topo.boundary_loops.is_empty();
+    let (found, expected) = if bordered {
+        cp.euler_check_doubled(chi)
+    } else {
+        cp.euler_check(chi)
+    };
+    let critical = json!({
+        "minima": cp.minima, "maxima": cp.maxima, "saddles": cp.saddles,
+        "on_boundary": cp.on_boundary, "non_manifold": cp.non_manifold,
+        "saddle_count": cp.saddle_count(),
+        "doubled": bordered, "euler_found": found, "euler_expected": expected,
+        "euler_ok": found == expected, "chi": chi,
+    });
+    let isos = render::level_values(lo, hi, c.levels);
+    let sets = render::extract_level_sets(&e.mesh, &values, &isos);
+    let mut counts = Vec::with_capacity(sets.len());
+    let mut segments = Vec::new();
+    for ls in &sets {
+        counts.push(ls.segments.len() as u32);
+        for seg in &ls.segments {
+            for q in seg {
+                segments.extend(q.iter().map(|&x| x as f32));
+            }
+        }
+    }
     let header = json!({
         "n": n,
         "experiment": p.experiment.name(),
@@ -631,7 +672,7 @@ fn compute_field(s: &AppState, e: &MeshEntry, p: &FieldParams) -> ApiResult<Fiel
         "source": c.source,
         "levels": isos,
         "level_counts": counts,
-        "critical": cp,
+        "critical": critical,
         "basis": basis_info,
         "compute_ms": compute_ms,
         "total_ms": start.elapsed().as_secs_f64() * 1e3,
@@ -640,6 +681,8 @@ fn compute_field(s: &AppState, e: &MeshEntry, p: &FieldParams) -> ApiResult<Fiel
         values,
         header,
         segments,
+        level_sets: sets,
+        critical: cp,
     })
 }
 
@@ -786,24 +829,30 @@ async fn download(
             "unknown format '{format}': expected txt, ply, wrl, png or toml"
         )));
     }
+    let p_colormap = p.colormap.clone().unwrap_or_else(|| "hue".into());
+    let uses_source = matches!(
+        p.experiment,
+        Experiment::Heat | Experiment::Diffusion | Experiment::Distance
+    );
+    let source = p.source.unwrap_or(0);
     let out = run_field(&s, &id, p).await?;
-    let values = out.values;
+    let values = &out.values;
     match format.as_str() {
         "txt" => {
             let mut s = String::with_capacity(values.len() * 24);
-            for v in &values {
+            for v in values {
                 s.push_str(&format!("{v}\n"));
             }
             Ok(attach(format!("{stem}.txt"), "text/plain", s.into_bytes()))
         }
         "ply" => {
-            let norm = normalized(&values);
+            let norm = normalized(values);
             let mut s = format!(
                 "ply\nformat ascii 1.0\ncomment spectral-mesh field\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nproperty double value\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
                 e.mesh.n_vertices(),
                 e.mesh.n_triangles()
             );
-            for ((p, v), u) in e.mesh.positions().iter().zip(&values).zip(&norm) {
+            for ((p, v), u) in e.mesh.positions().iter().zip(values).zip(&norm) {
                 let c = hue_rgb(*u);
                 s.push_str(&format!(
                     "{} {} {} {} {} {} {}\n",
@@ -819,34 +868,46 @@ async fn download(
                 s.into_bytes(),
             ))
         }
-        "wrl" => {
-            let norm = normalized(&values);
-            let mut s = String::from(
-                "#VRML V2.0 utf8\n# spectral-mesh field\nShape {\n  appearance Appearance { material Material { } }\n  geometry IndexedFaceSet {\n    solid FALSE\n    colorPerVertex TRUE\n    coord Coordinate { point [\n",
-            );
-            for p in e.mesh.positions() {
-                s.push_str(&format!("      {} {} {},\n", p[0], p[1], p[2]));
+        _ => {
+            let cmap: render::Colormap = p_colormap
+                .parse()
+                .map_err(|_| ApiError::bad(format!("unknown colour map '{p_colormap}'")))?;
+            let mut scene = render::Scene::with_field(&e.mesh, values, cmap, None);
+            scene.level_sets = out.level_sets;
+            let pos = e.mesh.positions();
+            let mut mark = |v: usize, kind| {
+                scene.markers.push(render::Marker {
+                    position: pos[v],
+                    kind,
+                })
+            };
+            out.critical
+                .minima
+                .iter()
+                .for_each(|&v| mark(v, render::MarkerKind::Minimum));
+            out.critical
+                .maxima
+                .iter()
+                .for_each(|&v| mark(v, render::MarkerKind::Maximum));
+            out.critical
+                .saddles
+                .iter()
+                .for_each(|&(v, _)| mark(v, render::MarkerKind::Saddle));
+            if uses_source {
+                mark(source, render::MarkerKind::Source);
             }
-            s.push_str("    ] }\n    color Color { color [\n");
-            for u in &norm {
-                let c = hue_rgb(*u);
-                s.push_str(&format!(
-                    "      {:.4} {:.4} {:.4},\n",
-                    c[0] as f64 / 255.0,
-                    c[1] as f64 / 255.0,
-                    c[2] as f64 / 255.0
-                ));
+            let mut buf = Vec::new();
+            if format == "wrl" {
+                render::write_vrml(&mut buf, &scene)
+                    .map_err(|err| ApiError(StatusCode::INTERNAL_SERVER_ERROR, err.to_string()))?;
+                Ok(attach(format!("{stem}.wrl"), "model/vrml", buf))
+            } else {
+                let img = render::render_scene(&scene, &render::RenderOptions::default())
+                    .map_err(|err| ApiError(StatusCode::INTERNAL_SERVER_ERROR, err.to_string()))?;
+                img.write_png(&mut buf)
+                    .map_err(|err| ApiError(StatusCode::INTERNAL_SERVER_ERROR, err.to_string()))?;
+                Ok(attach(format!("{stem}.png"), "image/png", buf))
             }
-            s.push_str("    ] }\n    coordIndex [\n");
-            for t in e.mesh.triangles() {
-                s.push_str(&format!("      {}, {}, {}, -1,\n", t[0], t[1], t[2]));
-            }
-            s.push_str("    ]\n  }\n}\n");
-            Ok(attach(format!("{stem}.wrl"), "model/vrml", s.into_bytes()))
         }
-        _ => Err(ApiError(
-            StatusCode::NOT_IMPLEMENTED,
-            "PNG rendering is not available in this build yet".into(),
-        )),
     }
 }

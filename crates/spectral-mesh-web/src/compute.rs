@@ -3,9 +3,8 @@
 //! eigenvectors B-orthonormal, spectral weights `w = 1/phi`.
 
 use serde::{Deserialize, Serialize};
-use spectral_mesh::linalg::SparseCholesky;
-use spectral_mesh::mesh::topology::{Topology, VertexTriangles};
-use spectral_mesh::{Eigenbasis, Mesh, Operators};
+use spectral_mesh::Eigenbasis;
+use spectral_mesh::fields::harmonic::{Constraint, ConstraintSpec};
 
 use crate::expr::Expr;
 
@@ -101,6 +100,8 @@ pub struct FieldParams {
     pub segments: Option<usize>,
     /// Download format (only read by the download endpoint).
     pub format: Option<String>,
+    /// Colour map of picture downloads (hue, viridis, turbo, diverging, grey).
+    pub colormap: Option<String>,
 }
 
 /// A request that cannot be served, with a message for the user.
@@ -401,245 +402,45 @@ fn segment(basis: &Eigenbasis, w: &[f64], segments: usize) -> Vec<f64> {
 }
 
 /// Parses harmonic constraints: a preset "2", "4", "6" (vertex of min x -> 0, max x -> 1,
-/// then y, then z) or explicit "v=x,v=x,...".
-pub fn parse_constraints(spec: &str, mesh: &Mesh) -> Result<Vec<(usize, f64)>, BadRequest> {
-    let n = mesh.n_vertices();
+/// then y, then z; MATH.md) or explicit "v=x,v=x,...".
+pub fn parse_constraints(spec: &str, n: usize) -> Result<ConstraintSpec, BadRequest> {
     let spec = spec.trim();
     if let Ok(count) = spec.parse::<usize>() {
         if !matches!(count, 2 | 4 | 6) {
             return Err(format!("constraint presets are 2, 4 or 6 (got {count})").into());
         }
-        let p = mesh.positions();
-        let mut out = Vec::new();
-        for axis in 0..count / 2 {
-            let mut lo = 0;
-            let mut hi = 0;
-            for i in 0..n {
-                if p[i][axis] < p[lo][axis] {
-                    lo = i;
-                }
-                if p[i][axis] > p[hi][axis] {
-                    hi = i;
-                }
-            }
-            out.push((lo, 0.0));
-            out.push((hi, 1.0));
-        }
-        return Ok(dedup(out));
+        return Ok(ConstraintSpec::Extremes(count));
     }
     let mut out = Vec::new();
     for part in spec.split(',').filter(|s| !s.trim().is_empty()) {
         let (v, x) = part
             .split_once('=')
             .ok_or_else(|| format!("bad constraint '{part}': expected vertex=value"))?;
-        let v: usize = v
+        let vertex: usize = v
             .trim()
             .parse()
             .map_err(|_| format!("bad vertex in constraint '{part}'"))?;
-        let x: f64 = x
+        let value: f64 = x
             .trim()
             .parse()
             .map_err(|_| format!("bad value in constraint '{part}'"))?;
-        if v >= n {
-            return Err(format!("vertex {v} is out of range: the mesh has {n} vertices").into());
+        if vertex >= n {
+            return Err(
+                format!("vertex {vertex} is out of range: the mesh has {n} vertices").into(),
+            );
         }
-        if !x.is_finite() {
-            return Err(format!("constraint value for vertex {v} is not finite").into());
+        if !value.is_finite() {
+            return Err(format!("constraint value for vertex {vertex} is not finite").into());
         }
-        out.push((v, x));
+        out.push(Constraint { vertex, value });
     }
     if out.len() < 2 {
-        return Err("a harmonic map needs at least two constraints".into());
+        return Err("a harmonic map needs at least two constraints (vertex=value, ...)".into());
     }
     if out.len() > 10_000 {
         return Err("at most 10000 constraints".into());
     }
-    Ok(dedup(out))
-}
-
-fn dedup(mut c: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
-    let mut seen = std::collections::HashSet::new();
-    c.retain(|(v, _)| seen.insert(*v));
-    c
-}
-
-/// Solves the Dirichlet problem `S_FF f_F = -S_FI f_I` (MATH.md, harmonic maps).
-pub fn harmonic(
-    ops: &Operators,
-    topo: &Topology,
-    constraints: &[(usize, f64)],
-) -> Result<Vec<f64>, BadRequest> {
-    let n = ops.n();
-    let mut fixed = vec![None; n];
-    for &(v, x) in constraints {
-        fixed[v] = Some(x);
-    }
-    let mut has = vec![false; topo.components.len()];
-    for &(v, _) in constraints {
-        if let Some(c) = topo.vertex_component.get(v).copied()
-            && c < has.len()
-        {
-            has[c] = true;
-        }
-    }
-    if let Some(c) = has.iter().position(|h| !h) {
-        return Err(format!(
-            "component {c} has no constraint: every connected component needs one"
-        )
-        .into());
-    }
-    let free: Vec<usize> = (0..n)
-        .filter(|&i| fixed[i].is_none() && topo.vertex_component[i] != usize::MAX)
-        .collect();
-    let fixed_idx: Vec<usize> = (0..n).filter(|&i| fixed[i].is_some()).collect();
-    let mut f = vec![0.0; n];
-    for &i in &fixed_idx {
-        f[i] = fixed[i].unwrap_or(0.0);
-    }
-    if free.is_empty() {
-        return Ok(f);
-    }
-    let sff = ops.stiffness.submatrix(&free, &free);
-    let sfi = ops.stiffness.submatrix(&free, &fixed_idx);
-    let fi: Vec<f64> = fixed_idx.iter().map(|&i| f[i]).collect();
-    let rhs: Vec<f64> = sfi.mul_vec(&fi).into_iter().map(|v| -v).collect();
-    let chol = SparseCholesky::new(&sff)
-        .map_err(|e| format!("the harmonic system could not be factored: {e}"))?;
-    let sol = chol.solve(&rhs);
-    for (&i, v) in free.iter().zip(sol) {
-        f[i] = v;
-    }
-    if f.iter().any(|v| !v.is_finite()) {
-        return Err("the harmonic solve produced non-finite values".into());
-    }
-    Ok(f)
-}
-
-/// Critical points of a piecewise-linear function (Banchoff), ties broken by index.
-#[derive(Debug, Clone, Serialize, Default)]
-pub struct CriticalPoints {
-    /// Minima.
-    pub minima: Vec<usize>,
-    /// Maxima.
-    pub maxima: Vec<usize>,
-    /// Saddles as (vertex, multiplicity).
-    pub saddles: Vec<(usize, usize)>,
-    /// Boundary vertices (not classified).
-    pub boundary_skipped: usize,
-    /// minima - saddles (with multiplicity) + maxima.
-    pub euler_found: i64,
-    /// The mesh's Euler characteristic.
-    pub euler_expected: i64,
-    /// True when the surface is closed and the check holds.
-    pub euler_ok: bool,
-}
-
-/// Classifies every interior vertex of `mesh` for the field `f`.
-pub fn critical_points(
-    mesh: &Mesh,
-    topo: &Topology,
-    vt: &VertexTriangles,
-    f: &[f64],
-) -> CriticalPoints {
-    let n = mesh.n_vertices();
-    let mut on_boundary = vec![false; n];
-    for l in &topo.boundary_loops {
-        for &v in l {
-            on_boundary[v] = true;
-        }
-    }
-    for e in &topo.non_manifold_edges {
-        on_boundary[e[0]] = true;
-        on_boundary[e[1]] = true;
-    }
-    for &v in &topo.non_manifold_vertices {
-        on_boundary[v] = true;
-    }
-    let above = |u: usize, v: usize| f[u] > f[v] || (f[u] == f[v] && u > v);
-    let mut cp = CriticalPoints::default();
-    let tris = mesh.triangles();
-    for v in 0..n {
-        let star = vt.of(v);
-        if star.is_empty() {
-            continue;
-        }
-        if on_boundary[v] {
-            cp.boundary_skipped += 1;
-            continue;
-        }
-        let mut changes = 0usize;
-        let mut any_above = false;
-        let mut any_below = false;
-        for &t in star {
-            let tri = tris[t];
-            let others: Vec<usize> = tri.iter().copied().filter(|&u| u != v).collect();
-            if others.len() != 2 {
-                continue;
-            }
-            let (a, b) = (above(others[0], v), above(others[1], v));
-            if a != b {
-                changes += 1;
-            }
-            any_above |= a || b;
-            any_below |= !a || !b;
-        }
-        if changes == 0 {
-            if any_above && !any_below {
-                cp.minima.push(v);
-            } else if any_below && !any_above {
-                cp.maxima.push(v);
-            }
-        } else if changes >= 4 {
-            cp.saddles.push((v, changes / 2 - 1));
-        }
-    }
-    let saddle_mult: usize = cp.saddles.iter().map(|s| s.1).sum();
-    cp.euler_found = cp.minima.len() as i64 - saddle_mult as i64 + cp.maxima.len() as i64;
-    cp.euler_expected = topo.euler_characteristic();
-    cp.euler_ok = cp.boundary_skipped == 0 && cp.euler_found == cp.euler_expected;
-    cp
-}
-
-/// Level sets: `levels` iso-values evenly spaced strictly inside (min, max); returns the
-/// iso-values, the segment count per level and the segments as `x1 y1 z1 x2 y2 z2` floats.
-pub fn level_sets(mesh: &Mesh, f: &[f64], levels: usize) -> (Vec<f64>, Vec<u32>, Vec<f32>) {
-    let (lo, hi) = min_max(f);
-    let mut isos = Vec::new();
-    let mut counts = Vec::new();
-    let mut segs = Vec::new();
-    if levels == 0 || hi <= lo {
-        return (isos, counts, segs);
-    }
-    let p = mesh.positions();
-    for l in 1..=levels {
-        let c = lo + (hi - lo) * l as f64 / (levels + 1) as f64;
-        isos.push(c);
-        let before = segs.len();
-        for tri in mesh.triangles() {
-            let mut pts = [[0.0f64; 3]; 2];
-            let mut np = 0;
-            for e in 0..3 {
-                let (i, j) = (tri[e], tri[(e + 1) % 3]);
-                let (fi, fj) = (f[i] - c, f[j] - c);
-                if (fi >= 0.0) != (fj >= 0.0) && np < 2 {
-                    let s = fi / (fi - fj);
-                    pts[np] = [
-                        p[i][0] + s * (p[j][0] - p[i][0]),
-                        p[i][1] + s * (p[j][1] - p[i][1]),
-                        p[i][2] + s * (p[j][2] - p[i][2]),
-                    ];
-                    np += 1;
-                }
-            }
-            if np == 2 {
-                for q in pts {
-                    segs.extend(q.iter().map(|&x| x as f32));
-                }
-            }
-        }
-        counts.push(((segs.len() - before) / 6) as u32);
-    }
-    (isos, counts, segs)
+    Ok(ConstraintSpec::Explicit(out))
 }
 
 /// Minimum and maximum of the finite entries.
@@ -654,51 +455,12 @@ pub fn min_max(f: &[f64]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fallback::{icosphere, torus};
-    use spectral_mesh::Laplacian;
-
-    #[test]
-    fn critical_points_of_height_satisfy_euler() {
-        for (mesh, chi) in [(icosphere(2), 2), (torus(24, 12, 1.0, 0.4), 0)] {
-            let topo = Topology::new(&mesh);
-            let vt = VertexTriangles::new(&mesh);
-            let f: Vec<f64> = mesh
-                .positions()
-                .iter()
-                .map(|p| p[0] + 0.3 * p[1] + 0.1 * p[2])
-                .collect();
-            let cp = critical_points(&mesh, &topo, &vt, &f);
-            assert_eq!(cp.euler_expected, chi);
-            assert!(cp.euler_ok, "{cp:?}");
-            assert_eq!(cp.minima.len(), 1);
-            assert_eq!(cp.maxima.len(), 1);
-        }
-    }
-
-    #[test]
-    fn harmonic_meets_constraints_and_max_principle() {
-        let mesh = icosphere(2);
-        let ops = Operators::new(&mesh, Laplacian::Fem);
-        let topo = Topology::new(&mesh);
-        let c = parse_constraints("2", &mesh).unwrap();
-        let f = harmonic(&ops, &topo, &c).unwrap();
-        for &(v, x) in &c {
-            assert_eq!(f[v], x);
-        }
-        let (lo, hi) = min_max(&f);
-        assert!(lo >= -1e-9 && hi <= 1.0 + 1e-9);
-        // S f = 0 at free vertices.
-        let sf = ops.stiffness.mul_vec(&f);
-        for (i, v) in sf.iter().enumerate() {
-            if c.iter().all(|&(w, _)| w != i) {
-                assert!(v.abs() < 1e-9, "residual {v} at {i}");
-            }
-        }
-    }
+    use spectral_mesh::shapes::build_str;
+    use spectral_mesh::{Laplacian, Operators};
 
     #[test]
     fn heat_conserves_mass_with_full_basis() {
-        let mesh = icosphere(1);
+        let mesh = build_str("sphere:res=1").unwrap();
         let ops = Operators::new(&mesh, Laplacian::Fem);
         let n = mesh.n_vertices();
         let basis = Eigenbasis::dense(&ops, n).unwrap();
@@ -724,7 +486,7 @@ mod tests {
 
     #[test]
     fn distance_is_zero_at_source_and_positive_elsewhere() {
-        let mesh = icosphere(1);
+        let mesh = build_str("sphere:res=1").unwrap();
         let ops = Operators::new(&mesh, Laplacian::Fem);
         let basis = Eigenbasis::dense(&ops, 20).unwrap();
         let p = FieldParams {
@@ -768,25 +530,5 @@ mod tests {
         };
         let c = check(&p, 10).unwrap();
         assert!(weights(&[0.0, 1.0, 2.0], &c).is_err());
-    }
-
-    #[test]
-    fn level_sets_lie_on_the_surface() {
-        let mesh = icosphere(2);
-        let f: Vec<f64> = mesh.positions().iter().map(|p| p[2]).collect();
-        let (isos, counts, segs) = level_sets(&mesh, &f, 5);
-        assert_eq!(isos.len(), 5);
-        assert!(counts.iter().all(|&c| c > 0));
-        assert_eq!(segs.len(), 6 * counts.iter().sum::<u32>() as usize);
-        // Every segment end point has z close to its iso-value (linear on triangles).
-        let mut off = 0;
-        for (l, &c) in counts.iter().enumerate() {
-            for s in 0..c as usize {
-                let z1 = segs[off + 6 * s + 2] as f64;
-                let z2 = segs[off + 6 * s + 5] as f64;
-                assert!((z1 - isos[l]).abs() < 1e-5 && (z2 - isos[l]).abs() < 1e-5);
-            }
-            off += 6 * c as usize;
-        }
     }
 }

@@ -41,7 +41,6 @@ pub mod api;
 pub mod cache;
 pub mod compute;
 pub mod expr;
-pub mod fallback;
 pub mod state;
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};

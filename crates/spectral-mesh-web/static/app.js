@@ -359,13 +359,11 @@ function drawField() {
     scene.add(markerObj);
   }
   if (cp) {
-    const mult = cp.saddles.reduce((a, s) => a + s[1], 0);
-    const check = cp.boundary_skipped > 0
-      ? `(bordered surface: ${cp.boundary_skipped} boundary vertices not classified)`
-      : `${cp.euler_ok ? '✓' : '✗'} min − saddles + max = ${cp.euler_found}, χ = ${cp.euler_expected}`;
+    const what = cp.doubled ? '2(m − s + M) inside + (m − s + M) on the boundary' : 'minima − saddles + maxima';
     const el = $('critical');
-    el.textContent = `minima ${cp.minima.length}  maxima ${cp.maxima.length}  saddles ${cp.saddles.length} (multiplicity ${mult})\n${check}`;
-    el.className = 'info small ' + (cp.boundary_skipped > 0 ? '' : cp.euler_ok ? 'ok' : 'bad');
+    el.textContent = `minima ${cp.minima.length}  maxima ${cp.maxima.length}  saddles ${cp.saddles.length} (with multiplicity ${cp.saddle_count})\n` +
+      `${cp.euler_ok ? '✓' : '✗'} ${what} = ${cp.euler_found}, ${cp.doubled ? '2χ' : 'χ'} = ${cp.euler_expected}`;
+    el.className = 'info small ' + (cp.euler_ok ? 'ok' : 'bad');
   }
   render();
 }
@@ -415,6 +413,7 @@ function downloadUrl(format) {
   const q = new URLSearchParams();
   for (const [k, v] of Object.entries(params())) if (v !== undefined && !(typeof v === 'number' && Number.isNaN(v))) q.set(k, String(v));
   q.set('format', format);
+  q.set('colormap', $('colormap').value);
   return `/api/mesh/${app.meshId}/download?${q}`;
 }
 document.querySelectorAll('#downloads a').forEach((a) => {

@@ -275,6 +275,19 @@ async fn happy_paths() {
     assert!(r.body.starts_with(b"ply\n"));
     let r = get(addr, &format!("/api/mesh/{id}/download?format=wrl&{q}")).await;
     assert!(r.body.starts_with(b"#VRML V2.0 utf8"));
+    let r = get(
+        addr,
+        &format!("/api/mesh/{id}/download?format=png&colormap=viridis&{q}"),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", r.error());
+    assert!(r.body.starts_with(b"\x89PNG"));
+    let r = get(
+        addr,
+        &format!("/api/mesh/{id}/download?format=png&colormap=nope&{q}"),
+    )
+    .await;
+    assert_eq!(r.status, 400);
     let r = get(addr, &format!("/api/mesh/{id}/download?format=toml&{q}")).await;
     assert_eq!(r.status, 200);
     let t: toml::Table = toml::from_str(&String::from_utf8(r.body).unwrap()).unwrap();
