@@ -182,6 +182,8 @@ async function setMesh(reply) {
   app.meshId = reply.mesh_id; app.n = reply.n; app.m = reply.m; app.info = reply.info;
   app.basisKey = null;
   $('info').textContent = describeInfo(reply);
+  const shapeName = String(reply.source).split(':')[0];
+  if ([...$('shape-select').options].some((o) => o.value === shapeName)) $('shape-select').value = shapeName;
   $('k').max = String(reply.n);
   if (parseInt($('k').value, 10) > reply.n) $('k').value = String(Math.min(reply.n, 100));
   if (parseInt($('source').value, 10) >= reply.n) $('source').value = '0';
@@ -290,6 +292,7 @@ async function requestUpdate() {
 }
 
 async function updateOnce() {
+  refreshParamVisibility();
   const p = params();
   const t0 = app.inputTime || performance.now();
   app.inputTime = 0;
