@@ -134,7 +134,7 @@ def main():
         print(f"  {k:45s} {v:.3e}")
         worst = max(worst, v)
     print(f"  max error {worst:.3e}")
-    return 0 if worst < 1e-6 else 1
+    return 0 if worst < 1e-8 else 1
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ fi
 
 step "cargo fmt --check" cargo fmt --all -- --check
 step "cargo clippy" cargo clippy --workspace --all-targets --quiet -- -D warnings
-step "cargo test" cargo test --workspace --quiet
+step "cargo test" cargo test --workspace --quiet --no-fail-fast
 step "build release CLI" cargo build --release --quiet -p spectral-mesh-cli
 cli="$root/target/release/spectral-mesh"
 

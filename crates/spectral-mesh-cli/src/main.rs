@@ -1,7 +1,9 @@
 //! `spectral-mesh`: harmonic maps, heat diffusion and spectral distances on triangle
 //! meshes, from the command line. See `spectral-mesh --help`.
 
+mod basis;
 mod commands;
+mod figure;
 mod input;
 mod output;
 mod progress;
@@ -30,6 +32,11 @@ enum Command {
     Convert(commands::convert::Args),
     /// Export the stiffness S and the mass matrices (Matrix Market) with the mesh.
     Operators(commands::operators::Args),
+    /// Draw a per-vertex field: PNG picture, VRML scene, coloured PLY.
+    Render(commands::render::Args),
+    /// Run one of the paper's experiments with its defaults and outputs.
+    #[command(subcommand)]
+    Experiment(commands::experiment::Experiment),
 }
 
 fn main() -> std::process::ExitCode {
@@ -39,6 +46,8 @@ fn main() -> std::process::ExitCode {
         Command::Info(a) => commands::info::run(a),
         Command::Convert(a) => commands::convert::run(a),
         Command::Operators(a) => commands::operators::run(a),
+        Command::Render(a) => commands::render::run(a),
+        Command::Experiment(e) => commands::experiment::run(e),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -2,6 +2,8 @@
 //!
 //! `cargo run --release -p spectral-mesh-render --example render_demo -- OUT_DIR`
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use spectral_mesh::Mesh;
 use spectral_mesh_render::*;
 use std::time::Instant;
@@ -36,13 +38,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (lo, hi) = field_range(&field, Colormap::Hue);
     scene.level_sets = extract_level_sets(&mesh, &field, &level_values(lo, hi, 12));
     scene.markers = vec![
-        Marker { position: mesh.positions()[0], kind: MarkerKind::Maximum },
-        Marker { position: mesh.positions()[60 * 48], kind: MarkerKind::Minimum },
-        Marker { position: mesh.positions()[30 * 48 + 12], kind: MarkerKind::Saddle },
-        Marker { position: mesh.positions()[90 * 48 + 12], kind: MarkerKind::Source },
+        Marker {
+            position: mesh.positions()[0],
+            kind: MarkerKind::Maximum,
+        },
+        Marker {
+            position: mesh.positions()[60 * 48],
+            kind: MarkerKind::Minimum,
+        },
+        Marker {
+            position: mesh.positions()[30 * 48 + 12],
+            kind: MarkerKind::Saddle,
+        },
+        Marker {
+            position: mesh.positions()[90 * 48 + 12],
+            kind: MarkerKind::Source,
+        },
     ];
-    for (name, view) in [("iso", View::Iso), ("front", View::Front), ("top", View::Top)] {
-        let opts = RenderOptions { width: 640, height: 480, view, ..Default::default() };
+    for (name, view) in [
+        ("iso", View::Iso),
+        ("front", View::Front),
+        ("top", View::Top),
+    ] {
+        let opts = RenderOptions {
+            width: 640,
+            height: 480,
+            view,
+            ..Default::default()
+        };
         render_scene(&scene, &opts)?.save_png(format!("{out}/torus_{name}.png"))?;
     }
     for cmap in [Colormap::Viridis, Colormap::Turbo, Colormap::Diverging] {
@@ -66,11 +89,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut bs = Scene::with_field(&big, &bf, Colormap::Turbo, None);
     bs.level_sets = extract_level_sets(&big, &bf, &level_values(-1.4, 1.4, 10));
     for ss in [1, 2, 3] {
-        let opts = RenderOptions { width: 1024, height: 1024, supersample: ss, ..Default::default() };
+        let opts = RenderOptions {
+            width: 1024,
+            height: 1024,
+            supersample: ss,
+            ..Default::default()
+        };
         let t0 = Instant::now();
         let img = render_scene(&bs, &opts)?;
         let dt = t0.elapsed();
-        println!("{} triangles, 1024x1024, supersample {ss}: {:.1} ms", big.n_triangles(), dt.as_secs_f64() * 1e3);
+        println!(
+            "{} triangles, 1024x1024, supersample {ss}: {:.1} ms",
+            big.n_triangles(),
+            dt.as_secs_f64() * 1e3
+        );
         if ss == 3 {
             img.save_png(format!("{out}/big.png"))?;
         }

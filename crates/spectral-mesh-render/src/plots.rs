@@ -45,14 +45,26 @@ fn is_svg(path: &Path) -> bool {
 }
 
 /// Plots eigenvalue against index (0-based), points joined by a line.
-pub fn plot_spectrum(path: impl AsRef<Path>, values: &[f64], title: &str) -> Result<(), RenderError> {
+pub fn plot_spectrum(
+    path: impl AsRef<Path>,
+    values: &[f64],
+    title: &str,
+) -> Result<(), RenderError> {
     let pts: Vec<(f64, f64)> = values
         .iter()
         .enumerate()
         .map(|(i, &v)| (i as f64, v))
         .collect();
     let curves = vec![("eigenvalues".to_string(), pts)];
-    plot_impl(path.as_ref(), &curves, "index", "eigenvalue", false, title, true)
+    plot_impl(
+        path.as_ref(),
+        &curves,
+        "index",
+        "eigenvalue",
+        false,
+        title,
+        true,
+    )
 }
 
 /// Plots several named curves `(x, y)` with a legend; `log_y` uses a logarithmic `y` axis
@@ -141,7 +153,8 @@ fn plot_impl(
         {
             let root = SVGBackend::with_string(&mut s, (w, h)).into_drawing_area();
             draw_any(&root, &clean, x0..x1, y0, y1, log_y, &labels)?;
-            root.present().map_err(|e| RenderError::Plot(e.to_string()))?;
+            root.present()
+                .map_err(|e| RenderError::Plot(e.to_string()))?;
         }
         std::fs::write(path, s)?;
     } else {
@@ -149,7 +162,8 @@ fn plot_impl(
         {
             let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
             draw_any(&root, &clean, x0..x1, y0, y1, log_y, &labels)?;
-            root.present().map_err(|e| RenderError::Plot(e.to_string()))?;
+            root.present()
+                .map_err(|e| RenderError::Plot(e.to_string()))?;
         }
         let mut rgba = Vec::with_capacity((w * h * 4) as usize);
         for px in buf.chunks_exact(3) {

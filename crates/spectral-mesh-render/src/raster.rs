@@ -311,7 +311,11 @@ pub fn field_colors(field: &[f64], colormap: Colormap, range: Option<(f64, f64)>
 }
 
 /// Renders a mesh with per-vertex colours and no overlays.
-pub fn render(mesh: &Mesh, colors: &[[f32; 3]], opts: &RenderOptions) -> Result<Image, RenderError> {
+pub fn render(
+    mesh: &Mesh,
+    colors: &[[f32; 3]],
+    opts: &RenderOptions,
+) -> Result<Image, RenderError> {
     let mut scene = Scene::new(mesh);
     scene.vertex_colors = colors.to_vec();
     render_scene(&scene, opts)
@@ -489,7 +493,13 @@ pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Image, Render
                 dot(n, light).abs() as f32
             };
             let s = amb + dif * lam;
-            let sane = |v: f32| if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.5 };
+            let sane = |v: f32| {
+                if v.is_finite() {
+                    v.clamp(0.0, 1.0)
+                } else {
+                    0.5
+                }
+            };
             RVert {
                 x: x * ss_f,
                 y: y * ss_f,
@@ -500,12 +510,7 @@ pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Image, Render
         })
         .collect();
     for tri in mesh.triangles() {
-        raster_triangle(
-            &mut buf,
-            &verts[tri[0]],
-            &verts[tri[1]],
-            &verts[tri[2]],
-        );
+        raster_triangle(&mut buf, &verts[tri[0]], &verts[tri[1]], &verts[tri[2]]);
     }
 
     // Level-set lines.

@@ -27,7 +27,13 @@ pub fn write_vrml(w: &mut impl Write, scene: &Scene) -> io::Result<()> {
     }
     s.push_str("    ] }\n    color Color { color [\n");
     for c in &scene.vertex_colors {
-        let f = |v: f32| if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.5 };
+        let f = |v: f32| {
+            if v.is_finite() {
+                v.clamp(0.0, 1.0)
+            } else {
+                0.5
+            }
+        };
         let _ = writeln!(s, "      {:.4} {:.4} {:.4},", f(c[0]), f(c[1]), f(c[2]));
     }
     s.push_str("    ] }\n    coordIndex [\n");

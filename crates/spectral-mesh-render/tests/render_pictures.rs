@@ -1,5 +1,7 @@
 //! Property tests of the renderer, the VRML writer and the plots.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use spectral_mesh::Mesh;
 use spectral_mesh_render::vrml::parse_vrml;
 use spectral_mesh_render::*;
@@ -11,7 +13,11 @@ fn sphere(r: f64, rings: usize, segs: usize) -> Mesh {
         let th = std::f64::consts::PI * i as f64 / rings as f64;
         for j in 0..segs {
             let ph = 2.0 * std::f64::consts::PI * (j as f64 + 0.5 * (i % 2) as f64) / segs as f64;
-            p.push([r * th.sin() * ph.cos(), r * th.sin() * ph.sin(), r * th.cos()]);
+            p.push([
+                r * th.sin() * ph.cos(),
+                r * th.sin() * ph.sin(),
+                r * th.cos(),
+            ]);
         }
     }
     p.push([0.0, 0.0, -r]);
@@ -303,19 +309,23 @@ fn colorbar_spans_the_map_and_has_labels() {
     let mut found = false;
     for x in strip_x0..480 {
         let col: Vec<[u8; 4]> = (0..360).map(|y| img.pixel(x, y).unwrap()).collect();
-        let magenta = col.iter().position(|c| c[0] > 240 && c[1] < 15 && c[2] > 240);
-        let red = col.iter().rposition(|c| c[0] > 240 && c[1] < 15 && c[2] < 15);
-        let green = col.iter().position(|c| c[0] < 15 && c[1] > 240 && c[2] < 15);
+        let magenta = col
+            .iter()
+            .position(|c| c[0] > 240 && c[1] < 15 && c[2] > 240);
+        let red = col
+            .iter()
+            .rposition(|c| c[0] > 240 && c[1] < 15 && c[2] < 15);
+        let green = col
+            .iter()
+            .position(|c| c[0] < 15 && c[1] > 240 && c[2] < 15);
         if let (Some(m), Some(r), Some(g)) = (magenta, red, green) {
             assert!(m < g && g < r);
             found = true;
             // Labels: dark pixels above the top and below the bottom of the bar.
-            let dark_above = (0..m).any(|y| {
-                (strip_x0..480).any(|xx| is_dark(img.pixel(xx, y as u32).unwrap()))
-            });
-            let dark_below = (r + 3..360).any(|y| {
-                (strip_x0..480).any(|xx| is_dark(img.pixel(xx, y as u32).unwrap()))
-            });
+            let dark_above =
+                (0..m).any(|y| (strip_x0..480).any(|xx| is_dark(img.pixel(xx, y as u32).unwrap())));
+            let dark_below = (r + 3..360)
+                .any(|y| (strip_x0..480).any(|xx| is_dark(img.pixel(xx, y as u32).unwrap())));
             assert!(dark_above && dark_below);
             break;
         }
@@ -325,8 +335,16 @@ fn colorbar_spans_the_map_and_has_labels() {
 
 #[test]
 fn perspective_and_named_views_fit_the_shape() {
-    let mesh = sphere(2.0, 24, 48).map_positions(|p| [p[0] + 5.0, 0.5 * p[1], p[2] - 3.0]).unwrap();
-    for view in [View::Front, View::Side, View::Top, View::Iso, "30,-20".parse().unwrap()] {
+    let mesh = sphere(2.0, 24, 48)
+        .map_positions(|p| [p[0] + 5.0, 0.5 * p[1], p[2] - 3.0])
+        .unwrap();
+    for view in [
+        View::Front,
+        View::Side,
+        View::Top,
+        View::Iso,
+        "30,-20".parse().unwrap(),
+    ] {
         for projection in [
             Projection::Orthographic,
             Projection::Perspective { fov_deg: 40.0 },
@@ -343,7 +361,10 @@ fn perspective_and_named_views_fit_the_shape() {
             for y in 0..80 {
                 assert!(is_white(img.pixel(0, y).unwrap()) && is_white(img.pixel(99, y).unwrap()));
             }
-            assert!(!is_white(img.pixel(50, 40).unwrap()), "{view:?} {projection:?}");
+            assert!(
+                !is_white(img.pixel(50, 40).unwrap()),
+                "{view:?} {projection:?}"
+            );
         }
     }
     assert!("sideways".parse::<View>().is_err());
@@ -434,7 +455,9 @@ fn vrml_round_trip_counts() {
     assert_eq!(&coords[..3], &mesh.positions()[0][..]);
     assert_eq!(
         ifs.field("solid"),
-        Some(&spectral_mesh_render::vrml::VrmlValue::Words(vec!["FALSE".into()]))
+        Some(&spectral_mesh_render::vrml::VrmlValue::Words(vec![
+            "FALSE".into()
+        ]))
     );
 }
 
@@ -455,7 +478,10 @@ fn plots_write_valid_png_and_svg() {
     plots::plot_spectrum(&png_path, &values, "spectrum").unwrap();
     let (w, h, buf) = decode_png(&png_path);
     assert_eq!((w, h), plots::PLOT_SIZE);
-    let non_white = buf.chunks_exact(4).filter(|c| c[..3] != [255, 255, 255]).count();
+    let non_white = buf
+        .chunks_exact(4)
+        .filter(|c| c[..3] != [255, 255, 255])
+        .count();
     assert!(non_white > 2000, "plot has ink: {non_white}");
 
     let svg_path = dir.path().join("spectrum.svg");
@@ -466,9 +492,18 @@ fn plots_write_valid_png_and_svg() {
     // Filter curves on a log axis (the paper's Fig. 7 shape).
     let s: Vec<f64> = (0..200).map(|i| i as f64 * 0.05).collect();
     let curves = vec![
-        ("heat t=1".to_string(), s.iter().map(|&x| (x, (-x).exp())).collect()),
-        ("biharmonic".to_string(), s.iter().map(|&x| (x, 1.0 / (x * x))).collect::<Vec<_>>()),
-        ("commute".to_string(), s.iter().map(|&x| (x, 1.0 / x)).collect::<Vec<_>>()),
+        (
+            "heat t=1".to_string(),
+            s.iter().map(|&x| (x, (-x).exp())).collect(),
+        ),
+        (
+            "biharmonic".to_string(),
+            s.iter().map(|&x| (x, 1.0 / (x * x))).collect::<Vec<_>>(),
+        ),
+        (
+            "commute".to_string(),
+            s.iter().map(|&x| (x, 1.0 / x)).collect::<Vec<_>>(),
+        ),
     ];
     for ext in ["png", "svg"] {
         let p = dir.path().join(format!("filters.{ext}"));

@@ -9,6 +9,8 @@
 //! constraints used, one `VERTEX VALUE` per line, on standard output (the constraints-file
 //! format). Without constraints, `extremes=2` (the paper's default) is used.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use std::io::Write;
 use std::process::ExitCode;
 

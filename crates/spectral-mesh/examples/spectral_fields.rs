@@ -4,7 +4,10 @@
 //! Usage: `spectral_fields MESH.off OUTDIR K T ANCHOR...`
 //! Files: `eigenvalues.txt` (k), `heat_<i>.txt` (wFEM `K_t e_i`, n), `biharmonic_<i>.txt`
 //! (n), `hks_times.txt` (auto times), `hks.txt` (n rows, one column per time, unscaled),
-//! `commute_<i>.txt` (n). Uses the dense eigen path (small meshes only).
+//! `commute_<i>.txt` (n). The basis comes from `compute_eigenbasis` (the engine every
+//! command uses: dense for small meshes, block shift-invert above).
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::error::Error;
 use std::fs;
@@ -15,7 +18,7 @@ use spectral_mesh::spectral::distances::distances_from;
 use spectral_mesh::spectral::filters::Filter;
 use spectral_mesh::spectral::heat::{KernelKind, basis_function};
 use spectral_mesh::spectral::signatures::{hks, hks_auto_times};
-use spectral_mesh::{Eigenbasis, Laplacian, Mesh, Operators};
+use spectral_mesh::{Laplacian, Mesh, Operators};
 
 /// A minimal OFF / COFF reader (comments, colour columns after x y z ignored; polygons fanned).
 fn read_off(path: &Path) -> Result<Mesh, Box<dyn Error>> {
@@ -90,7 +93,12 @@ fn main() -> Result<(), Box<dyn Error>> {
         .map(|s| s.parse())
         .collect::<Result<_, _>>()?;
     let ops = Operators::new(&mesh, Laplacian::Fem);
-    let basis = Eigenbasis::dense(&ops, k)?;
+    let params = spectral_mesh::spectral::eigenbasis::EigenParams {
+        k,
+        ..Default::default()
+    };
+    let basis =
+        spectral_mesh::spectral::eigenbasis::compute_eigenbasis(&ops, &params, &mut |_| {})?;
     write(&out.join("eigenvalues.txt"), &basis.values)?;
     for &a in &anchors {
         write(

@@ -1,6 +1,8 @@
 //! Critical points of piecewise-linear fields: height functions and the Euler identities,
 //! on closed and bordered surfaces, and with several components.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod fields_util;
 
 use fields_util::{Rng, flat_square, icosphere, torus, union};

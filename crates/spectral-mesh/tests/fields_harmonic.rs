@@ -1,6 +1,8 @@
 //! Harmonic and bi-harmonic maps: maximum principle, topology of the critical points,
 //! linear precision, solver reuse, scale invariance, locality and errors.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod fields_util;
 
 use fields_util::{flat_square, icosphere, torus, union};

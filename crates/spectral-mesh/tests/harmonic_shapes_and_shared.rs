@@ -2,6 +2,8 @@
 //! shared mesh: Euler's relation m - s + M = chi for the critical points, and the maximum
 //! principle where the cotangent weights allow it.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use std::path::PathBuf;
 
 use spectral_mesh::Mesh;

@@ -1,5 +1,7 @@
 //! Every kind of bad input gives an error naming the file, the line and the problem.
 
+#![allow(clippy::unwrap_used)]
+
 use spectral_mesh::io::{IoError, read_mesh, read_mesh_from_bytes};
 
 fn err(src: &[u8], name: &str) -> IoError {

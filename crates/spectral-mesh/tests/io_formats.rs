@@ -1,5 +1,7 @@
 //! Reading every supported format and variant, and format detection.
 
+#![allow(clippy::unwrap_used)]
+
 use spectral_mesh::io::{MeshFormat, read_mesh_from_bytes};
 
 fn load(text: &str, name: &str) -> spectral_mesh::io::LoadedMesh {
@@ -329,4 +331,29 @@ fn mesh_format_parse_display_and_from_path() {
     );
     assert_eq!(MeshFormat::from_path(Path::new("a/b")), None);
     assert_eq!(MeshFormat::from_path(Path::new("a/b.txt")), None);
+}
+
+#[test]
+fn large_polygon_is_fanned_with_a_warning() {
+    // A convex 80-gon: above the ear-clipping limit, so it is fanned and a warning says so.
+    let k = 80;
+    let mut src = format!("OFF\n{k} 1 0\n");
+    for i in 0..k {
+        let a = std::f64::consts::TAU * f64::from(i) / f64::from(k);
+        src.push_str(&format!("{} {} 0\n", a.cos(), a.sin()));
+    }
+    src.push_str(&format!("{k}"));
+    for i in 0..k {
+        src.push_str(&format!(" {i}"));
+    }
+    src.push('\n');
+    let l = load(&src, "big.off");
+    assert_eq!(l.mesh.n_triangles(), 78);
+    assert_eq!(l.polygons_triangulated, 1);
+    assert!(
+        l.warnings.iter().any(|w| w.contains("fan")),
+        "{:?}",
+        l.warnings
+    );
+    assert_eq!(l.mesh.triangles()[5], [0, 6, 7]);
 }

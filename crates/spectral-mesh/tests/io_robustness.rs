@@ -1,5 +1,7 @@
 //! Fuzz-like robustness: truncated files and garbage never panic; they give Ok or Err.
 
+#![allow(clippy::unwrap_used)]
+
 use spectral_mesh::Mesh;
 use spectral_mesh::io::{MeshFormat, WriteOptions, read_mesh_from_bytes, write_mesh_to};
 

@@ -1,5 +1,7 @@
 //! Writing then reading gives back bit-identical positions and identical triangles.
 
+#![allow(clippy::unwrap_used)]
+
 use spectral_mesh::Mesh;
 use spectral_mesh::io::{
     IoError, MeshFormat, WriteOptions, read_mesh, read_mesh_from_bytes, write_mesh, write_mesh_to,
@@ -10,7 +12,7 @@ fn awkward() -> Mesh {
     let p = vec![
         [1.0 / 3.0, -0.0, 0.1 + 0.2],
         [1e-300, 5e-324, -2.5e300],
-        [std::f64::consts::PI, -1.0 / 7.0, 123456789.123456789],
+        [std::f64::consts::PI, -1.0 / 7.0, 123_456_789.123_456_79],
         [0.0, 1.0, f64::MIN_POSITIVE],
         [-1e-7, 7e22, 2.0f64.sqrt()],
     ];
@@ -21,9 +23,7 @@ fn awkward() -> Mesh {
 fn same_bits(a: &Mesh, b: &Mesh) {
     assert_eq!(a.n_vertices(), b.n_vertices());
     for (p, q) in a.positions().iter().zip(b.positions()) {
-        for d in 0..3 {
-            assert_eq!(p[d].to_bits(), q[d].to_bits(), "{p:?} vs {q:?}");
-        }
+        assert_eq!(p.map(f64::to_bits), q.map(f64::to_bits), "{p:?} vs {q:?}");
     }
     assert_eq!(a.triangles(), b.triangles());
 }
@@ -62,7 +62,7 @@ fn colours_and_scalar_survive_and_scalar_is_in_the_ply() {
             let opts = WriteOptions {
                 format: None,
                 vertex_colors: Some(colors.clone()),
-                vertex_scalar: Some(("heat_t0.5".to_string(), scalar.clone())),
+                vertex_scalar: Some(("heat_t05".to_string(), scalar.clone())),
                 binary,
             };
             let mut buf = Vec::new();
@@ -71,9 +71,7 @@ fn colours_and_scalar_survive_and_scalar_is_in_the_ply() {
             same_bits(&m, &l.mesh);
             let got = l.vertex_colors.expect("colours read back");
             for (g, c) in got.iter().zip(&colors) {
-                for k in 0..3 {
-                    assert_eq!((g[k] * 255.0).round() as u8, c[k], "{format}");
-                }
+                assert_eq!(g.map(|x| (x * 255.0).round() as u8), *c, "{format}");
             }
             if format == MeshFormat::Ply {
                 // Check the scalar with an independent PLY parser.
@@ -84,7 +82,7 @@ fn colours_and_scalar_survive_and_scalar_is_in_the_ply() {
                     .unwrap();
                 let vs = &ply.payload["vertex"];
                 for (v, s) in vs.iter().zip(&scalar) {
-                    assert_eq!(v["heat_t0.5"], Property::Double(*s));
+                    assert_eq!(v["heat_t05"], Property::Double(*s));
                 }
             }
         }
@@ -99,7 +97,8 @@ fn stl_round_trip_is_exact_for_f32_coordinates() {
         [0.0, 0.25, 0.0],
         [0.0, 0.0, f64::from(0.1f32)],
     ];
-    let t = vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
+    // Vertices in order of first appearance, as welding numbers them.
+    let t = vec![[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]];
     let m = Mesh::new(p, t).unwrap();
     for binary in [false, true] {
         let mut buf = Vec::new();
@@ -166,7 +165,7 @@ fn inconsistent_write_options_are_refused_without_writing() {
     );
     assert!(e.to_string().contains("x.ply"), "{e}");
     assert!(!path.exists());
-    for name in ["has space", "", "x"] {
+    for name in ["has space", "", "x", "a.b"] {
         let opts = WriteOptions {
             vertex_scalar: Some((name.to_string(), vec![0.0; 5])),
             ..WriteOptions::default()

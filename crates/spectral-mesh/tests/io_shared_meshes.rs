@@ -4,6 +4,8 @@
 //! the variable is unset the tests print a note and pass, when it is set to a missing folder
 //! they fail.
 
+#![allow(clippy::unwrap_used)]
+
 use std::path::PathBuf;
 
 use spectral_mesh::io::{MeshFormat, read_mesh};

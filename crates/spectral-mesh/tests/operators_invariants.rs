@@ -4,6 +4,8 @@
 //! The folder comes from `SPECTRAL_MESH_SHARED_MESHES`; unset, these tests say they were
 //! skipped; set to a missing folder, they fail.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use std::path::PathBuf;
 
 use spectral_mesh::Mesh;

@@ -1,5 +1,7 @@
 //! Diagnostic: prints statistics of every shape (run with `--ignored --nocapture`).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::shapes::{build_str, shape_names};
 
@@ -55,5 +57,36 @@ fn print_stats() {
                 min_angle_deg(&m)
             );
         }
+    }
+}
+
+#[test]
+#[ignore]
+fn dump_off() {
+    let dir = std::env::var("SHAPE_DUMP").unwrap_or("/tmp/shapes".into());
+    std::fs::create_dir_all(&dir).unwrap();
+    for info in shape_names() {
+        let m = build_str(&format!("{}:res=2", info.name)).unwrap();
+        let mut s = format!("OFF\n{} {} 0\n", m.n_vertices(), m.n_triangles());
+        for p in m.positions() {
+            s += &format!("{} {} {}\n", p[0], p[1], p[2]);
+        }
+        for t in m.triangles() {
+            s += &format!("3 {} {} {}\n", t[0], t[1], t[2]);
+        }
+        std::fs::write(format!("{dir}/{}.off", info.name), s).unwrap();
+    }
+}
+
+#[test]
+#[ignore]
+fn where_extremes() {
+    let m = build_str("3torus:res=4").unwrap();
+    let a = m.triangle_areas();
+    let mut idx: Vec<usize> = (0..a.len()).collect();
+    idx.sort_by(|&i, &j| a[i].partial_cmp(&a[j]).unwrap());
+    for &t in idx.iter().take(3).chain(idx.iter().rev().take(3)) {
+        let c = m.corners(t);
+        println!("area {:.3e} at {:?}", a[t], c[0]);
     }
 }

@@ -1,5 +1,7 @@
 //! Heat kernel: exact properties on the full spectrum, references, the analytic sphere.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod spectral_util;
 
 use spectral_mesh::spectral::heat::{
@@ -220,5 +222,5 @@ fn bad_inputs_are_errors() {
     assert!(basis_function(&basis, 0, -1.0, KernelKind::Wfem).is_err());
     assert!(basis_function(&basis, 0, f64::NAN, KernelKind::Wfem).is_err());
     assert!(diffuse(&basis, &[1.0, 2.0], 0.1, KernelKind::Wfem).is_err());
-    assert!(reference_heat_time_stepping(&ops, &vec![0.0; 25], 0.1, 0.0).is_err());
+    assert!(reference_heat_time_stepping(&ops, &[0.0; 25], 0.1, 0.0).is_err());
 }

@@ -1,5 +1,7 @@
 //! Signatures (HKS, WKS, ADF) and segmentation by persistence-merged watersheds.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod spectral_util;
 
 use spectral_mesh::Eigenbasis;

@@ -211,7 +211,8 @@ pub struct WriteOptions {
     /// (with alpha 255), OBJ as `v x y z r g b` with components in `[0, 1]`.
     pub vertex_colors: Option<Vec<[u8; 3]>>,
     /// A per-vertex scalar (name, `n` values) written as a PLY `double` property;
-    /// ignored by the other formats. The name must be a non-empty word without spaces.
+    /// ignored by the other formats. The name must be non-empty ASCII letters, digits, `_`
+    /// or `-`, and not one of the standard property names.
     pub vertex_scalar: Option<(String, Vec<f64>)>,
     /// Binary output: PLY `binary_little_endian`, STL binary. OFF and OBJ are always text.
     pub binary: bool,
@@ -433,12 +434,12 @@ pub fn write_mesh_to(
         if name.is_empty()
             || !name
                 .chars()
-                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.')
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
         {
             return Err(ctx.invalid(
                 None,
                 format!(
-                    "scalar name {name:?} is not a valid property name (use letters, digits, _ - .)"
+                    "scalar name {name:?} is not a valid property name (use letters, digits, _ and -)"
                 ),
             ));
         }
@@ -509,18 +510,30 @@ impl RawFaces {
     }
 }
 
+/// What a reader collected, before the shared checks.
+pub(crate) struct RawMesh<'a> {
+    pub(crate) format: MeshFormat,
+    pub(crate) positions: Vec<[f64; 3]>,
+    /// Line of every vertex, when the format has lines.
+    pub(crate) position_lines: Option<&'a [usize]>,
+    pub(crate) faces: &'a RawFaces,
+    /// Added to vertex indices in messages (1 for OBJ).
+    pub(crate) index_base: i64,
+    pub(crate) vertex_colors: Option<Vec<[f32; 3]>>,
+    pub(crate) warnings: Vec<String>,
+}
+
 /// Shared end of every reader: checks positions and faces, triangulates, builds the mesh.
-/// `index_base` is added to indices in messages (1 for OBJ).
-pub(crate) fn assemble(
-    ctx: &Ctx,
-    format: MeshFormat,
-    positions: Vec<[f64; 3]>,
-    position_lines: Option<&[usize]>,
-    faces: &RawFaces,
-    index_base: i64,
-    vertex_colors: Option<Vec<[f32; 3]>>,
-    mut warnings: Vec<String>,
-) -> Result<LoadedMesh, IoError> {
+pub(crate) fn assemble(ctx: &Ctx, raw: RawMesh<'_>) -> Result<LoadedMesh, IoError> {
+    let RawMesh {
+        format,
+        positions,
+        position_lines,
+        faces,
+        index_base,
+        vertex_colors,
+        mut warnings,
+    } = raw;
     let n = positions.len();
     for (v, p) in positions.iter().enumerate() {
         if let Some(d) = p.iter().position(|c| !c.is_finite()) {

@@ -4,7 +4,9 @@ use std::collections::BTreeSet;
 use std::io::Write;
 
 use super::lexer::{parse_f64, parse_i64, show};
-use super::{Ctx, IoError, LoadedMesh, MeshFormat, RawFaces, WriteOptions, assemble, fmt_f64};
+use super::{
+    Ctx, IoError, LoadedMesh, MeshFormat, RawFaces, RawMesh, WriteOptions, assemble, fmt_f64,
+};
 use crate::mesh::Mesh;
 
 /// Statements that are legal OBJ but carry nothing for a triangle mesh.
@@ -228,13 +230,15 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     };
     assemble(
         ctx,
-        MeshFormat::Obj,
-        positions,
-        Some(&lines),
-        &faces,
-        1,
-        vertex_colors,
-        warnings,
+        RawMesh {
+            format: MeshFormat::Obj,
+            positions,
+            position_lines: Some(&lines),
+            faces: &faces,
+            index_base: 1,
+            vertex_colors,
+            warnings,
+        },
     )
 }
 

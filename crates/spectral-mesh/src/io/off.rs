@@ -3,7 +3,9 @@
 use std::io::Write;
 
 use super::lexer::{Lexer, parse_f64, parse_i64, show};
-use super::{Ctx, IoError, LoadedMesh, MeshFormat, RawFaces, WriteOptions, assemble, fmt_f64};
+use super::{
+    Ctx, IoError, LoadedMesh, MeshFormat, RawFaces, RawMesh, WriteOptions, assemble, fmt_f64,
+};
 use crate::mesh::Mesh;
 
 /// What the header letters announce per vertex.
@@ -279,13 +281,15 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     }
     assemble(
         ctx,
-        MeshFormat::Off,
-        positions,
-        Some(&lines),
-        &faces,
-        0,
-        vertex_colors,
-        warnings,
+        RawMesh {
+            format: MeshFormat::Off,
+            positions,
+            position_lines: Some(&lines),
+            faces: &faces,
+            index_base: 0,
+            vertex_colors,
+            warnings,
+        },
     )
 }
 

@@ -5,7 +5,9 @@ use std::io::Write;
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{DefaultElement, Property};
 
-use super::{Ctx, IoError, LoadedMesh, MeshFormat, RawFaces, WriteOptions, assemble, fmt_f64};
+use super::{
+    Ctx, IoError, LoadedMesh, MeshFormat, RawFaces, RawMesh, WriteOptions, assemble, fmt_f64,
+};
 use crate::mesh::Mesh;
 
 /// Number of header lines (through `end_header`) and whether the payload is binary.
@@ -74,6 +76,11 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
             None => msg,
         };
         // ply-rs nests "... Error: ..." messages; the innermost one is the useful part.
+        let msg = if msg.contains("ParseError {") {
+            "malformed header line".to_string()
+        } else {
+            msg
+        };
         let first = msg.lines().next().unwrap_or("").trim().to_string();
         let msg = match msg.rfind("Error: ") {
             Some(k) => format!("{first} ({})", &msg[k + 7..]),
@@ -201,13 +208,15 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     }
     assemble(
         ctx,
-        MeshFormat::Ply,
-        positions,
-        None,
-        &faces,
-        0,
-        vertex_colors,
-        warnings,
+        RawMesh {
+            format: MeshFormat::Ply,
+            positions,
+            position_lines: None,
+            faces: &faces,
+            index_base: 0,
+            vertex_colors,
+            warnings,
+        },
     )
 }
 

@@ -3,7 +3,7 @@
 use crate::mesh::{cross, dot, norm, normalize, sub};
 
 /// Largest polygon triangulated by ear clipping; bigger ones get a fan.
-const MAX_EAR_CLIPPING: usize = 200;
+const MAX_EAR_CLIPPING: usize = 64;
 
 /// Splits polygon `poly` (vertex indices into `positions`, at least 3, all distinct) into
 /// `poly.len() - 2` triangles appended to `out`, keeping the polygon's winding.
@@ -19,9 +19,9 @@ const MAX_EAR_CLIPPING: usize = 200;
 /// 3. If no ear exists (a self-intersecting or degenerate polygon), the most convex corner
 ///    is cut; if no corner is convex at all, the first remaining corner is.
 ///
-/// A polygon whose Newell normal is zero (no usable plane) or with more than 200 corners
-/// is fan-triangulated from its first vertex instead; the function then returns `false`
-/// (the readers turn that into a warning). Otherwise it returns `true`.
+/// A polygon whose Newell normal is zero (no usable plane) or with more than 64 corners
+/// (ear clipping as done here costs O(k^3)) is fan-triangulated from its first vertex
+/// instead; the function then returns `false` (the readers turn that into a warning). Otherwise it returns `true`.
 pub fn triangulate_polygon(
     positions: &[[f64; 3]],
     poly: &[usize],
@@ -57,7 +57,8 @@ pub fn triangulate_polygon(
     for i in 0..k {
         extent = extent.max(norm(sub(positions[poly[i]], positions[poly[0]])));
     }
-    if !(norm(nrm) > 1e-14 * extent * extent) {
+    let nn = norm(nrm);
+    if nn.is_nan() || nn <= 1e-14 * extent * extent {
         fan(out);
         return false;
     }

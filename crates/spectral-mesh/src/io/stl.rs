@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 use std::io::Write;
 
-use super::{Ctx, IoError, LoadedMesh, MeshFormat, RawFaces, WriteOptions, assemble};
+use super::{Ctx, IoError, LoadedMesh, MeshFormat, RawFaces, RawMesh, WriteOptions, assemble};
 use crate::mesh::Mesh;
 
 /// True when the size matches the triangle count of a binary STL header exactly.
@@ -102,13 +102,15 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     }
     assemble(
         ctx,
-        MeshFormat::Stl,
-        positions,
-        None,
-        &faces,
-        0,
-        None,
-        warnings,
+        RawMesh {
+            format: MeshFormat::Stl,
+            positions,
+            position_lines: None,
+            faces: &faces,
+            index_base: 0,
+            vertex_colors: None,
+            warnings,
+        },
     )
 }
 

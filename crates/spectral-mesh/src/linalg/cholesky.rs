@@ -1,10 +1,13 @@
 //! Sparse Cholesky factorization (faer, AMD ordering, supernodal) with the symbolic
 //! analysis kept so that a matrix with the same pattern refactors cheaply.
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use std::sync::Arc;
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, factorize_symbolic_cholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{MatMut, Side};
+use faer::{Conj, MatMut, Par, Side};
+use rayon::prelude::*;
 
 use super::SparseMatrix;
 
@@ -23,11 +26,16 @@ pub enum CholeskyError {
 }
 
 /// A sparse `L L^T` factorization of a symmetric positive definite matrix.
+///
+/// Parallelism is explicit and coarse: the factorization itself runs on one thread (it is
+/// cheap next to the solves that use it), and multi-right-hand-side solves split their
+/// columns over the rayon pool, each part solved sequentially. This avoids fine-grained
+/// spin barriers, which are very slow on a loaded machine.
 #[derive(Debug, Clone)]
 pub struct SparseCholesky {
     n: usize,
-    symbolic: SymbolicLlt<usize>,
-    llt: Llt<usize, f64>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    values: Vec<f64>,
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
 }
@@ -38,6 +46,35 @@ fn view(a: &SparseMatrix) -> Result<SparseColMatRef<'_, usize, f64>, CholeskyErr
     Ok(SparseColMatRef::new(sym, a.values()))
 }
 
+fn numeric(
+    symbolic: &SymbolicCholesky<usize>,
+    a: &SparseMatrix,
+) -> Result<Vec<f64>, CholeskyError> {
+    let m = view(a)?;
+    let mut values = vec![0.0; symbolic.len_val()];
+    let par = Par::Seq;
+    let mut mem =
+        MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
+            .map_err(|e| CholeskyError::Internal(format!("{e:?}")))?;
+    symbolic
+        .factorize_numeric_llt::<f64>(
+            &mut values,
+            m,
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .map_err(|e| CholeskyError::NotPositiveDefinite(format!("{e:?}")))?;
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(CholeskyError::NotPositiveDefinite(
+            "non-finite factor".to_string(),
+        ));
+    }
+    Ok(values)
+}
+
 impl SparseCholesky {
     /// Analyses and factors `a` (only its lower triangle is read).
     pub fn new(a: &SparseMatrix) -> Result<Self, CholeskyError> {
@@ -45,14 +82,18 @@ impl SparseCholesky {
             return Err(CholeskyError::NotSquare(a.nrows(), a.ncols()));
         }
         let m = view(a)?;
-        let symbolic = SymbolicLlt::try_new(m.symbolic(), Side::Lower)
-            .map_err(|e| CholeskyError::Internal(format!("{e:?}")))?;
-        let llt = Llt::try_new_with_symbolic(symbolic.clone(), m, Side::Lower)
-            .map_err(|e| CholeskyError::NotPositiveDefinite(format!("{e:?}")))?;
+        let symbolic = factorize_symbolic_cholesky(
+            m.symbolic(),
+            Side::Lower,
+            Default::default(),
+            Default::default(),
+        )
+        .map_err(|e| CholeskyError::Internal(format!("{e:?}")))?;
+        let values = numeric(&symbolic, a)?;
         Ok(Self {
             n: a.nrows(),
-            symbolic,
-            llt,
+            symbolic: Arc::new(symbolic),
+            values,
             col_ptr: a.col_ptr().to_vec(),
             row_idx: a.row_idx().to_vec(),
         })
@@ -65,9 +106,7 @@ impl SparseCholesky {
             *self = Self::new(a)?;
             return Ok(());
         }
-        let m = view(a)?;
-        self.llt = Llt::try_new_with_symbolic(self.symbolic.clone(), m, Side::Lower)
-            .map_err(|e| CholeskyError::NotPositiveDefinite(format!("{e:?}")))?;
+        self.values = numeric(&self.symbolic, a)?;
         Ok(())
     }
 
@@ -78,18 +117,45 @@ impl SparseCholesky {
 
     /// Solves `A x = b` in place for one right-hand side.
     pub fn solve_in_place(&self, b: &mut [f64]) {
-        self.solve_many_in_place(b, 1);
+        self.solve_seq(b, 1);
     }
 
-    /// Solves `A X = B` in place for `k` right-hand sides stored column-major
-    /// (`b.len() == n * k`).
-    pub fn solve_many_in_place(&self, b: &mut [f64], k: usize) {
-        assert_eq!(b.len(), self.n * k);
-        if k == 0 {
+    fn solve_seq(&self, b: &mut [f64], k: usize) {
+        if k == 0 || self.n == 0 {
             return;
         }
         let rhs = MatMut::from_column_major_slice_mut(b, self.n, k);
-        self.llt.solve_in_place(rhs);
+        let par = Par::Seq;
+        let req = self.symbolic.solve_in_place_scratch::<f64>(k, par);
+        let mut mem = MemBuffer::new(req);
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            rhs,
+            par,
+            MemStack::new(&mut mem),
+        );
+    }
+
+    /// Solves `A X = B` in place for `k` right-hand sides stored column-major
+    /// (`b.len() == n * k`). The columns are split into groups solved in parallel.
+    pub fn solve_many_in_place(&self, b: &mut [f64], k: usize) {
+        assert_eq!(b.len(), self.n * k);
+        if k == 0 || self.n == 0 {
+            return;
+        }
+        let threads = rayon::current_num_threads().max(1);
+        if threads == 1 || k == 1 {
+            self.solve_seq(b, k);
+            return;
+        }
+        // Groups of at least 4 columns (multi-RHS solves are cheaper per column), at most
+        // one group per thread.
+        let groups = threads.min(k.div_ceil(4)).max(1);
+        let per = k.div_ceil(groups);
+        b.par_chunks_mut(self.n * per).for_each(|chunk| {
+            let c = chunk.len() / self.n;
+            self.solve_seq(chunk, c);
+        });
     }
 
     /// Returns `A^-1 b`.

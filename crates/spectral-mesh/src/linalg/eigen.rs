@@ -28,7 +28,7 @@
 //! Ritz vectors) is BLAS-3 through faer's parallel matrix product.
 
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par, Side};
+use faer::{Accum, Mat, MatRef, Par};
 use rayon::prelude::*;
 
 use super::{SparseCholesky, SparseMatrix};
@@ -51,6 +51,10 @@ pub struct SparseEigenOptions {
     pub seed: u64,
     /// Iteration cap; `0` picks a generous one from `k`.
     pub max_iterations: usize,
+    /// Expansion rule: `true` = block Krylov (`K^-1 B` applied to the last block added),
+    /// `false` = Davidson (`K^-1` applied to the residuals of the lowest unconverged
+    /// Ritz pairs).
+    pub krylov: bool,
 }
 
 impl Default for SparseEigenOptions {
@@ -63,6 +67,7 @@ impl Default for SparseEigenOptions {
             shift: None,
             seed: 0x5eed,
             max_iterations: 0,
+            krylov: false,
         }
     }
 }
@@ -166,21 +171,53 @@ pub fn sym_spmm(a: &SparseMatrix, x: &[f64], c: usize) -> Vec<f64> {
     let n = a.ncols();
     debug_assert_eq!(x.len(), n * c);
     let mut y = vec![0.0; n * c];
-    if n == 0 {
+    if n == 0 || c == 0 {
         return y;
     }
-    y.par_chunks_mut(n)
-        .zip(x.par_chunks(n))
-        .for_each(|(yc, xc)| {
-            for (i, yi) in yc.iter_mut().enumerate() {
-                let (rows, vals) = a.col(i);
-                let mut s = 0.0;
-                for (&r, &v) in rows.iter().zip(vals) {
-                    s += v * xc[r];
+    if c == 1 {
+        y.par_chunks_mut(LEAF_ROWS)
+            .enumerate()
+            .for_each(|(chunk, yc)| {
+                let base = chunk * LEAF_ROWS;
+                for (q, yi) in yc.iter_mut().enumerate() {
+                    let (rows, vals) = a.col(base + q);
+                    *yi = rows.iter().zip(vals).map(|(&r, &v)| v * x[r]).sum();
                 }
-                *yi = s;
+            });
+        return y;
+    }
+    // Row-major copy of X so that one pass over A serves all c columns.
+    let mut xr = vec![0.0; n * c];
+    xr.par_chunks_mut(LEAF_ROWS * c)
+        .enumerate()
+        .for_each(|(chunk, dst)| {
+            let base = chunk * LEAF_ROWS;
+            for (q, row) in dst.chunks_mut(c).enumerate() {
+                for (j, v) in row.iter_mut().enumerate() {
+                    *v = x[j * n + base + q];
+                }
             }
         });
+    let mut yr = vec![0.0; n * c];
+    yr.par_chunks_mut(LEAF_ROWS * c)
+        .enumerate()
+        .for_each(|(chunk, dst)| {
+            let base = chunk * LEAF_ROWS;
+            for (q, acc) in dst.chunks_mut(c).enumerate() {
+                let (rows, vals) = a.col(base + q);
+                for (&r, &v) in rows.iter().zip(vals) {
+                    let src = &xr[r * c..(r + 1) * c];
+                    for (o, s) in acc.iter_mut().zip(src) {
+                        *o += v * s;
+                    }
+                }
+            }
+        });
+    y.par_chunks_mut(n).enumerate().for_each(|(j, col)| {
+        for (i, v) in col.iter_mut().enumerate() {
+            *v = yr[i * c + j];
+        }
+    });
     y
 }
 
@@ -256,20 +293,53 @@ fn view(x: &[f64], n: usize, c: usize) -> MatRef<'_, f64> {
     MatRef::from_column_major_slice(&x[..n * c], n, c)
 }
 
+/// Rows per leaf of the parallel splits (fixed: results do not depend on the thread count).
+const LEAF_ROWS: usize = 4096;
+
+/// `A^T B` for row blocks, split recursively over rows and summed in a fixed order.
+fn gram_rec(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let n = a.nrows();
+    if n <= LEAF_ROWS {
+        let mut g = Mat::<f64>::zeros(a.ncols(), b.ncols());
+        matmul(g.as_mut(), Accum::Replace, a.transpose(), b, 1.0, Par::Seq);
+        return g;
+    }
+    let mid = (n / 2).next_multiple_of(64).min(n);
+    let (a0, a1) = a.split_at_row(mid);
+    let (b0, b1) = b.split_at_row(mid);
+    let (mut g0, g1) = rayon::join(|| gram_rec(a0, b0), || gram_rec(a1, b1));
+    g0 += g1;
+    g0
+}
+
 /// `A^T B` for column-major `A` (`n x a`) and `B` (`n x b`).
 fn gram(a: &[f64], b: &[f64], n: usize, ca: usize, cb: usize) -> Mat<f64> {
-    let mut g = Mat::<f64>::zeros(ca, cb);
-    if n > 0 && ca > 0 && cb > 0 {
-        matmul(
-            g.as_mut(),
-            Accum::Replace,
-            view(a, n, ca).transpose(),
-            view(b, n, cb),
-            1.0,
-            Par::rayon(0),
-        );
+    if n == 0 || ca == 0 || cb == 0 {
+        return Mat::<f64>::zeros(ca, cb);
     }
-    g
+    gram_rec(view(a, n, ca), view(b, n, cb))
+}
+
+/// `dst (+)= alpha * lhs * rhs`, split recursively over the rows of `dst` and `lhs`.
+fn matmul_rows(
+    dst: faer::MatMut<'_, f64>,
+    accum: Accum,
+    lhs: MatRef<'_, f64>,
+    rhs: MatRef<'_, f64>,
+    alpha: f64,
+) {
+    let n = dst.nrows();
+    if n <= LEAF_ROWS {
+        matmul(dst, accum, lhs, rhs, alpha, Par::Seq);
+        return;
+    }
+    let mid = (n / 2).next_multiple_of(64).min(n);
+    let (d0, d1) = dst.split_at_row_mut(mid);
+    let (l0, l1) = lhs.split_at_row(mid);
+    rayon::join(
+        || matmul_rows(d0, accum, l0, rhs, alpha),
+        || matmul_rows(d1, accum, l1, rhs, alpha),
+    );
 }
 
 /// `W -= V C` (`V`: `n x m`, `C`: `m x c`, `W`: `n x c`).
@@ -279,7 +349,7 @@ fn sub_product(w: &mut [f64], v: &[f64], c: MatRef<'_, f64>, n: usize) {
         return;
     }
     let wm = faer::MatMut::from_column_major_slice_mut(&mut w[..n * cc], n, cc);
-    matmul(wm, Accum::Add, view(v, n, m), c, -1.0, Par::rayon(0));
+    matmul_rows(wm, Accum::Add, view(v, n, m), c, -1.0);
 }
 
 /// `V C` as a new column-major buffer (`n x c`).
@@ -290,7 +360,7 @@ fn product(v: &[f64], c: MatRef<'_, f64>, n: usize) -> Vec<f64> {
         return out;
     }
     let om = faer::MatMut::from_column_major_slice_mut(&mut out, n, cc);
-    matmul(om, Accum::Replace, view(v, n, m), c, 1.0, Par::rayon(0));
+    matmul_rows(om, Accum::Replace, view(v, n, m), c, 1.0);
     out
 }
 
@@ -308,16 +378,36 @@ impl Rng {
     }
 }
 
-/// The dense symmetric eigen-decomposition of `h` (ascending).
+/// The dense symmetric eigen-decomposition of `h` (ascending; lower triangle read).
+/// Sequential: the projected matrices are small and fine-grained parallelism costs more
+/// than it gains on a shared machine.
 fn sym_eig(h: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), SparseEigenError> {
-    let evd = h
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|_| SparseEigenError::NonFinite)?;
-    let vals: Vec<f64> = (0..h.nrows()).map(|i| evd.S()[i]).collect();
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::evd;
+    let n = h.nrows();
+    let mut u = Mat::<f64>::zeros(n, n);
+    let mut d = faer::diag::Diag::<f64>::zeros(n);
+    let par = Par::Seq;
+    let mut mem = MemBuffer::new(evd::self_adjoint_evd_scratch::<f64>(
+        n,
+        evd::ComputeEigenvectors::Yes,
+        par,
+        Default::default(),
+    ));
+    evd::self_adjoint_evd(
+        h,
+        d.as_mut(),
+        Some(u.as_mut()),
+        par,
+        MemStack::new(&mut mem),
+        Default::default(),
+    )
+    .map_err(|_| SparseEigenError::NonFinite)?;
+    let vals: Vec<f64> = (0..n).map(|i| d[i]).collect();
     if vals.iter().any(|v| !v.is_finite()) {
         return Err(SparseEigenError::NonFinite);
     }
-    Ok((vals, evd.U().to_owned()))
+    Ok((vals, u))
 }
 
 /// B-orthonormalizes the `c` columns of `w` in place (SVQB), dropping numerically dependent
@@ -486,13 +576,13 @@ pub fn sparse_generalized_eigen(
     let p = if opts.block_size > 0 {
         opts.block_size
     } else {
-        ((k + 3) / 4).clamp(8, 48)
+        k.div_ceil(4).clamp(8, 48)
     }
     .min(n);
     let m_max = if opts.max_basis > 0 {
         opts.max_basis.max(k + 2 * p)
     } else {
-        (2 * k + 4 * p).max(k + 6 * p)
+        (5 * k / 2 + 4 * p).max(k + 8 * p)
     }
     .min(n);
     let max_iter = if opts.max_iterations > 0 {
@@ -515,6 +605,8 @@ pub fn sparse_generalized_eigen(
     w = bw;
     let c = new_block(&mut w, &v, n, 0, p, b)?;
     append(&mut v, &mut h, &mut m, &w, c, n, s)?;
+    let mut last = (m - c, c);
+    let mut restarted = false;
 
     let mut nconv = 0usize;
     let mut iteration = 0usize;
@@ -627,6 +719,11 @@ pub fn sparse_generalized_eigen(
                 dst[i] = sx[jj * n + i] - t * bx[jj * n + i];
             }
         }
+        if opts.krylov && last.1 > 0 && !restarted {
+            // Block Krylov: K^-1 B applied to the last block added.
+            c = last.1;
+            w = sym_spmm(b, &v[n * last.0..n * (last.0 + c)], c);
+        }
         if c > 0 {
             chol.solve_many_in_place(&mut w[..n * c], c);
             solves += c;
@@ -652,6 +749,10 @@ pub fn sparse_generalized_eigen(
                 h[(j, j)] = theta[j];
             }
             m = keep;
+            // The basis is no longer a Krylov space: the next block expands residuals.
+            restarted = true;
+        } else {
+            restarted = false;
         }
         let room = m_max - m;
         if c > room {
@@ -675,6 +776,7 @@ pub fn sparse_generalized_eigen(
             got = new_block(&mut w, &v, n, m, cr, b)?;
         }
         append(&mut v, &mut h, &mut m, &w, got, n, s)?;
+        last = (m - got, got);
     }
 }
 

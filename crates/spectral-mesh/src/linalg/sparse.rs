@@ -280,8 +280,7 @@ impl SparseMatrix {
         for c in 0..self.ncols {
             let (rows, vals) = self.col(c);
             for (&r, &v) in rows.iter().zip(vals) {
-                let row: &mut Vec<f64> = &mut d[r];
-                row[c] = v;
+                d[r][c] = v;
             }
         }
         d

@@ -39,7 +39,7 @@
 //!   unit circle), near-equilateral triangles.
 //! - `cylinder` (params `r`, `h`): `k + 1` rings of `2k` vertices, z in `[-h/2, h/2]`.
 //! - `irregular-NAME`: the regular shape at `res - 2` (at least 0), then three nested
-//!   red-green refinements of the triangles whose centroid lies beyond 45%, 60% and 75%
+//!   (`res + 1` when `res < 2`) red-green refinements of the triangles whose centroid lies beyond 45%, 60% and 75%
 //!   of the bounding box along x; new vertices go onto the exact surface (normalised,
 //!   closest point on the torus, radial for the cylinder, on the circle for disk boundary
 //!   edges) or, for the subdivision surfaces, onto curved (PN-triangle) edges from the
@@ -182,6 +182,8 @@ pub fn build(spec: &ShapeSpec) -> Result<Mesh, ShapeError> {
         return Ok(Mesh::new(p, t)?);
     }
     let base = spec.res.saturating_sub(IRREGULAR_COARSENING);
+    // The finest triangles are always about level res + 1: fewer levels at res < 2.
+    let levels = (spec.res + 1).min(IRREGULAR_THRESHOLDS.len() as u32) as usize;
     let (p, t) = regular(kind, base, &spec.values);
     let surface = match kind {
         ShapeKind::Sphere | ShapeKind::UvSphere => Surface::UnitSphere,
@@ -201,7 +203,7 @@ pub fn build(spec: &ShapeSpec) -> Result<Mesh, ShapeError> {
     let (p, t) = base_mesh.into_parts();
     let mut r = Refiner::new(p, t, surface, normals);
     let extent = (hi[0] - lo[0]).max(f64::MIN_POSITIVE);
-    for &thr in &IRREGULAR_THRESHOLDS {
+    for &thr in &IRREGULAR_THRESHOLDS[..levels] {
         let marked: Vec<bool> = r
             .triangles
             .iter()

@@ -9,11 +9,11 @@ use crate::mesh::{add, norm, scale, sub};
 /// Width of the bars between and around the holes.
 const BAR: f64 = 1.0;
 /// Width of a hole.
-const HOLE: f64 = 1.3;
+const HOLE: f64 = 2.2;
 /// Half thickness of the plate.
 const HALF_THICK: f64 = 0.5;
 /// How far the middle ring of a wall bulges outwards.
-const BULGE: f64 = 0.2;
+const BULGE: f64 = 0.25;
 
 /// Closed quad control mesh of genus `g`: a grid of `(2g+1) x 3` cells with the cells
 /// `(2i+1, 1)` removed, thickened into a top, a bottom and two-quad-high walls.

@@ -1,1 +1,475 @@
-//! store (to be written).
+//! Saving and loading an eigenbasis as a NumPy `.npz` archive, and a cache keyed by the
+//! mesh, the discretization and the solver parameters.
+//!
+//! Arrays in the archive (all readable by `numpy.load`):
+//! - `eigenvalues`: `(k,)` float64, ascending;
+//! - `eigenvectors`: `(n, k)` float64 (stored in Fortran order), `X^T B X = I`;
+//! - `mass_data`, `mass_indices`, `mass_indptr`, `mass_shape`: the mass matrix B in SciPy's
+//!   CSC layout (`scipy.sparse.csc_matrix((data, indices, indptr), shape=shape)`), indices
+//!   as int64;
+//! - `residuals`: `(k,)` float64 relative residuals;
+//! - `meta`: a JSON document as a 1-d uint8 array (`json.loads(bytes(f["meta"]))`) with
+//!   the Laplacian name, `n`, `k`, the mesh hash and the solver parameters.
+
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+use npyz::WriterBuilder;
+
+use super::eigenbasis::{EigenError, EigenParams, EigenProgress, Eigenbasis, compute_eigenbasis};
+use crate::linalg::SparseMatrix;
+use crate::mesh::Mesh;
+use crate::operators::{Laplacian, Operators};
+
+/// Errors of saving, loading and caching.
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The archive is not a valid eigenbasis file.
+    #[error("{path}: not a valid eigenbasis archive: {reason}")]
+    Format {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// Computing the basis failed.
+    #[error(transparent)]
+    Eigen(#[from] EigenError),
+}
+
+/// What an archive says about how its basis was made.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BasisMeta {
+    /// Format version of the archive (currently 1).
+    pub format_version: u32,
+    /// The discretization (`fem`, `voronoi-cot`, ...).
+    pub laplacian: Laplacian,
+    /// Number of vertices.
+    pub n: usize,
+    /// Number of pairs.
+    pub k: usize,
+    /// [`mesh_hash`] of the mesh, empty when unknown.
+    pub mesh_hash: String,
+    /// The solver parameters used.
+    pub params: EigenParams,
+    /// The program that wrote the file.
+    pub generator: String,
+}
+
+impl BasisMeta {
+    /// Metadata for `basis` computed on `mesh` with `params`.
+    pub fn new(basis: &Eigenbasis, mesh: Option<&Mesh>, params: &EigenParams) -> Self {
+        Self {
+            format_version: 1,
+            laplacian: basis.laplacian,
+            n: basis.n,
+            k: basis.k(),
+            mesh_hash: mesh.map(mesh_hash).unwrap_or_default(),
+            params: params.clone(),
+            generator: format!("spectral-mesh {}", env!("CARGO_PKG_VERSION")),
+        }
+    }
+}
+
+/// A content hash of the mesh: BLAKE3 (hex) of the vertex count, the positions as
+/// little-endian f64, the triangle count and the triangles as little-endian u64.
+pub fn mesh_hash(mesh: &Mesh) -> String {
+    let mut h = blake3::Hasher::new();
+    h.update(&(mesh.positions().len() as u64).to_le_bytes());
+    for p in mesh.positions() {
+        for c in p {
+            h.update(&c.to_le_bytes());
+        }
+    }
+    h.update(&(mesh.triangles().len() as u64).to_le_bytes());
+    for t in mesh.triangles() {
+        for &i in t {
+            h.update(&(i as u64).to_le_bytes());
+        }
+    }
+    h.finalize().to_hex().to_string()
+}
+
+fn io_err(path: &Path) -> impl Fn(std::io::Error) -> StoreError + '_ {
+    move |source| StoreError::Io {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
+fn npy_f64(data: &[f64], shape: &[u64], fortran: bool) -> std::io::Result<Vec<u8>> {
+    let mut buf = Vec::new();
+    {
+        let mut w = npyz::WriteOptions::new()
+            .default_dtype()
+            .shape(shape)
+            .order(if fortran {
+                npyz::Order::Fortran
+            } else {
+                npyz::Order::C
+            })
+            .writer(&mut buf)
+            .begin_nd()?;
+        w.extend(data.iter().copied())?;
+        w.finish()?;
+    }
+    Ok(buf)
+}
+
+fn npy_i64(data: &[i64]) -> std::io::Result<Vec<u8>> {
+    let mut buf = Vec::new();
+    {
+        let mut w = npyz::WriteOptions::new()
+            .default_dtype()
+            .shape(&[data.len() as u64])
+            .writer(&mut buf)
+            .begin_nd()?;
+        w.extend(data.iter().copied())?;
+        w.finish()?;
+    }
+    Ok(buf)
+}
+
+fn npy_u8(data: &[u8]) -> std::io::Result<Vec<u8>> {
+    let mut buf = Vec::new();
+    {
+        let mut w = npyz::WriteOptions::new()
+            .default_dtype()
+            .shape(&[data.len() as u64])
+            .writer(&mut buf)
+            .begin_nd()?;
+        w.extend(data.iter().copied())?;
+        w.finish()?;
+    }
+    Ok(buf)
+}
+
+/// Writes `basis` to `path` as an `.npz` archive (deflate-compressed; see the module
+/// documentation for the arrays). The file is written to a temporary name and renamed,
+/// so a crash never leaves a truncated archive under `path`.
+pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(), StoreError> {
+    let (n, k) = (basis.n, basis.k());
+    let e = io_err(path);
+    let meta_json = serde_json::to_vec(meta).map_err(|err| StoreError::Format {
+        path: path.display().to_string(),
+        reason: err.to_string(),
+    })?;
+    let m = &basis.mass;
+    let to_i64 = |v: &[usize]| v.iter().map(|&x| x as i64).collect::<Vec<i64>>();
+    let arrays: Vec<(&str, Vec<u8>)> = vec![
+        (
+            "eigenvalues",
+            npy_f64(&basis.values, &[k as u64], false).map_err(&e)?,
+        ),
+        (
+            "eigenvectors",
+            npy_f64(&basis.vectors[..n * k], &[n as u64, k as u64], true).map_err(&e)?,
+        ),
+        (
+            "mass_data",
+            npy_f64(m.values(), &[m.nnz() as u64], false).map_err(&e)?,
+        ),
+        ("mass_indices", npy_i64(&to_i64(m.row_idx())).map_err(&e)?),
+        ("mass_indptr", npy_i64(&to_i64(m.col_ptr())).map_err(&e)?),
+        (
+            "mass_shape",
+            npy_i64(&[m.nrows() as i64, m.ncols() as i64]).map_err(&e)?,
+        ),
+        (
+            "residuals",
+            npy_f64(&basis.residuals, &[basis.residuals.len() as u64], false).map_err(&e)?,
+        ),
+        ("meta", npy_u8(&meta_json).map_err(&e)?),
+    ];
+    let tmp: PathBuf = {
+        let mut name = path.file_name().unwrap_or_default().to_os_string();
+        name.push(format!(".tmp{}", std::process::id()));
+        path.with_file_name(name)
+    };
+    let result = (|| -> std::io::Result<()> {
+        let file = std::fs::File::create(&tmp)?;
+        let mut zip = zip::ZipWriter::new(std::io::BufWriter::new(file));
+        let opts = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Deflated)
+            .large_file(true);
+        for (name, bytes) in &arrays {
+            zip.start_file(format!("{name}.npy"), opts)
+                .map_err(std::io::Error::other)?;
+            zip.write_all(bytes)?;
+        }
+        let mut inner = zip.finish().map_err(std::io::Error::other)?;
+        inner.flush()?;
+        Ok(())
+    })();
+    if let Err(err) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e(err));
+    }
+    std::fs::rename(&tmp, path).map_err(&e)
+}
+
+/// Reads an archive written by [`save_npz`] (or by NumPy with the same arrays; the
+/// eigenvectors may be in C or Fortran order).
+pub fn load_npz(path: &Path) -> Result<(Eigenbasis, BasisMeta), StoreError> {
+    let e = io_err(path);
+    let fmt = |reason: String| StoreError::Format {
+        path: path.display().to_string(),
+        reason,
+    };
+    let file = std::fs::File::open(path).map_err(&e)?;
+    let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
+        .map_err(|err| fmt(format!("not a zip archive ({err})")))?;
+    let mut read = |name: &str| -> Result<npyz::NpyFile<std::io::Cursor<Vec<u8>>>, StoreError> {
+        let mut entry = zip
+            .by_name(&format!("{name}.npy"))
+            .map_err(|_| fmt(format!("missing array '{name}'")))?;
+        let mut bytes = Vec::new();
+        entry.read_to_end(&mut bytes).map_err(&e)?;
+        npyz::NpyFile::new(std::io::Cursor::new(bytes))
+            .map_err(|err| fmt(format!("array '{name}': {err}")))
+    };
+    let f64s = |f: npyz::NpyFile<std::io::Cursor<Vec<u8>>>, name: &str| {
+        f.into_vec::<f64>()
+            .map_err(|err| fmt(format!("array '{name}': {err}")))
+    };
+    let i64s = |f: npyz::NpyFile<std::io::Cursor<Vec<u8>>>, name: &str| {
+        f.into_vec::<i64>()
+            .map_err(|err| fmt(format!("array '{name}': {err}")))
+    };
+    let meta_bytes = read("meta")?
+        .into_vec::<u8>()
+        .map_err(|err| fmt(format!("array 'meta': {err}")))?;
+    let meta: BasisMeta = serde_json::from_slice(&meta_bytes)
+        .map_err(|err| fmt(format!("meta is not valid JSON ({err})")))?;
+    let values = f64s(read("eigenvalues")?, "eigenvalues")?;
+    let vf = read("eigenvectors")?;
+    let shape = vf.shape().to_vec();
+    let order = vf.order();
+    if shape.len() != 2 {
+        return Err(fmt(format!("eigenvectors have shape {shape:?}")));
+    }
+    let (n, k) = (shape[0] as usize, shape[1] as usize);
+    let raw = f64s(vf, "eigenvectors")?;
+    if k != values.len() || raw.len() != n * k {
+        return Err(fmt(format!(
+            "eigenvectors {n} x {k} do not match {} eigenvalues",
+            values.len()
+        )));
+    }
+    let vectors = match order {
+        npyz::Order::Fortran => raw,
+        npyz::Order::C => {
+            let mut v = vec![0.0; n * k];
+            for i in 0..n {
+                for j in 0..k {
+                    v[j * n + i] = raw[i * k + j];
+                }
+            }
+            v
+        }
+    };
+    let data = f64s(read("mass_data")?, "mass_data")?;
+    let to_usize = |v: Vec<i64>, name: &str| -> Result<Vec<usize>, StoreError> {
+        v.into_iter()
+            .map(|x| usize::try_from(x).map_err(|_| fmt(format!("negative entry in '{name}'"))))
+            .collect()
+    };
+    let indices = to_usize(i64s(read("mass_indices")?, "mass_indices")?, "mass_indices")?;
+    let indptr = to_usize(i64s(read("mass_indptr")?, "mass_indptr")?, "mass_indptr")?;
+    let mshape = to_usize(i64s(read("mass_shape")?, "mass_shape")?, "mass_shape")?;
+    if mshape.len() != 2 || mshape[0] != n || mshape[1] != n {
+        return Err(fmt(format!("mass shape {mshape:?} does not match n = {n}")));
+    }
+    let mass = SparseMatrix::from_csc(n, n, indptr, indices, data)
+        .ok_or_else(|| fmt("the mass matrix arrays are not valid CSC".to_string()))?;
+    let residuals = match read("residuals") {
+        Ok(f) => f64s(f, "residuals")?,
+        Err(_) => Vec::new(),
+    };
+    let basis = Eigenbasis {
+        laplacian: meta.laplacian,
+        n,
+        values,
+        vectors,
+        mass,
+        residuals,
+    };
+    Ok((basis, meta))
+}
+
+/// The cache file name for a mesh hash, discretization and parameters.
+pub fn cache_file_name(hash: &str, laplacian: Laplacian, params: &EigenParams) -> String {
+    let pj = serde_json::to_vec(params).unwrap_or_default();
+    let ph = blake3::hash(&pj).to_hex();
+    format!(
+        "{}-{}-k{}-{}.npz",
+        &hash[..hash.len().min(16)],
+        laplacian.name(),
+        params.k,
+        &ph.as_str()[..12]
+    )
+}
+
+/// Returns the basis stored in `cache_dir` for this mesh, discretization and parameters,
+/// or computes it (and stores it there). A stored basis is reused only when the mesh hash,
+/// the Laplacian and every parameter match; anything unreadable is recomputed and
+/// overwritten. The boolean is `true` when the basis came from the cache.
+pub fn load_or_compute(
+    cache_dir: &Path,
+    mesh: &Mesh,
+    ops: &Operators,
+    params: &EigenParams,
+    progress: &mut dyn FnMut(EigenProgress),
+) -> Result<(Eigenbasis, bool), StoreError> {
+    let hash = mesh_hash(mesh);
+    let path = cache_dir.join(cache_file_name(&hash, ops.laplacian, params));
+    if path.is_file()
+        && let Ok((basis, meta)) = load_npz(&path)
+        && meta.mesh_hash == hash
+        && meta.laplacian == ops.laplacian
+        && meta.params == *params
+        && basis.n == ops.n()
+        && basis.k() == params.k
+    {
+        return Ok((basis, true));
+    }
+    let basis = compute_eigenbasis(ops, params, progress)?;
+    std::fs::create_dir_all(cache_dir).map_err(io_err(cache_dir))?;
+    let meta = BasisMeta::new(&basis, Some(mesh), params);
+    save_npz(&basis, &path, &meta)?;
+    Ok((basis, false))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spectral::eigenbasis::test_meshes::icosphere;
+
+    fn basis() -> (Mesh, Operators, Eigenbasis, EigenParams) {
+        let mesh = icosphere(2, 1.0);
+        let ops = Operators::new(&mesh, Laplacian::Fem);
+        let params = EigenParams {
+            k: 10,
+            ..Default::default()
+        };
+        let b = compute_eigenbasis(&ops, &params, &mut |_| {}).unwrap();
+        (mesh, ops, b, params)
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let (mesh, _, b, params) = basis();
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("basis.npz");
+        let meta = BasisMeta::new(&b, Some(&mesh), &params);
+        save_npz(&b, &p, &meta).unwrap();
+        let (b2, meta2) = load_npz(&p).unwrap();
+        assert_eq!(meta2, meta);
+        assert_eq!(b2.values, b.values);
+        assert_eq!(b2.vectors, b.vectors);
+        assert_eq!(b2.mass, b.mass);
+        assert_eq!(b2.residuals, b.residuals);
+        assert_eq!(b2.laplacian, b.laplacian);
+        assert_eq!(meta2.mesh_hash.len(), 64);
+    }
+
+    #[test]
+    fn numpy_reads_the_archive() {
+        // $SPECTRAL_MESH_PYTHON, the workspace's .venv, or python3 on the PATH.
+        let venv = concat!(env!("CARGO_MANIFEST_DIR"), "/../../.venv/bin/python");
+        let candidates = [
+            std::env::var("SPECTRAL_MESH_PYTHON").unwrap_or_default(),
+            venv.to_string(),
+            "python3".to_string(),
+        ];
+        let python = candidates.iter().filter(|c| !c.is_empty()).find(|c| {
+            std::process::Command::new(c.as_str())
+                .args(["-c", "import numpy, scipy.sparse"])
+                .output()
+                .map(|o| o.status.success())
+                .unwrap_or(false)
+        });
+        let Some(python) = python else {
+            eprintln!("SKIPPED: no python with numpy + scipy (set SPECTRAL_MESH_PYTHON)");
+            return;
+        };
+        let (_, _, b, params) = basis();
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("basis.npz");
+        save_npz(&b, &p, &BasisMeta::new(&b, None, &params)).unwrap();
+        let script = r#"
+import sys, json, numpy as np, scipy.sparse as sp
+f = np.load(sys.argv[1])
+X = f["eigenvectors"]; lam = f["eigenvalues"]
+B = sp.csc_matrix((f["mass_data"], f["mass_indices"], f["mass_indptr"]), shape=tuple(f["mass_shape"]))
+meta = json.loads(bytes(f["meta"]))
+assert X.shape == (162, 10) and lam.shape == (10,), (X.shape, lam.shape)
+G = X.T @ (B @ X)
+assert abs(G - np.eye(10)).max() < 1e-10
+assert meta["k"] == 10 and meta["laplacian"] == "fem"
+print(repr(float(X[5, 3])), repr(float(lam[4])))
+"#;
+        let out = std::process::Command::new(python.as_str())
+            .args(["-c", script, p.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let s = String::from_utf8_lossy(&out.stdout);
+        let v: Vec<f64> = s.split_whitespace().map(|x| x.parse().unwrap()).collect();
+        assert_eq!(v[0], b.vectors[3 * 162 + 5]);
+        assert_eq!(v[1], b.values[4]);
+    }
+
+    #[test]
+    fn cache_reuses_only_matching_bases() {
+        let (mesh, ops, _, params) = basis();
+        let dir = tempfile::tempdir().unwrap();
+        let (b1, cached1) = load_or_compute(dir.path(), &mesh, &ops, &params, &mut |_| {}).unwrap();
+        assert!(!cached1);
+        let (b2, cached2) = load_or_compute(dir.path(), &mesh, &ops, &params, &mut |_| {}).unwrap();
+        assert!(cached2);
+        assert_eq!(b1.values, b2.values);
+        // Other parameters: recomputed.
+        let p2 = EigenParams {
+            k: 5,
+            ..params.clone()
+        };
+        let (_, cached3) = load_or_compute(dir.path(), &mesh, &ops, &p2, &mut |_| {}).unwrap();
+        assert!(!cached3);
+        // Other mesh (moved vertex): recomputed.
+        let mut pos = mesh.positions().to_vec();
+        pos[0][0] += 1e-3;
+        let mesh2 = Mesh::new(pos, mesh.triangles().to_vec()).unwrap();
+        assert_ne!(mesh_hash(&mesh), mesh_hash(&mesh2));
+        let ops2 = Operators::new(&mesh2, Laplacian::Fem);
+        let (_, cached4) =
+            load_or_compute(dir.path(), &mesh2, &ops2, &params, &mut |_| {}).unwrap();
+        assert!(!cached4);
+        // Other Laplacian: recomputed.
+        let ops3 = Operators::new(&mesh, Laplacian::VoronoiCot);
+        let (b5, cached5) =
+            load_or_compute(dir.path(), &mesh, &ops3, &params, &mut |_| {}).unwrap();
+        assert!(!cached5);
+        assert_eq!(b5.laplacian, Laplacian::VoronoiCot);
+        // A corrupt cache file is recomputed, not an error.
+        let path = dir
+            .path()
+            .join(cache_file_name(&mesh_hash(&mesh), Laplacian::Fem, &params));
+        std::fs::write(&path, b"garbage").unwrap();
+        let (_, cached6) = load_or_compute(dir.path(), &mesh, &ops, &params, &mut |_| {}).unwrap();
+        assert!(!cached6);
+        assert!(load_npz(&dir.path().join("missing.npz")).is_err());
+    }
+}

@@ -1,5 +1,5 @@
 //! Shared helpers of the spectral tests: small meshes and dense linear algebra.
-#![allow(dead_code)]
+#![allow(dead_code, clippy::unwrap_used, clippy::expect_used)]
 
 use spectral_mesh::{Laplacian, Mesh, Operators, SparseMatrix};
 
