@@ -6,7 +6,9 @@ use serde::{Deserialize, Serialize};
 use spectral_mesh::Eigenbasis;
 use spectral_mesh::fields::harmonic::{Constraint, ConstraintSpec};
 
-use crate::expr::Expr;
+use std::collections::BTreeMap;
+
+use spectral_mesh::spectral::filters::{CustomKind, Filter as LibFilter};
 
 /// Which field to compute.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -129,32 +131,8 @@ pub struct Checked {
     pub component: usize,
     /// Number of segments.
     pub segments: usize,
-    /// The filter weight.
-    pub weight: Weight,
-}
-
-/// A spectral weight function.
-#[derive(Debug, Clone)]
-pub enum Weight {
-    /// A built-in filter.
-    Builtin(Filter),
-    /// A custom expression, as `w` (false) or `phi` (true).
-    Custom(Expr, bool),
-}
-
-impl Weight {
-    /// `w(s)` at `s` with the page's `t` and `a`.
-    pub fn eval(&self, s: f64, t: f64, a: f64) -> f64 {
-        match self {
-            Weight::Builtin(Filter::Diffusion) => (-t * s).exp(),
-            Weight::Builtin(Filter::Commute) => 1.0 / s,
-            Weight::Builtin(Filter::Biharmonic) => 1.0 / (s * s),
-            Weight::Builtin(Filter::Mix) => (1.0 - a) * (-t * s).exp() + a / (s * s),
-            Weight::Builtin(Filter::Custom) => f64::NAN,
-            Weight::Custom(e, false) => e.eval(s, t, a),
-            Weight::Custom(e, true) => 1.0 / e.eval(s, t, a),
-        }
-    }
+    /// The spectral filter (the library's, with `t` and `a` bound).
+    pub filter: LibFilter,
 }
 
 /// Validates the scalar parameters against a mesh of `n` vertices.
@@ -179,21 +157,29 @@ pub fn check(p: &FieldParams, n: usize) -> Result<Checked, BadRequest> {
     if !(2..=32).contains(&segments) {
         return Err(format!("segments must be in 2..=32 (got {segments})").into());
     }
-    let filter = p.filter.unwrap_or_default();
-    let weight = if filter == Filter::Custom {
-        let text = p.custom.as_deref().unwrap_or("").trim();
-        if text.is_empty() {
-            return Err("the custom filter needs an expression in s (e.g. exp(-t*s))".into());
+    let filter = match p.filter.unwrap_or_default() {
+        Filter::Diffusion => LibFilter::Diffusion { t },
+        Filter::Commute => LibFilter::CommuteTime,
+        Filter::Biharmonic => LibFilter::Biharmonic,
+        Filter::Mix => LibFilter::Mix { a, t },
+        Filter::Custom => {
+            let text = p.custom.as_deref().unwrap_or("").trim();
+            if text.is_empty() {
+                return Err("the custom filter needs an expression in s (e.g. exp(-t*s))".into());
+            }
+            if text.len() > 500 {
+                return Err("custom filter: the expression is longer than 500 characters".into());
+            }
+            let kind = match p.custom_kind.as_deref().unwrap_or("w") {
+                "w" | "weight" => CustomKind::Weight,
+                "phi" => CustomKind::Phi,
+                other => {
+                    return Err(format!("custom_kind must be 'w' or 'phi' (got '{other}')").into());
+                }
+            };
+            let params = BTreeMap::from([("t".to_string(), t), ("a".to_string(), a)]);
+            LibFilter::custom(text, params, kind).map_err(|e| format!("custom filter: {e}"))?
         }
-        let e = Expr::parse(text).map_err(|m| format!("custom filter: {m}"))?;
-        let as_phi = match p.custom_kind.as_deref().unwrap_or("w") {
-            "w" | "weight" => false,
-            "phi" => true,
-            other => return Err(format!("custom_kind must be 'w' or 'phi' (got '{other}')").into()),
-        };
-        Weight::Custom(e, as_phi)
-    } else {
-        Weight::Builtin(filter)
     };
     Ok(Checked {
         t,
@@ -202,31 +188,16 @@ pub fn check(p: &FieldParams, n: usize) -> Result<Checked, BadRequest> {
         levels,
         component: p.component.unwrap_or(1),
         segments,
-        weight,
+        filter,
     })
 }
 
-/// The weights `w(lambda_j)` of the first `k` pairs; zero eigenvalues get weight 0.
-/// Errors when the weight is not finite and strictly positive at some eigenvalue.
+/// The weights `w(lambda_j)` of the first `k` pairs (the library's rules: zero eigenvalues
+/// get weight 0; every other weight must be finite and > 0).
 pub fn weights(values: &[f64], c: &Checked) -> Result<Vec<f64>, BadRequest> {
-    let lmax = values.iter().copied().fold(1.0f64, f64::max);
-    let tol = 1e-9 * lmax;
-    let mut w = Vec::with_capacity(values.len());
-    for &l in values {
-        if l <= tol {
-            w.push(0.0);
-            continue;
-        }
-        let v = c.weight.eval(l, c.t, c.a);
-        if !v.is_finite() || v <= 0.0 {
-            return Err(format!(
-                "the filter weight w(s) must be finite and > 0 at every eigenvalue; w({l:.6}) = {v}"
-            )
-            .into());
-        }
-        w.push(v);
-    }
-    Ok(w)
+    c.filter
+        .weights(values)
+        .map_err(|e| BadRequest(format!("filter: {e}")))
 }
 
 /// `(B x_j)_i` for every `j < k`: row `i` of `B X` (B is symmetric).
@@ -326,7 +297,7 @@ pub fn spectral_field(
             }
             let x = &basis.vectors[j * n..(j + 1) * n];
             let s = if exp == Experiment::Embedding {
-                weights(&values[j..=j], c)?[0].sqrt()
+                weights(values, c)?[j].sqrt()
             } else {
                 1.0
             };

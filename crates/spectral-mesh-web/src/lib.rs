@@ -40,7 +40,6 @@
 pub mod api;
 pub mod cache;
 pub mod compute;
-pub mod expr;
 pub mod state;
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
