@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# End-to-end tests of the web app in headless Chromium (Debian's package) driven by
+# playwright-core. Starts the release server on a free port of 127.0.0.1, runs
+# `node --test web/e2e/*.test.mjs`, stops the server.
+#   SPECTRAL_MESH_SHARED_MESHES  folder with sphere966.off (default: ../shared/meshes beside
+#                                the clone, then /work/shared/meshes)
+#   SPECTRAL_MESH_WEB_BENCH=1    also run the ~100k-vertex, k = 200 input-to-picture benchmark
+set -euo pipefail
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+cd "$ROOT"
+
+if [ ! -x /usr/bin/chromium ]; then
+  apt-get update -qq && apt-get install -y -qq chromium >/dev/null
+fi
+if [ ! -d web/node_modules/three ] || [ ! -d web/node_modules/playwright-core ]; then
+  (cd web && npm ci --no-audit --no-fund)
+fi
+
+cargo build --release -q -p spectral-mesh-web --example serve
+BIN="${CARGO_TARGET_DIR:-$ROOT/target}/release/examples/serve"
+
+if [ -z "${SPECTRAL_MESH_SHARED_MESHES:-}" ]; then
+  for d in "$ROOT/../shared/meshes" /work/shared/meshes; do
+    if [ -f "$d/sphere966.off" ]; then SPECTRAL_MESH_SHARED_MESHES="$d"; break; fi
+  done
+fi
+export SPECTRAL_MESH_SHARED_MESHES="${SPECTRAL_MESH_SHARED_MESHES:-}"
+
+LOG=$(mktemp)
+"$BIN" --host 127.0.0.1 --port 0 --cache-mib 2048 >"$LOG" 2>&1 &
+PID=$!
+cleanup() { kill "$PID" 2>/dev/null || true; wait "$PID" 2>/dev/null || true; rm -f "$LOG"; }
+trap cleanup EXIT
+
+URL=""
+for _ in $(seq 1 200); do
+  URL=$(grep -o 'http://[^ ]*' "$LOG" || true)
+  [ -n "$URL" ] && break
+  if ! kill -0 "$PID" 2>/dev/null; then cat "$LOG"; echo "server did not start"; exit 1; fi
+  sleep 0.1
+done
+[ -n "$URL" ] || { cat "$LOG"; echo "server printed no URL"; exit 1; }
+echo "server at $URL (pid $PID)"
+export SPECTRAL_MESH_URL="$URL"
+export SPECTRAL_MESH_SCREENSHOT="$ROOT/docs/web-app.png"
+
+node --test --test-concurrency=1 "$ROOT"/web/e2e/*.test.mjs
