@@ -45,6 +45,10 @@ for s in conformance/check_*.sh; do
   step "conformance: $(basename "$s" .sh)" bash "$s" "$cli" "$py"
 done
 
+# The web app in headless Chromium (installs Debian's chromium and the npm packages on
+# first use).
+step "web app end-to-end (headless Chromium)" bash web/e2e/run.sh
+
 echo
 if [ "$failed" -gt 0 ]; then
   printf 'failed step: %s\n' "${failures[@]}"

@@ -57,9 +57,26 @@ enum Command {
     /// Truncation (Fig. 12) and robustness studies.
     #[command(subcommand)]
     Study(commands::study::Study),
+    /// The interactive web app on http://127.0.0.1:8000 (pick a shape, click, move sliders).
+    Serve(commands::serve::Args),
 }
 
 fn main() -> std::process::ExitCode {
+    // `spectral-mesh shapes | head` closes stdout early: end quietly as a pipe
+    // reader expects (status 141, as after SIGPIPE) instead of panicking.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if msg.contains("Broken pipe") {
+            std::process::exit(141);
+        }
+        default_hook(info);
+    }));
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Shapes(a) => commands::shapes::run(a),
@@ -77,6 +94,7 @@ fn main() -> std::process::ExitCode {
         Command::Experiment(e) => commands::experiment::run(e),
         Command::Run(a) => commands::run::run(a),
         Command::Study(s) => commands::study::run(s),
+        Command::Serve(a) => commands::serve::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -12,6 +12,7 @@ pub mod perturb;
 pub mod render;
 pub mod run;
 pub mod segment;
+pub mod serve;
 pub mod shapes;
 pub mod signature;
 pub mod study;
