@@ -1,5 +1,4 @@
 //! Property tests of the renderer, the VRML writer and the plots.
-#![allow(clippy::unwrap_used)]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use spectral_mesh::Mesh;
