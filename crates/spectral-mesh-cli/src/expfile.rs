@@ -188,7 +188,10 @@ impl ExperimentFile {
         if let Some(h) = &self.mesh_hash
             && !(h.len() == 64 && h.chars().all(|c| c.is_ascii_hexdigit()))
         {
-            return Err(key_err("mesh_hash", "must be 64 hexadecimal digits (blake3)"));
+            return Err(key_err(
+                "mesh_hash",
+                "must be 64 hexadecimal digits (blake3)",
+            ));
         }
         self.laplacian()?;
         if let Some(k) = self.k
@@ -521,8 +524,14 @@ mod tests {
         let h = "experiment = \"harmonic\"\nmesh = \"x\"\n";
         for (extra, key) in [
             ("constraints = [3]\n", "key 'constraints'"),
-            ("constraints = [{ vertex = -1, value = 0.0 }]\n", "constraints[0]"),
-            ("constraints = [{ vertex = 1, val = 0.0 }]\n", "constraints[0]"),
+            (
+                "constraints = [{ vertex = -1, value = 0.0 }]\n",
+                "constraints[0]",
+            ),
+            (
+                "constraints = [{ vertex = 1, val = 0.0 }]\n",
+                "constraints[0]",
+            ),
             ("constraints = \"2\"\n", "key 'constraints'"),
             ("order = 3\n", "key 'order'"),
             ("t = 0.5\n", "key 't'"),

@@ -197,10 +197,7 @@ fn projection_map_recovers_the_vertices_of_a_refinement() {
     // coarse part (an icosahedron's faces).
     let other = build_str("sphere:res=3").unwrap();
     let p = resampled_as(&mesh, other, "sphere:res=3");
-    let pts = p
-        .map
-        .original_points(&mesh, p.mesh.n_vertices())
-        .unwrap();
+    let pts = p.map.original_points(&mesh, p.mesh.n_vertices()).unwrap();
     for (a, b) in pts.iter().zip(p.mesh.positions()) {
         let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
         assert!(d < 0.2, "{d}");

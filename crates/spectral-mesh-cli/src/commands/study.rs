@@ -99,18 +99,17 @@ fn run_truncation(a: TruncationArgs) -> Result<()> {
         .iter()
         .map(|l| parse_laplacian(l).map_err(|e| anyhow!("--laplacian: {e}")))
         .collect::<Result<Vec<_>>>()?;
-    let ks = a
-        .k
-        .iter()
-        .map(|k| match k.trim() {
-            "all" | "n" => Ok(usize::MAX),
-            s => s
-                .parse::<usize>()
-                .ok()
-                .filter(|&k| k > 0)
-                .ok_or_else(|| anyhow!("--k {s}: a number of pairs >= 1 or 'all'")),
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let ks =
+        a.k.iter()
+            .map(|k| match k.trim() {
+                "all" | "n" => Ok(usize::MAX),
+                s => s
+                    .parse::<usize>()
+                    .ok()
+                    .filter(|&k| k > 0)
+                    .ok_or_else(|| anyhow!("--k {s}: a number of pairs >= 1 or 'all'")),
+            })
+            .collect::<Result<Vec<_>>>()?;
     let reference = match a.reference.as_str() {
         "auto" => TruncationReference::Auto,
         "dense" => TruncationReference::Dense,
@@ -284,11 +283,7 @@ pub struct ParsedStudy {
     pub tables: Vec<(Vec<Laplacian>, Vec<Quantity>)>,
 }
 
-fn parse_list<T>(
-    key: &str,
-    items: &[String],
-    f: impl Fn(&str) -> Result<T>,
-) -> Result<Vec<T>> {
+fn parse_list<T>(key: &str, items: &[String], f: impl Fn(&str) -> Result<T>) -> Result<Vec<T>> {
     if items.is_empty() {
         bail!("key '{key}': the list is empty");
     }
@@ -411,8 +406,8 @@ fn build_table(study: &ParsedStudy, ti: usize, base: &Path) -> Result<Vec<StudyM
                     .mesh;
                 resampled_as(&mesh, other, spec)
             } else {
-                let spec = perturb::parse_perturbation(p)
-                    .map_err(|e| anyhow!("key '{pkey}': {e}"))?;
+                let spec =
+                    perturb::parse_perturbation(p).map_err(|e| anyhow!("key '{pkey}': {e}"))?;
                 perturb::apply(&mesh, &spec).map_err(|e| anyhow!("key '{pkey}' on {m}: {e}"))?
             };
             perts.push((p.clone(), pm));
@@ -439,14 +434,11 @@ fn csv_field(s: &str) -> String {
 
 fn run_robustness(a: RobustnessArgs) -> Result<()> {
     let origin = a.file.display().to_string();
-    let text = std::fs::read_to_string(&a.file)
-        .map_err(|e| anyhow!("{origin}: cannot read: {e}"))?;
+    let text =
+        std::fs::read_to_string(&a.file).map_err(|e| anyhow!("{origin}: cannot read: {e}"))?;
     let study = parse_study(&text, &origin)?;
     let base = parent_dir(&a.file);
-    let mut names = vec![
-        "robustness.csv".to_string(),
-        "robustness.md".to_string(),
-    ];
+    let mut names = vec!["robustness.csv".to_string(), "robustness.md".to_string()];
     for (t, (_, qs)) in study.file.table.iter().zip(&study.tables) {
         for q in qs {
             names.push(format!("{}-{}.png", t.name, q.name()));
@@ -659,15 +651,36 @@ mod tests {
             (format!("k = \"x\"\n{t}"), "key 'k'"),
             (format!("heat_t = -1.0\n{t}"), "key 'heat_t'"),
             (format!("hks_t = 0.0\n{t}"), "key 'hks_t'"),
-            (format!("laplacians = [\"fem\", \"cott\"]\n{t}"), "key 'laplacians[1]'"),
-            (format!("quantities = [\"heat\", \"temp\"]\n{t}"), "key 'quantities[1]'"),
+            (
+                format!("laplacians = [\"fem\", \"cott\"]\n{t}"),
+                "key 'laplacians[1]'",
+            ),
+            (
+                format!("quantities = [\"heat\", \"temp\"]\n{t}"),
+                "key 'quantities[1]'",
+            ),
             (format!("colour = 1\n{t}"), "colour"),
             (format!("{t}extra = 1\n"), "extra"),
-            (t.replace("noise:0.1", "noize:0.1"), "key 'table[0].perturbations[0]'"),
-            (t.replace("noise:0.1", "noise:-0.1"), "key 'table[0].perturbations[0]'"),
-            (t.replace("[\"sphere:res=1\"]", "[]"), "key 'table[0].meshes'"),
-            (t.replace("name = \"a\"", "name = \"a b\""), "key 'table[0].name'"),
-            (format!("{t}laplacians = [\"x\"]\n"), "key 'table[0].laplacians[0]'"),
+            (
+                t.replace("noise:0.1", "noize:0.1"),
+                "key 'table[0].perturbations[0]'",
+            ),
+            (
+                t.replace("noise:0.1", "noise:0.1,seed=x"),
+                "key 'table[0].perturbations[0]'",
+            ),
+            (
+                t.replace("[\"sphere:res=1\"]", "[]"),
+                "key 'table[0].meshes'",
+            ),
+            (
+                t.replace("name = \"a\"", "name = \"a b\""),
+                "key 'table[0].name'",
+            ),
+            (
+                format!("{t}laplacians = [\"x\"]\n"),
+                "key 'table[0].laplacians[0]'",
+            ),
             ("k = 10\n".to_string(), "table"),
         ] {
             let e = err(&text);

@@ -519,7 +519,9 @@ pub fn run_study(
     let mut setups = Vec::with_capacity(meshes.len());
     for m in meshes {
         let n = m.mesh.n_vertices();
-        let source = params.source.unwrap_or_else(|| vertex_of_largest_x(&m.mesh));
+        let source = params
+            .source
+            .unwrap_or_else(|| vertex_of_largest_x(&m.mesh));
         if source >= n {
             return Err(StudyError::InvalidParameter {
                 name: "source",
