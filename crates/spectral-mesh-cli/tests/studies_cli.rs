@@ -1,5 +1,7 @@
 //! Experiment files (`--save-experiment`, `run`) and `study truncation | robustness`.
 
+#![allow(clippy::unwrap_used)]
+
 use std::path::Path;
 use std::process::{Command, Output};
 
