@@ -293,6 +293,7 @@ fn truncation_study_writes_falling_curves() {
         assert!(e[2] < 1e-10, "{chunk:?}");
     }
     assert!(p.join("t/truncation.png").exists());
+    assert!(p.join("t/truncation-t1.png").exists() && p.join("t/truncation-t2.png").exists());
     assert!(p.join("t/truncation.md").exists());
 }
 
