@@ -1,5 +1,7 @@
 //! The truncation and robustness study machinery of `experiments::{truncation, study}`.
 
+#![allow(clippy::unwrap_used)]
+
 use spectral_mesh::Laplacian;
 use spectral_mesh::experiments::study::{
     Quantity, StudyMesh, StudyParams, projection_map, resampled_as, run_study,

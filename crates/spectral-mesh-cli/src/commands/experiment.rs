@@ -266,6 +266,9 @@ fn experiment_file(
     file: &Path,
     laplacian: Laplacian,
 ) -> ExperimentFile {
+    // The folder must exist for the relative paths to be computed from its real location
+    // (a failure is reported when the file is written).
+    let _ = std::fs::create_dir_all(parent_dir(file));
     ExperimentFile {
         experiment: experiment.into(),
         mesh: mesh_entry(&loaded.input, file),

@@ -303,8 +303,8 @@ pub fn truncation_study(
 /// `sum_j coef_j exp(-lambda_j t) x_j` over every column of `basis`.
 fn partial_sum(basis: &Eigenbasis, coef: &[f64], t: f64, n: usize) -> Vec<f64> {
     let mut acc = vec![0.0; n];
-    for j in 0..basis.k() {
-        let c = coef[j] * (-basis.values[j] * t).exp();
+    for (j, (&cj, &l)) in coef.iter().zip(&basis.values).enumerate() {
+        let c = cj * (-l * t).exp();
         if c != 0.0 {
             for (a, x) in acc.iter_mut().zip(basis.vector(j)) {
                 *a += c * x;
