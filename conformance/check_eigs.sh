@@ -21,7 +21,7 @@ while read -r m k; do
 done <<'LIST'
 sphere966 40
 eight 40
-cactus 40
+homer 50
 mesh_with_border 40
 hand 50
 blobby_3cc 30
