@@ -1,5 +1,7 @@
 //! Diagnostic: prints statistics of every shape (run with `--ignored --nocapture`).
 
+#![allow(clippy::unwrap_used)]
+
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::shapes::{build_str, shape_names};
 

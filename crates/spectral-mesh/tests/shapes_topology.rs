@@ -1,5 +1,7 @@
 //! Topology, orientation, geometry and determinism of every built-in shape.
 
+#![allow(clippy::unwrap_used)]
+
 use spectral_mesh::Mesh;
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::mesh::{cross, dot, norm, sub};
@@ -43,15 +45,36 @@ fn check(spec: &ShapeSpec) -> Mesh {
     let want = spec.kind.expected_topology();
     assert_eq!(t.n_components(), 1, "{name}: components");
     assert!(t.unreferenced_vertices.is_empty(), "{name}: unreferenced");
-    assert!(t.non_manifold_edges.is_empty(), "{name}: non-manifold edges");
-    assert!(t.non_manifold_vertices.is_empty(), "{name}: non-manifold vertices");
+    assert!(
+        t.non_manifold_edges.is_empty(),
+        "{name}: non-manifold edges"
+    );
+    assert!(
+        t.non_manifold_vertices.is_empty(),
+        "{name}: non-manifold vertices"
+    );
     assert_eq!(t.inconsistently_oriented_edges, 0, "{name}: orientation");
     assert!(t.orientable, "{name}: orientable");
-    assert_eq!(t.euler_characteristic(), want.euler_characteristic, "{name}: chi");
+    assert_eq!(
+        t.euler_characteristic(),
+        want.euler_characteristic,
+        "{name}: chi"
+    );
     assert_eq!(t.components[0].genus, Some(want.genus), "{name}: genus");
-    assert_eq!(t.boundary_loops.len(), want.boundary_loops, "{name}: boundary loops");
-    assert_eq!(t.is_closed_manifold(), want.boundary_loops == 0, "{name}: closed");
-    assert!(t.edge_face_count.iter().all(|&c| c == 1 || c == 2), "{name}");
+    assert_eq!(
+        t.boundary_loops.len(),
+        want.boundary_loops,
+        "{name}: boundary loops"
+    );
+    assert_eq!(
+        t.is_closed_manifold(),
+        want.boundary_loops == 0,
+        "{name}: closed"
+    );
+    assert!(
+        t.edge_face_count.iter().all(|&c| c == 1 || c == 2),
+        "{name}"
+    );
     // No degenerate triangles: every angle above 3 degrees (5 in most cases, see below).
     let ang = min_angle_deg(&m);
     assert!(ang > 3.0, "{name}: min angle {ang}");
@@ -61,14 +84,20 @@ fn check(spec: &ShapeSpec) -> Mesh {
     let normals = m.triangle_normals();
     match spec.kind {
         ShapeKind::Disk => {
-            assert!(normals.iter().all(|n| n[2] > 0.999_999), "{name}: disk normal");
+            assert!(
+                normals.iter().all(|n| n[2] > 0.999_999),
+                "{name}: disk normal"
+            );
             for p in m.positions() {
                 assert_eq!(p[2], 0.0);
                 assert!(p[0].hypot(p[1]) <= 1.0 + 1e-15);
             }
             for &v in &t.boundary_vertices() {
                 let p = m.positions()[v];
-                assert!((p[0].hypot(p[1]) - 1.0).abs() < 1e-15, "{name}: boundary radius");
+                assert!(
+                    (p[0].hypot(p[1]) - 1.0).abs() < 1e-15,
+                    "{name}: boundary radius"
+                );
             }
         }
         ShapeKind::Cylinder => {
@@ -84,7 +113,10 @@ fn check(spec: &ShapeSpec) -> Mesh {
             for l in &t.boundary_loops {
                 let z = m.positions()[l[0]][2];
                 assert!((z.abs() - 0.5 * h).abs() < 1e-12, "{name}: loop z {z}");
-                assert!(l.iter().all(|&v| m.positions()[v][2] == z), "{name}: flat loop");
+                assert!(
+                    l.iter().all(|&v| m.positions()[v][2] == z),
+                    "{name}: flat loop"
+                );
             }
         }
         _ => {
@@ -118,13 +150,31 @@ fn regular_shapes_have_stated_topology_and_vertex_counts() {
 #[test]
 fn vertex_count_formulas_match_documented_values() {
     let want = [
-        (ShapeKind::ThreeTorus, [96, 396, 1596, 6396, 25596, 102396, 409596]),
-        (ShapeKind::DoubleTorus, [72, 294, 1182, 4734, 18942, 75774, 303102]),
-        (ShapeKind::Torus, [98, 392, 1568, 6272, 25088, 100352, 401408]),
+        (
+            ShapeKind::ThreeTorus,
+            [96, 396, 1596, 6396, 25596, 102396, 409596],
+        ),
+        (
+            ShapeKind::DoubleTorus,
+            [72, 294, 1182, 4734, 18942, 75774, 303102],
+        ),
+        (
+            ShapeKind::Torus,
+            [98, 392, 1568, 6272, 25088, 100352, 401408],
+        ),
         (ShapeKind::Sphere, [12, 42, 162, 642, 2562, 10242, 40962]),
-        (ShapeKind::UvSphere, [86, 366, 1514, 6162, 24866, 99906, 400514]),
-        (ShapeKind::Disk, [127, 469, 1801, 7057, 27937, 111169, 443521]),
-        (ShapeKind::Cylinder, [112, 420, 1624, 6384, 25312, 100800, 402304]),
+        (
+            ShapeKind::UvSphere,
+            [86, 366, 1514, 6162, 24866, 99906, 400514],
+        ),
+        (
+            ShapeKind::Disk,
+            [127, 469, 1801, 7057, 27937, 111169, 443521],
+        ),
+        (
+            ShapeKind::Cylinder,
+            [112, 420, 1624, 6384, 25312, 100800, 402304],
+        ),
     ];
     for (kind, counts) in want {
         for (res, &c) in counts.iter().enumerate() {
@@ -136,7 +186,11 @@ fn vertex_count_formulas_match_documented_values() {
     for kind in ShapeKind::ALL {
         for res in [0, 3] {
             let m = build(&ShapeSpec::new(kind).with_res(res)).unwrap();
-            assert_eq!(Some(m.n_vertices()), kind.vertex_count(res), "{kind:?} {res}");
+            assert_eq!(
+                Some(m.n_vertices()),
+                kind.vertex_count(res),
+                "{kind:?} {res}"
+            );
         }
     }
 }
@@ -155,7 +209,10 @@ fn irregular_shapes_keep_topology_and_vary_triangle_size() {
             if res >= 3 {
                 assert!(ratio > 50.0, "{spec}: area ratio {ratio}");
             }
-            assert!(ratio > 4.0 * regular, "{spec}: {ratio} vs regular {regular}");
+            assert!(
+                ratio > 4.0 * regular,
+                "{spec}: {ratio} vs regular {regular}"
+            );
             // The uv-sphere inherits thin pole fans; the subdivision surfaces use curved
             // edges on a coarse base: both stay above 4.5 degrees; the others above 10.
             let ang = min_angle_deg(&m);
@@ -172,9 +229,13 @@ fn irregular_shapes_keep_topology_and_vary_triangle_size() {
 fn sphere_vertices_are_on_the_unit_sphere() {
     for spec in [
         ShapeSpec::new(ShapeKind::Sphere).with_res(4),
-        ShapeSpec::new(ShapeKind::Sphere).with_res(4).with_irregular(true),
+        ShapeSpec::new(ShapeKind::Sphere)
+            .with_res(4)
+            .with_irregular(true),
         ShapeSpec::new(ShapeKind::UvSphere).with_res(2),
-        ShapeSpec::new(ShapeKind::UvSphere).with_res(3).with_irregular(true),
+        ShapeSpec::new(ShapeKind::UvSphere)
+            .with_res(3)
+            .with_irregular(true),
     ] {
         let m = build(&spec).unwrap();
         let worst = m
@@ -196,7 +257,11 @@ fn torus_vertices_are_on_the_torus() {
         let m = check(&spec);
         for p in m.positions() {
             let d = (p[0].hypot(p[1]) - big_r).hypot(p[2]);
-            assert!((d - small_r).abs() < 1e-12, "{spec}: off the torus by {}", d - small_r);
+            assert!(
+                (d - small_r).abs() < 1e-12,
+                "{spec}: off the torus by {}",
+                d - small_r
+            );
         }
     }
 }

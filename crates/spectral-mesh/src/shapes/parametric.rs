@@ -72,7 +72,11 @@ pub(crate) fn uv_sphere(res: u32) -> Arrays {
         let th = PI * i as f64 / k as f64;
         for j in 0..nl {
             let ph = 2.0 * PI * j as f64 / nl as f64;
-            p.push(normalize([th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()]));
+            p.push(normalize([
+                th.sin() * ph.cos(),
+                th.sin() * ph.sin(),
+                th.cos(),
+            ]));
         }
     }
     let south = p.len();
@@ -84,7 +88,12 @@ pub(crate) fn uv_sphere(res: u32) -> Arrays {
     }
     for i in 1..k - 1 {
         for j in 0..nl {
-            let (a, b, c, d) = (ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1));
+            let (a, b, c, d) = (
+                ring(i, j),
+                ring(i + 1, j),
+                ring(i + 1, j + 1),
+                ring(i, j + 1),
+            );
             if (i + j) % 2 == 0 {
                 t.push([a, b, c]);
                 t.push([a, c, d]);

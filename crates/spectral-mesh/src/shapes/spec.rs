@@ -103,7 +103,6 @@ pub struct ExpectedTopology {
     pub boundary_loops: usize,
 }
 
-
 const TORUS_PARAMS: &[ParamInfo] = &[
     ParamInfo {
         name: "R",
@@ -369,10 +368,7 @@ impl ShapeSpec {
                         valid: valid.join(", "),
                     });
                 };
-                let v: f64 = value
-                    .trim()
-                    .parse()
-                    .map_err(|_| bad("expected a number"))?;
+                let v: f64 = value.trim().parse().map_err(|_| bad("expected a number"))?;
                 if !v.is_finite() {
                     return Err(bad("must be finite"));
                 }
@@ -394,7 +390,11 @@ impl ShapeSpec {
             return Err(bad(
                 "res",
                 self.res.to_string(),
-                format!("must be at most {} for {}", self.kind.max_res(), self.kind.name()),
+                format!(
+                    "must be at most {} for {}",
+                    self.kind.max_res(),
+                    self.kind.name()
+                ),
             ));
         }
         if self.values.len() != self.kind.params().len() {
@@ -460,8 +460,15 @@ impl FromStr for ShapeSpec {
 
 /// All valid names (regular and irregular), comma-separated, for error messages.
 pub(crate) fn valid_names() -> String {
-    let mut v: Vec<String> = ShapeKind::ALL.iter().map(|k| k.name().to_string()).collect();
-    v.extend(ShapeKind::ALL.iter().map(|k| format!("irregular-{}", k.name())));
+    let mut v: Vec<String> = ShapeKind::ALL
+        .iter()
+        .map(|k| k.name().to_string())
+        .collect();
+    v.extend(
+        ShapeKind::ALL
+            .iter()
+            .map(|k| format!("irregular-{}", k.name())),
+    );
     v.join(", ")
 }
 
