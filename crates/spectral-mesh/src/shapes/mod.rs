@@ -23,7 +23,9 @@
 //!
 //! Sizes for benchmarks: `res = 4, 5, 6` give about 25k, 100k and 400k vertices for every
 //! family except `sphere`, whose `res` is the icosphere subdivision level
-//! (`res = 5, 6, 7, 8`: 10 242, 40 962, 163 842, 655 362 vertices).
+//! (`res = 5, 6, 7, 8`: 10 242, 40 962, 163 842, 655 362 vertices). Building the 400k
+//! meshes takes under a second (`3torus:res=6`: 0.8 s, 409 596 vertices), the irregular
+//! ones a few seconds (`irregular-3torus:res=6`: 3.3 s, 528 388 vertices).
 //!
 //! Construction:
 //! - `3torus`, `double-torus`: a closed quad control mesh, a plate with 3 (2) holes in a

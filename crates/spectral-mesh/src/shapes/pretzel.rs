@@ -39,14 +39,11 @@ pub(crate) fn control_mesh(g: usize) -> (Vec<[f64; 3]>, Vec<[usize; 4]>) {
     let gid = |i: usize, j: usize| j * gw + i;
     let n_grid = gw * (ny + 1);
     let mut pos: Vec<[f64; 3]> = Vec::with_capacity(3 * n_grid);
-    for j in 0..=ny {
-        for i in 0..=nx {
-            pos.push([xs[i], ys[j], HALF_THICK]);
-        }
-    }
-    for j in 0..=ny {
-        for i in 0..=nx {
-            pos.push([xs[i], ys[j], -HALF_THICK]);
+    for z in [HALF_THICK, -HALF_THICK] {
+        for &y in &ys {
+            for &x in &xs {
+                pos.push([x, y, z]);
+            }
         }
     }
     let mut quads = Vec::new();

@@ -200,10 +200,10 @@ impl Refiner {
 
         let mut out = Vec::with_capacity(m + 3 * split.len());
         let mut out_green = Vec::with_capacity(out.capacity());
-        for t in 0..m {
+        for (t, &red) in marked.iter().enumerate() {
             let [a, b, c] = self.triangles[t];
             let g = self.green[t];
-            if marked[t] {
+            if red {
                 let ab = midpoint(a, b);
                 let bc = midpoint(b, c);
                 let ca = midpoint(c, a);
