@@ -317,74 +317,10 @@ mod tests {
 
     /// Icosphere (subdivided icosahedron projected on the sphere of radius `r`).
     fn icosphere(r: f64, levels: usize) -> Mesh {
-        let g = (1.0 + 5f64.sqrt()) / 2.0;
-        let mut p: Vec<[f64; 3]> = vec![
-            [-1.0, g, 0.0],
-            [1.0, g, 0.0],
-            [-1.0, -g, 0.0],
-            [1.0, -g, 0.0],
-            [0.0, -1.0, g],
-            [0.0, 1.0, g],
-            [0.0, -1.0, -g],
-            [0.0, 1.0, -g],
-            [g, 0.0, -1.0],
-            [g, 0.0, 1.0],
-            [-g, 0.0, -1.0],
-            [-g, 0.0, 1.0],
-        ];
-        let mut t: Vec<[usize; 3]> = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        for _ in 0..levels {
-            let mut mid: HashMap<(usize, usize), usize> = HashMap::new();
-            let mut nt = Vec::new();
-            let mut m = |a: usize, b: usize, p: &mut Vec<[f64; 3]>| -> usize {
-                let k = (a.min(b), a.max(b));
-                *mid.entry(k).or_insert_with(|| {
-                    let (x, y) = (p[a], p[b]);
-                    p.push([
-                        (x[0] + y[0]) / 2.0,
-                        (x[1] + y[1]) / 2.0,
-                        (x[2] + y[2]) / 2.0,
-                    ]);
-                    p.len() - 1
-                })
-            };
-            for &[a, b, c] in &t {
-                let ab = m(a, b, &mut p);
-                let bc = m(b, c, &mut p);
-                let ca = m(c, a, &mut p);
-                nt.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-            }
-            t = nt;
-        }
-        let p = p
-            .into_iter()
-            .map(|x| {
-                let l = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
-                [r * x[0] / l, r * x[1] / l, r * x[2] / l]
-            })
-            .collect();
-        Mesh::new(p, t).unwrap()
+        crate::shapes::build_str(&format!("sphere:res={levels}"))
+            .unwrap()
+            .map_positions(|p| [p[0] * r, p[1] * r, p[2] * r])
+            .unwrap()
     }
 
     fn check_points(mesh: &Mesh, field: &[f64], ls: &LevelSet) {

@@ -311,84 +311,13 @@ impl Eigenbasis {
 pub(crate) mod test_meshes {
     //! Small meshes built in code for the tests.
     use crate::mesh::Mesh;
-    use std::collections::HashMap;
 
     /// An icosphere of radius `r` with `level` subdivisions (12, 42, 162, 642, ... vertices).
     pub fn icosphere(level: usize, r: f64) -> Mesh {
-        let t = (1.0 + 5f64.sqrt()) / 2.0;
-        let mut p: Vec<[f64; 3]> = vec![
-            [-1.0, t, 0.0],
-            [1.0, t, 0.0],
-            [-1.0, -t, 0.0],
-            [1.0, -t, 0.0],
-            [0.0, -1.0, t],
-            [0.0, 1.0, t],
-            [0.0, -1.0, -t],
-            [0.0, 1.0, -t],
-            [t, 0.0, -1.0],
-            [t, 0.0, 1.0],
-            [-t, 0.0, -1.0],
-            [-t, 0.0, 1.0],
-        ];
-        let mut f: Vec<[usize; 3]> = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        let proj = |v: [f64; 3]| {
-            let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            [v[0] / l, v[1] / l, v[2] / l]
-        };
-        for v in p.iter_mut() {
-            *v = proj(*v);
-        }
-        for _ in 0..level {
-            let mut mid: HashMap<(usize, usize), usize> = HashMap::new();
-            let mut nf = Vec::with_capacity(f.len() * 4);
-            for tri in &f {
-                let mut m = [0usize; 3];
-                for e in 0..3 {
-                    let (a, b) = (tri[e], tri[(e + 1) % 3]);
-                    let key = (a.min(b), a.max(b));
-                    m[e] = *mid.entry(key).or_insert_with(|| {
-                        let q = proj([
-                            (p[a][0] + p[b][0]) / 2.0,
-                            (p[a][1] + p[b][1]) / 2.0,
-                            (p[a][2] + p[b][2]) / 2.0,
-                        ]);
-                        p.push(q);
-                        p.len() - 1
-                    });
-                }
-                nf.push([tri[0], m[0], m[2]]);
-                nf.push([tri[1], m[1], m[0]]);
-                nf.push([tri[2], m[2], m[1]]);
-                nf.push([m[0], m[1], m[2]]);
-            }
-            f = nf;
-        }
-        let p = p
-            .into_iter()
-            .map(|v| [v[0] * r, v[1] * r, v[2] * r])
-            .collect();
-        Mesh::new(p, f).unwrap()
+        crate::shapes::build_str(&format!("sphere:res={level}"))
+            .unwrap()
+            .map_positions(|p| [p[0] * r, p[1] * r, p[2] * r])
+            .unwrap()
     }
 
     /// A disk of radius 1 triangulated from a polar-ish grid: `rings` rings of `6 * ring`
