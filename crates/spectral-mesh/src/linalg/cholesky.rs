@@ -4,7 +4,11 @@
 use std::sync::Arc;
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, factorize_symbolic_cholesky};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    factorize_symbolic_cholesky,
+};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use rayon::prelude::*;
@@ -27,17 +31,260 @@ pub enum CholeskyError {
 
 /// A sparse `L L^T` factorization of a symmetric positive definite matrix.
 ///
-/// Parallelism is explicit and coarse: the factorization itself runs on one thread (it is
-/// cheap next to the solves that use it), and multi-right-hand-side solves split their
-/// columns over the rayon pool, each part solved sequentially. This avoids fine-grained
-/// spin barriers, which are very slow on a loaded machine.
+/// The analysis (AMD ordering, supernodal structure) and the numeric factorization are
+/// faer's. The triangular solves are our own: the right-hand sides are gathered into a
+/// row-major block (a few columns side by side, permuted), and each supernode's columns
+/// are applied to those rows with fixed-width inner loops. Mesh Laplacians give many
+/// small supernodes, where this is several times faster than a general dense kernel per
+/// supernode; the factor is streamed once per block of up to 8 right-hand sides.
+///
+/// Parallelism is explicit and coarse: the factorization runs on one thread (it is cheap
+/// next to the solves that use it), and multi-right-hand-side solves split their columns
+/// over the rayon pool, each part solved sequentially. This avoids fine-grained spin
+/// barriers, which are very slow on a loaded machine.
 #[derive(Debug, Clone)]
 pub struct SparseCholesky {
     n: usize,
     symbolic: Arc<SymbolicCholesky<usize>>,
+    layout: Option<Arc<Supernodes>>,
     values: Vec<f64>,
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
+}
+
+/// Runtime SIMD dispatch of [`Supernodes::solve_rows`] (AVX2/AVX-512 when available).
+struct SolveOp<'a, const C: usize> {
+    sn: &'a Supernodes,
+    vals: &'a [f64],
+    x: &'a mut [[f64; C]],
+}
+
+impl<const C: usize> pulp::WithSimd for SolveOp<'_, C> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        self.sn.solve_rows::<C>(self.vals, self.x);
+    }
+}
+
+/// Supernodes with at least this many columns are applied column by column (contiguous
+/// in L); smaller ones row by row (each scattered row of the right-hand side once).
+const ROW_OUTER_MAX: usize = 8;
+
+/// The supernodal layout of the factor, copied out of faer's symbolic structure: supernode
+/// `s` holds columns `begin[s]..begin[s + 1]`; its values are a column-major block of
+/// `(size + pattern) x size` starting at `val_ptr[s]` (the lower-triangular diagonal block
+/// on top, then the rows `row_idx[row_ptr[s]..row_ptr[s + 1]]`); `fwd[i]` is the original
+/// index of permuted row `i`.
+#[derive(Debug)]
+struct Supernodes {
+    begin: Vec<usize>,
+    row_ptr: Vec<usize>,
+    val_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    fwd: Vec<usize>,
+}
+
+impl Supernodes {
+    fn from_symbolic(sym: &SymbolicCholesky<usize>) -> Option<Self> {
+        let SymbolicCholeskyRaw::Supernodal(sn) = sym.raw() else {
+            return None;
+        };
+        let ns = sn.n_supernodes();
+        let mut begin = sn.supernode_begin().to_vec();
+        begin.push(*sn.supernode_end().last().unwrap_or(&0));
+        let fwd = match sym.perm() {
+            Some(p) => p.arrays().0.to_vec(),
+            None => (0..sym.nrows()).collect(),
+        };
+        Some(Self {
+            begin,
+            row_ptr: sn.col_ptr_for_row_idx()[..=ns].to_vec(),
+            val_ptr: sn.col_ptr_for_val()[..=ns].to_vec(),
+            row_idx: sn.row_idx().to_vec(),
+            fwd,
+        })
+    }
+
+    /// Solves `L L^T y = x` in place for a row-major block `x` of `C` columns (permuted).
+    /// Off-diagonal rows of small supernodes are visited once per supernode (not once per
+    /// column), which matters because those accesses are scattered over `x`. Always
+    /// inlined into [`SolveOp`], so that it is compiled for the SIMD level pulp detects.
+    #[inline(always)]
+    fn solve_rows<const C: usize>(&self, vals: &[f64], x: &mut [[f64; C]]) {
+        let ns = self.begin.len() - 1;
+        let max_size = (0..ns)
+            .map(|s| self.begin[s + 1] - self.begin[s])
+            .max()
+            .unwrap_or(0);
+        let mut top = vec![[0.0; C]; max_size];
+        // Forward: L y = x.
+        for s in 0..ns {
+            let f = self.begin[s];
+            let size = self.begin[s + 1] - f;
+            let pat = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
+            let nr = size + pat.len();
+            let l = &vals[self.val_ptr[s]..self.val_ptr[s] + nr * size];
+            let top = &mut top[..size];
+            top.copy_from_slice(&x[f..f + size]);
+            for jj in 0..size {
+                let col = &l[jj * nr..jj * nr + size];
+                let inv = 1.0 / col[jj];
+                let mut xj = top[jj];
+                for v in xj.iter_mut() {
+                    *v *= inv;
+                }
+                top[jj] = xj;
+                for ii in jj + 1..size {
+                    let a = col[ii];
+                    for q in 0..C {
+                        top[ii][q] -= a * xj[q];
+                    }
+                }
+            }
+            x[f..f + size].copy_from_slice(top);
+            if size == 1 {
+                let xj = top[0];
+                for (&r, &a) in pat.iter().zip(&l[1..nr]) {
+                    let xi = &mut x[r];
+                    for q in 0..C {
+                        xi[q] -= a * xj[q];
+                    }
+                }
+            } else if size >= ROW_OUTER_MAX {
+                // Large (dense) supernodes: stream the columns of L contiguously.
+                for (jj, tj) in top.iter().enumerate() {
+                    let col = &l[jj * nr + size..(jj + 1) * nr];
+                    for (&r, &a) in pat.iter().zip(col) {
+                        let xi = &mut x[r];
+                        for q in 0..C {
+                            xi[q] -= a * tj[q];
+                        }
+                    }
+                }
+            } else {
+                // Small supernodes: touch each scattered row of x once.
+                for (p, &r) in pat.iter().enumerate() {
+                    let mut acc = [0.0; C];
+                    for (jj, tj) in top.iter().enumerate() {
+                        let a = l[jj * nr + size + p];
+                        for q in 0..C {
+                            acc[q] += a * tj[q];
+                        }
+                    }
+                    let xi = &mut x[r];
+                    for q in 0..C {
+                        xi[q] -= acc[q];
+                    }
+                }
+            }
+        }
+        // Backward: L^T z = y.
+        for s in (0..ns).rev() {
+            let f = self.begin[s];
+            let size = self.begin[s + 1] - f;
+            let pat = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
+            let nr = size + pat.len();
+            let l = &vals[self.val_ptr[s]..self.val_ptr[s] + nr * size];
+            let top = &mut top[..size];
+            top.copy_from_slice(&x[f..f + size]);
+            if size == 1 {
+                let mut acc = top[0];
+                for (&r, &a) in pat.iter().zip(&l[1..nr]) {
+                    let xi = x[r];
+                    for q in 0..C {
+                        acc[q] -= a * xi[q];
+                    }
+                }
+                top[0] = acc;
+            } else if size >= ROW_OUTER_MAX {
+                for (jj, tj) in top.iter_mut().enumerate() {
+                    let col = &l[jj * nr + size..(jj + 1) * nr];
+                    let mut acc = *tj;
+                    for (&r, &a) in pat.iter().zip(col) {
+                        let xi = x[r];
+                        for q in 0..C {
+                            acc[q] -= a * xi[q];
+                        }
+                    }
+                    *tj = acc;
+                }
+            } else {
+                for (p, &r) in pat.iter().enumerate() {
+                    let xi = x[r];
+                    for (jj, tj) in top.iter_mut().enumerate() {
+                        let a = l[jj * nr + size + p];
+                        for q in 0..C {
+                            tj[q] -= a * xi[q];
+                        }
+                    }
+                }
+            }
+            for jj in (0..size).rev() {
+                let col = &l[jj * nr..jj * nr + size];
+                let mut acc = top[jj];
+                for ii in jj + 1..size {
+                    let a = col[ii];
+                    for q in 0..C {
+                        acc[q] -= a * top[ii][q];
+                    }
+                }
+                let inv = 1.0 / col[jj];
+                for v in acc.iter_mut() {
+                    *v *= inv;
+                }
+                top[jj] = acc;
+            }
+            x[f..f + size].copy_from_slice(top);
+        }
+    }
+
+    /// Solves for `C` column-major columns of `b` (`n` rows each) in place.
+    fn solve_cols<const C: usize>(&self, vals: &[f64], b: &mut [f64], n: usize) {
+        let mut x = vec![[0.0; C]; n];
+        for (i, row) in x.iter_mut().enumerate() {
+            let src = self.fwd[i];
+            for (q, v) in row.iter_mut().enumerate() {
+                *v = b[q * n + src];
+            }
+        }
+        pulp::Arch::new().dispatch(SolveOp {
+            sn: self,
+            vals,
+            x: &mut x,
+        });
+        for (i, row) in x.iter().enumerate() {
+            let dst = self.fwd[i];
+            for (q, v) in row.iter().enumerate() {
+                b[q * n + dst] = *v;
+            }
+        }
+    }
+
+    /// Solves for any number of column-major columns, 8 (then 4, 2, 1) at a time.
+    fn solve_many(&self, vals: &[f64], b: &mut [f64], n: usize) {
+        let mut rest = b;
+        while !rest.is_empty() {
+            let c = rest.len() / n;
+            let w = if c >= 8 {
+                8
+            } else if c >= 4 {
+                4
+            } else if c >= 2 {
+                2
+            } else {
+                1
+            };
+            let (head, tail) = rest.split_at_mut(n * w);
+            match w {
+                8 => self.solve_cols::<8>(vals, head, n),
+                4 => self.solve_cols::<4>(vals, head, n),
+                2 => self.solve_cols::<2>(vals, head, n),
+                _ => self.solve_cols::<1>(vals, head, n),
+            }
+            rest = tail;
+        }
+    }
 }
 
 fn view(a: &SparseMatrix) -> Result<SparseColMatRef<'_, usize, f64>, CholeskyError> {
@@ -86,13 +333,18 @@ impl SparseCholesky {
             m.symbolic(),
             Side::Lower,
             Default::default(),
-            Default::default(),
+            CholeskySymbolicParams {
+                supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+                ..Default::default()
+            },
         )
         .map_err(|e| CholeskyError::Internal(format!("{e:?}")))?;
         let values = numeric(&symbolic, a)?;
+        let layout = Supernodes::from_symbolic(&symbolic).map(Arc::new);
         Ok(Self {
             n: a.nrows(),
             symbolic: Arc::new(symbolic),
+            layout,
             values,
             col_ptr: a.col_ptr().to_vec(),
             row_idx: a.row_idx().to_vec(),
@@ -122,6 +374,11 @@ impl SparseCholesky {
 
     fn solve_seq(&self, b: &mut [f64], k: usize) {
         if k == 0 || self.n == 0 {
+            return;
+        }
+        // One column: faer's solve (no gather into a row-major block needed).
+        if let Some(layout) = self.layout.as_ref().filter(|_| k > 1) {
+            layout.solve_many(&self.values, &mut b[..self.n * k], self.n);
             return;
         }
         let rhs = MatMut::from_column_major_slice_mut(b, self.n, k);
@@ -190,6 +447,47 @@ mod tests {
         for i in 0..n {
             assert!((x[i] - x_true[i]).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn block_solves_match_for_every_width() {
+        // A 2D grid Laplacian plus a diagonal: supernodes of several sizes after AMD.
+        let side = 23;
+        let n = side * side;
+        let mut t = Vec::new();
+        for i in 0..side {
+            for j in 0..side {
+                let p = i * side + j;
+                t.push((p, p, 4.1 + (p % 7) as f64 * 0.01));
+                if i + 1 < side {
+                    t.push((p, p + side, -1.0));
+                    t.push((p + side, p, -1.0));
+                }
+                if j + 1 < side {
+                    t.push((p, p + 1, -1.0));
+                    t.push((p + 1, p, -1.0));
+                }
+            }
+        }
+        let a = SparseMatrix::from_triplets(n, n, &t);
+        let c = SparseCholesky::new(&a).unwrap();
+        assert!(c.layout.is_some(), "the factor should be supernodal");
+        // 15 columns: one block of 8, 4, 2 and 1.
+        let k = 15;
+        let x_true: Vec<f64> = (0..n * k)
+            .map(|i| ((i * 7919) % 1000) as f64 / 500.0 - 1.0)
+            .collect();
+        let mut b = Vec::with_capacity(n * k);
+        for j in 0..k {
+            b.extend(a.mul_vec(&x_true[j * n..(j + 1) * n]));
+        }
+        c.solve_many_in_place(&mut b, k);
+        let err = b
+            .iter()
+            .zip(&x_true)
+            .map(|(u, v)| (u - v).abs())
+            .fold(0.0, f64::max);
+        assert!(err < 1e-12, "max error {err}");
     }
 
     #[test]

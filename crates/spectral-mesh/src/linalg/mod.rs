@@ -5,12 +5,13 @@
 pub mod cholesky;
 pub mod dense_eigen;
 pub mod eigen;
+mod krylov_schur;
 pub mod sparse;
 
 pub use cholesky::{CholeskyError, SparseCholesky};
 pub use dense_eigen::{DenseEigenError, dense_generalized_eigen};
 pub use eigen::{
-    EigenProgress, PartialEigen, SparseEigenError, SparseEigenOptions, b_orthogonality_error,
-    relative_residuals, sparse_generalized_eigen, sym_spmm,
+    EigenProgress, PartialEigen, SparseAlgorithm, SparseEigenError, SparseEigenOptions,
+    b_orthogonality_error, relative_residuals, sparse_generalized_eigen, sym_spmm, sym_spmm_into,
 };
 pub use sparse::SparseMatrix;

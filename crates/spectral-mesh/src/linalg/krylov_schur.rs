@@ -1,0 +1,616 @@
+//! Block Krylov-Schur (thick-restart block Lanczos) on the shift-inverted pencil.
+//!
+//! The operator is `Op = K^-1 B` with `K = S - sigma B` (`sigma < 0`, factored once by
+//! sparse Cholesky). `Op` is self-adjoint in the `B` inner product and its eigenvalues
+//! `theta = 1 / (lambda - sigma)` are largest for the smallest `lambda`, where they are
+//! also best separated: a handful of Krylov steps per wanted pair suffice.
+//!
+//! The basis `V` (`n x j`, `V^T B V = I`) grows by blocks: the newest block `Q` is
+//! multiplied by `Op` (one sparse product with `B`, one multi-right-hand-side solve), the
+//! result is B-orthogonalized against all of `V` (classical Gram-Schmidt twice, as
+//! matrix-matrix products) and B-orthonormalized within itself (SVQB). The coefficients
+//! fill the projected matrix `T = V^T B Op V`, so that
+//! `Op V = V T + Q_next R E^T` holds to rounding error (a Krylov decomposition).
+//!
+//! When `V` reaches its size limit the iteration restarts (Krylov-Schur): `T = Y Theta Y^T`,
+//! the Ritz vectors `V Y` of the largest `theta` are kept (computed in place, row block by
+//! row block, so no second `n x m` buffer is needed), `T` becomes diagonal plus the
+//! coupling row of the pending block, and expansion goes on from that block. Restarting is
+//! also when convergence is checked, on the true residuals `S x - lambda B x` of the kept
+//! Ritz vectors (sparse products only), so the reported accuracy never depends on the
+//! accuracy of the solves or of the Krylov relation. The eigenvalues returned are the
+//! Rayleigh quotients `x^T S x / x^T B x`.
+//!
+//! Directions that become numerically dependent (an invariant subspace was found, or `k`
+//! is close to `n`) are replaced by random directions (Op applied to random vectors) B-orthogonal to the basis, so
+//! eigenvalues missing from the start block can still enter the space.
+
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatMut, MatRef, Par};
+
+use super::eigen::{
+    EigenProgress, LEAF_ROWS, PartialEigen, Rng, SparseEigenError, b_orthogonality_error, gram,
+    residuals_from, sub_product, sym_eig, sym_spmm, sym_spmm_into,
+};
+use super::{SparseCholesky, SparseMatrix};
+
+/// The factored problem the iteration works on.
+pub(super) struct Problem<'a> {
+    pub s: &'a SparseMatrix,
+    pub b: &'a SparseMatrix,
+    pub chol: &'a SparseCholesky,
+    pub shift: f64,
+    pub k: usize,
+    pub tol: f64,
+    pub sn: f64,
+    pub bn: f64,
+}
+
+/// Sizes of the iteration.
+pub(super) struct Sizes {
+    /// Block size.
+    pub block: usize,
+    /// Largest basis dimension before a restart.
+    pub max_basis: usize,
+    /// Restart cap.
+    pub max_restarts: usize,
+}
+
+/// `sum_i w_i * (B w)_i` per column.
+fn col_dots(w: &[f64], bw: &[f64], n: usize, c: usize) -> Vec<f64> {
+    (0..c)
+        .map(|j| {
+            w[j * n..(j + 1) * n]
+                .iter()
+                .zip(&bw[j * n..(j + 1) * n])
+                .map(|(a, b)| a * b)
+                .sum()
+        })
+        .collect()
+}
+
+/// One classical Gram-Schmidt pass: `W -= V (V^T B W)`; returns `V^T B W`.
+fn project_once(
+    w: &mut [f64],
+    v: &[f64],
+    n: usize,
+    j: usize,
+    c: usize,
+    b: &SparseMatrix,
+) -> Mat<f64> {
+    if j == 0 || c == 0 {
+        return Mat::zeros(j, c);
+    }
+    let bw = sym_spmm(b, &w[..n * c], c);
+    let coef = gram(&v[..n * j], &bw, n, j, c);
+    sub_product(&mut w[..n * c], v, coef.as_ref(), n);
+    coef
+}
+
+/// SVQB on the `c` columns of `w`: `W = Q Rq` with `Q` B-orthonormal (`kept` columns,
+/// written to the front of `w`) and `Rq` (`kept x c`). The Gram matrix is scaled to unit
+/// diagonal before its eigen-decomposition (so columns of very different norms keep their
+/// relative accuracy) and the orthonormalization is repeated once when the first pass
+/// may leave `|Q^T B Q - I|` above about `1e-12` (an ill-conditioned Gram matrix). Also
+/// returns the smallest squared B-norm of the input columns. Columns whose squared B-norm is below `floor2`
+/// (absolute), and directions below `1e-14` of the largest (relative, after scaling), are
+/// dropped.
+fn svqb_r(
+    w: &mut [f64],
+    n: usize,
+    c: usize,
+    b: &SparseMatrix,
+    floor2: f64,
+) -> Result<(usize, Mat<f64>, f64), SparseEigenError> {
+    let mut cur = c;
+    let mut r = Mat::<f64>::identity(c, c);
+    let mut min_diag = f64::INFINITY;
+    let mut again = true;
+    for pass in 0..2 {
+        if cur == 0 || !again {
+            break;
+        }
+        let bw = sym_spmm(b, &w[..n * cur], cur);
+        let mut g = gram(&w[..n * cur], &bw, n, cur, cur);
+        if pass == 0 {
+            min_diag = (0..cur).map(|i| g[(i, i)]).fold(f64::INFINITY, f64::min);
+        }
+        let mut d = vec![0.0; cur];
+        for (i, di) in d.iter_mut().enumerate() {
+            let gii = g[(i, i)];
+            if !gii.is_finite() {
+                return Err(SparseEigenError::NonFinite);
+            }
+            *di = if gii > floor2 && gii > 0.0 {
+                1.0 / gii.sqrt()
+            } else {
+                0.0
+            };
+        }
+        for j in 0..cur {
+            for i in 0..cur {
+                g[(i, j)] *= d[i] * d[j];
+            }
+        }
+        for j in 0..cur {
+            for i in 0..j {
+                let a = 0.5 * (g[(i, j)] + g[(j, i)]);
+                g[(i, j)] = a;
+                g[(j, i)] = a;
+            }
+        }
+        let (lam, u) = sym_eig(g.as_ref())?;
+        let lmax = lam.iter().cloned().fold(0.0, f64::max);
+        let keep: Vec<usize> = (0..cur)
+            .rev()
+            .filter(|&i| lmax > 0.0 && lam[i] > 1e-14 * lmax)
+            .collect();
+        let kept = keep.len();
+        // One pass leaves |Q^T B Q - I| ~ eps * cond(G); repeat when that may exceed 1e-12.
+        let lmin_kept = keep.last().map_or(0.0, |&i| lam[i]);
+        again = lmin_kept < 1e-4 * lmax;
+        // W = Q Rq with Q = W D U_k L^-1/2, Rq = L^1/2 U_k^T D^-1 (on the kept columns).
+        let mut coef = Mat::<f64>::zeros(cur, kept);
+        let mut rq = Mat::<f64>::zeros(kept, cur);
+        for (jj, &j) in keep.iter().enumerate() {
+            let sq = lam[j].sqrt();
+            for i in 0..cur {
+                coef[(i, jj)] = d[i] * u[(i, j)] / sq;
+                rq[(jj, i)] = if d[i] > 0.0 {
+                    u[(i, j)] * sq / d[i]
+                } else {
+                    0.0
+                };
+            }
+        }
+        let q = super::eigen::product(&w[..n * cur], coef.as_ref(), n);
+        w[..n * kept].copy_from_slice(&q);
+        let mut r2 = Mat::<f64>::zeros(kept, c);
+        matmul(
+            r2.as_mut(),
+            Accum::Replace,
+            rq.as_ref(),
+            r.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        r = r2;
+        cur = kept;
+    }
+    Ok((cur, r, min_diag))
+}
+
+/// Turns the `c` columns stored at `v[n j ..]` (the block `W`) into a B-orthonormal block
+/// `Q` orthogonal to `V = v[:, :j]`, with `W = V C + Q R`. Returns `(C, R, q)` where `q`
+/// is the column count of `Q` (`R` is `q x c`). Directions of `W` that are numerically in
+/// the span of `V` are replaced by random ones (zero rows of `R`), as long as the space
+/// has room.
+#[allow(clippy::too_many_arguments)]
+fn orthonormalize(
+    v: &mut [f64],
+    n: usize,
+    j: usize,
+    c: usize,
+    b: &SparseMatrix,
+    chol: &SparseCholesky,
+    rng: &mut Rng,
+    solves: &mut usize,
+) -> Result<(Mat<f64>, Mat<f64>, usize), SparseEigenError> {
+    let (basis, rest) = v.split_at_mut(n * j);
+    let w = &mut rest[..n * c];
+    let bw = sym_spmm(b, w, c);
+    let pre = col_dots(w, &bw, n, c);
+    let pre_max = pre.iter().cloned().fold(0.0, f64::max);
+    if !pre_max.is_finite() {
+        return Err(SparseEigenError::NonFinite);
+    }
+    // Two classical Gram-Schmidt passes (the first reuses B W): W_in = V C + W.
+    let mut coef = Mat::<f64>::zeros(j, c);
+    if j > 0 {
+        let c1 = gram(&basis[..n * j], &bw, n, j, c);
+        sub_product(w, basis, c1.as_ref(), n);
+        coef += c1;
+        coef += project_once(w, basis, n, j, c, b);
+    }
+    drop(bw);
+    let (kept, rq, min_diag) = svqb_r(w, n, c, b, 1e-20 * pre_max)?;
+    let mut r = rq;
+    let mut cur = kept;
+    if j > 0 && cur > 0 && min_diag < 1e-6 * pre_max {
+        // The block lost most of its norm to the projection: rounding in the two passes
+        // matters, so project the orthonormalized block once more (W_in = V (C + Cp R) + Q R).
+        let cp = project_once(w, basis, n, j, cur, b);
+        let mut add = Mat::<f64>::zeros(j, c);
+        matmul(
+            add.as_mut(),
+            Accum::Replace,
+            cp.as_ref(),
+            r.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        coef += add;
+        let (kept2, rq2, _) = svqb_r(w, n, cur, b, 0.0)?;
+        let mut r2 = Mat::<f64>::zeros(kept2, c);
+        matmul(
+            r2.as_mut(),
+            Accum::Replace,
+            rq2.as_ref(),
+            r.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        r = r2;
+        cur = kept2;
+    }
+    // Refill dropped directions with random ones (not part of W_in: zero rows of R).
+    let room = n.saturating_sub(j);
+    let want = c.min(room);
+    if cur < want {
+        let extra = want - cur;
+        let mut filled = 0;
+        for _attempt in 0..3 {
+            let need = extra - filled;
+            if need == 0 {
+                break;
+            }
+            let start = cur + filled;
+            // Op applied to random vectors (in the range of Op, like the whole basis).
+            let rnd: Vec<f64> = (0..n * need).map(|_| rng.next_f64()).collect();
+            let mut brnd = sym_spmm(b, &rnd, need);
+            chol.solve_many_in_place(&mut brnd, need);
+            *solves += need;
+            w[n * start..n * (start + need)].copy_from_slice(&brnd);
+            let pre_t = {
+                let tail = &w[n * start..n * (start + need)];
+                let bt = sym_spmm(b, tail, need);
+                col_dots(tail, &bt, n, need).into_iter().fold(0.0, f64::max)
+            };
+            for _ in 0..2 {
+                project_once(&mut w[n * start..n * (start + need)], basis, n, j, need, b);
+                // Against the columns of Q found so far.
+                let (qpart, tpart) = w.split_at_mut(n * start);
+                project_once(&mut tpart[..n * need], qpart, n, start, need, b);
+            }
+            let tail = &mut w[n * start..n * (start + need)];
+            let (got, _, _) = svqb_r(tail, n, need, b, 1e-20 * pre_t)?;
+            filled += got;
+        }
+        let total = cur + filled;
+        let mut r3 = Mat::<f64>::zeros(total, c);
+        for i in 0..cur {
+            for q in 0..c {
+                r3[(i, q)] = r[(i, q)];
+            }
+        }
+        r = r3;
+        cur = total;
+    }
+    Ok((coef, r, cur))
+}
+
+/// Rayleigh quotients `x^T S x / x^T B x` and relative residuals (see
+/// [`super::relative_residuals`]) of `c` column-major vectors, 8 columns at a time (small
+/// temporaries). `fallback` gives the eigenvalue of a column with `x^T B x = 0`.
+fn true_residuals(pb: &Problem<'_>, x: &[f64], c: usize, fallback: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let n = pb.s.ncols();
+    let mut lam = Vec::with_capacity(c);
+    let mut res = Vec::with_capacity(c);
+    let mut sx = vec![0.0; n * 8.min(c)];
+    let mut bx = vec![0.0; n * 8.min(c)];
+    let mut done = 0;
+    while done < c {
+        let w = (c - done).min(8);
+        let xs = &x[n * done..n * (done + w)];
+        sym_spmm_into(pb.s, xs, w, &mut sx);
+        sym_spmm_into(pb.b, xs, w, &mut bx);
+        let mut l = Vec::with_capacity(w);
+        for q in 0..w {
+            let col = &xs[q * n..(q + 1) * n];
+            let num: f64 = col
+                .iter()
+                .zip(&sx[q * n..(q + 1) * n])
+                .map(|(a, b)| a * b)
+                .sum();
+            let den: f64 = col
+                .iter()
+                .zip(&bx[q * n..(q + 1) * n])
+                .map(|(a, b)| a * b)
+                .sum();
+            l.push(if den > 0.0 {
+                num / den
+            } else {
+                fallback[done + q]
+            });
+        }
+        res.extend(residuals_from(
+            &sx[..n * w],
+            &bx[..n * w],
+            xs,
+            &l,
+            n,
+            pb.sn,
+            pb.bn,
+        ));
+        lam.extend(l);
+        done += w;
+    }
+    (lam, res)
+}
+
+/// `V[:, :p] = V[:, :m] Y` in place (`Y` is `m x p`, `p <= m`), row block by row block.
+fn rotate_in_place(v: &mut [f64], n: usize, m: usize, y: MatRef<'_, f64>) {
+    if n == 0 || m == 0 || y.ncols() == 0 {
+        return;
+    }
+    let vm = MatMut::from_column_major_slice_mut(&mut v[..n * m], n, m);
+    rotate_rec(vm, y);
+}
+
+fn rotate_rec(mut vm: MatMut<'_, f64>, y: MatRef<'_, f64>) {
+    let rows = vm.nrows();
+    if rows <= LEAF_ROWS {
+        let p = y.ncols();
+        let mut tmp = Mat::<f64>::zeros(rows, p);
+        matmul(tmp.as_mut(), Accum::Replace, vm.as_ref(), y, 1.0, Par::Seq);
+        vm.as_mut().submatrix_mut(0, 0, rows, p).copy_from(&tmp);
+        return;
+    }
+    let mid = (rows / 2).next_multiple_of(64).min(rows);
+    let (a, bm) = vm.split_at_row_mut(mid);
+    rayon::join(|| rotate_rec(a, y), || rotate_rec(bm, y));
+}
+
+/// The `k` smallest pairs by block Krylov-Schur (see the module documentation).
+pub(super) fn krylov_schur(
+    pb: &Problem<'_>,
+    sizes: &Sizes,
+    rng: &mut Rng,
+    progress: &mut dyn FnMut(EigenProgress),
+) -> Result<PartialEigen, SparseEigenError> {
+    let (s, b, chol) = (pb.s, pb.b, pb.chol);
+    let n = s.ncols();
+    let k = pb.k;
+    let bs = sizes.block.clamp(1, n);
+    let m_max = sizes.max_basis.clamp(k.min(n), n);
+    // Storage: the basis plus room for one pending block.
+    let mut v = vec![0.0; n * (m_max + bs).min(n + bs)];
+    let mut t = Mat::<f64>::zeros(m_max + bs, m_max + bs);
+    let mut j = 0usize;
+    let mut expansions = 0usize;
+    let mut nconv = 0usize;
+
+    // Start block: Op applied to a random block, B-orthonormal. Every basis vector is
+    // then in the range of Op, whose high-frequency components are damped by
+    // theta ~ 1 / lambda: a random start would leave white noise in the Ritz vectors that
+    // the residual of S (weighted by lambda_max) sees but the residual of Op does not.
+    let mut w: Vec<f64> = (0..n * bs).map(|_| rng.next_f64()).collect();
+    let mut bw = sym_spmm(b, &w, bs);
+    chol.solve_many_in_place(&mut bw, bs);
+    w = bw;
+    v[..n * bs].copy_from_slice(&w);
+    drop(w);
+    let mut solves = bs;
+    let (_, _, mut qc) = orthonormalize(&mut v, n, 0, bs, b, chol, rng, &mut solves)?;
+    // Op V = V T + Q R_row (Q the pending block, R_row its coupling, qc x j).
+    let mut rrow = Mat::<f64>::zeros(qc, 0);
+    let mut restarts = 0usize;
+
+    loop {
+        let full_space = j + qc > n || qc == 0;
+        if j + qc > m_max || full_space {
+            // ---- Restart and convergence check ----
+            let m = j;
+            let mut tm = Mat::<f64>::zeros(m, m);
+            for c in 0..m {
+                for r in 0..m {
+                    tm[(r, c)] = 0.5 * (t[(r, c)] + t[(c, r)]);
+                }
+            }
+            let (theta_asc, y_asc) = sym_eig(tm.as_ref())?;
+            // Descending theta = ascending lambda.
+            let theta: Vec<f64> = theta_asc.iter().rev().cloned().collect();
+            let mut y = Mat::<f64>::zeros(m, m);
+            for c in 0..m {
+                for r in 0..m {
+                    y[(r, c)] = y_asc[(r, m - 1 - c)];
+                }
+            }
+            let keep = if full_space {
+                m
+            } else {
+                (k + (m_max - k) / 2)
+                    .max(nconv + bs)
+                    .min(m_max.saturating_sub(qc).max(k.min(m)))
+                    .min(m)
+            };
+            let nchk = keep.min(k + bs.max(k / 5)).max(k.min(keep));
+            // Residual estimates without touching the n-vectors: with Op V = V T + Q R_row
+            // and x = V y, S x - lambda B x = -(1/theta) K Q (R_row y), so
+            // ||S x - lambda B x||^2 = u^T (Z^T Z) u / theta^2 with Z = K Q, u = R_row y.
+            let mut rho = Mat::<f64>::zeros(qc, m);
+            if qc > 0 && m > 0 {
+                matmul(
+                    rho.as_mut(),
+                    Accum::Replace,
+                    rrow.as_ref(),
+                    y.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+            }
+            let gz = if qc > 0 {
+                let q = &v[n * m..n * (m + qc)];
+                let mut z = sym_spmm(s, q, qc);
+                let bq = sym_spmm(b, q, qc);
+                for (zi, bi) in z.iter_mut().zip(&bq) {
+                    *zi -= pb.shift * bi;
+                }
+                gram(&z, &z, n, qc, qc)
+            } else {
+                Mat::<f64>::zeros(0, 0)
+            };
+            rotate_in_place(&mut v, n, m, y.as_ref().submatrix(0, 0, m, keep));
+            let lam_est: Vec<f64> = (0..nchk).map(|i| pb.shift + 1.0 / theta[i]).collect();
+            let est: Vec<f64> = (0..nchk)
+                .map(|i| {
+                    let mut q2 = 0.0;
+                    for a in 0..qc {
+                        for c in 0..qc {
+                            q2 += rho[(a, i)] * gz[(a, c)] * rho[(c, i)];
+                        }
+                    }
+                    let r = q2.max(0.0).sqrt() / theta[i].abs();
+                    let xn = v[i * n..(i + 1) * n]
+                        .iter()
+                        .map(|x| x * x)
+                        .sum::<f64>()
+                        .sqrt();
+                    let den = (pb.sn + lam_est[i].abs() * pb.bn) * xn;
+                    if den > 0.0 { r / den } else { r }
+                })
+                .collect();
+            if est.iter().any(|r| !r.is_finite()) {
+                return Err(SparseEigenError::NonFinite);
+            }
+            nconv = est
+                .iter()
+                .take_while(|&&r| r <= pb.tol || full_space)
+                .count();
+            restarts += 1;
+            progress(EigenProgress::Iteration {
+                iteration: expansions,
+                converged: nconv.min(k),
+                wanted: k,
+                basis: m,
+            });
+            // The wanted pairs plus the rest of a cluster cut by k: `end` is the first
+            // Ritz value clearly above lambda_k. It must itself be accurate enough to be
+            // placed (its Ritz value error is about the square of its residual).
+            let gap_of = |lk: f64| 1e-3 * lk.abs() + 1e-10 * pb.sn / pb.bn.max(f64::MIN_POSITIVE);
+            let lk = lam_est[k - 1];
+            let end = (k..nchk).find(|&i| lam_est[i] > lk + gap_of(lk));
+            let ready = match end {
+                _ if full_space || nchk >= n => nconv >= k,
+                Some(e) => nconv >= e && est[e] <= pb.tol.sqrt(),
+                None => false,
+            };
+            if ready {
+                // Confirm on the true residuals of the pairs up to `end`.
+                let nres = end.unwrap_or(k).max(k).min(keep);
+                let (lam, res) = true_residuals(pb, &v[..n * nres], nres, &lam_est);
+                if res.iter().any(|r| !r.is_finite()) {
+                    return Err(SparseEigenError::NonFinite);
+                }
+                let good = res
+                    .iter()
+                    .take_while(|&&r| r <= pb.tol || full_space)
+                    .count();
+                if good >= nres {
+                    // Sort the first k (Rayleigh quotients may swap inside a tight cluster).
+                    let mut order: Vec<usize> = (0..k).collect();
+                    order.sort_by(|&a, &c| lam[a].total_cmp(&lam[c]));
+                    let mut vectors = Vec::with_capacity(n * k);
+                    let mut values = Vec::with_capacity(k);
+                    let mut residuals = Vec::with_capacity(k);
+                    for &c in &order {
+                        vectors.extend_from_slice(&v[c * n..(c + 1) * n]);
+                        values.push(lam[c]);
+                        residuals.push(res[c]);
+                    }
+                    drop(v);
+                    let orthogonality_error = b_orthogonality_error(b, &vectors, k);
+                    let max_residual = residuals.iter().cloned().fold(0.0, f64::max);
+                    progress(EigenProgress::Finished {
+                        iterations: expansions,
+                        solves,
+                        max_residual,
+                        orthogonality_error,
+                    });
+                    return Ok(PartialEigen {
+                        values,
+                        vectors,
+                        residuals,
+                        orthogonality_error,
+                        iterations: expansions,
+                        solves,
+                        shift: pb.shift,
+                    });
+                }
+                nconv = good;
+            }
+            if restarts > sizes.max_restarts || full_space {
+                return Err(SparseEigenError::NoConvergence {
+                    converged: nconv.min(k),
+                    wanted: k,
+                    iterations: expansions,
+                });
+            }
+            // New projected matrix: diag(theta); the coupling of the pending block to the
+            // kept Ritz vectors enters T when that block is expanded (its projection
+            // coefficients), and R_row becomes rho restricted to the kept columns.
+            t.fill(0.0);
+            for c in 0..keep {
+                t[(c, c)] = theta[c];
+            }
+            let mut rr = Mat::<f64>::zeros(qc, keep);
+            for c in 0..keep {
+                for a in 0..qc {
+                    rr[(a, c)] = rho[(a, c)];
+                }
+            }
+            rrow = rr;
+            // Move the pending block behind the kept vectors.
+            v.copy_within(n * m..n * (m + qc), n * keep);
+            j = keep;
+            continue;
+        }
+
+        // ---- Expansion: absorb the pending block, multiply it by Op ----
+        let j0 = j;
+        j += qc;
+        let c = qc;
+        {
+            let (done, rest) = v.split_at_mut(n * j);
+            let mut w = sym_spmm(b, &done[n * j0..n * j], c);
+            chol.solve_many_in_place(&mut w, c);
+            rest[..n * c].copy_from_slice(&w);
+        }
+        solves += c;
+        expansions += 1;
+        let (coef, r, q) = orthonormalize(&mut v, n, j, c, b, chol, rng, &mut solves)?;
+        for cc in 0..c {
+            for rr in 0..j {
+                let val = coef[(rr, cc)];
+                if !val.is_finite() {
+                    return Err(SparseEigenError::NonFinite);
+                }
+                t[(rr, j0 + cc)] = val;
+                t[(j0 + cc, rr)] = val;
+            }
+        }
+        for cc in 0..c {
+            for rr in 0..cc {
+                let a = 0.5 * (coef[(j0 + rr, cc)] + coef[(j0 + cc, rr)]);
+                t[(j0 + rr, j0 + cc)] = a;
+                t[(j0 + cc, j0 + rr)] = a;
+            }
+        }
+        let mut nr = Mat::<f64>::zeros(q, j);
+        for cc in 0..c {
+            for rr in 0..q {
+                nr[(rr, j0 + cc)] = r[(rr, cc)];
+            }
+        }
+        rrow = nr;
+        qc = q;
+        if expansions % 2 == 0 {
+            progress(EigenProgress::Iteration {
+                iteration: expansions,
+                converged: nconv.min(k),
+                wanted: k,
+                basis: j,
+            });
+        }
+    }
+}
