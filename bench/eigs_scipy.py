@@ -3,11 +3,15 @@
 
 Builds the cotangent stiffness S (positive semi-definite) and a mass matrix B from an OFF
 file with NumPy (the formulas of MATH.md), then times scipy.sparse.linalg.eigsh in
-shift-invert mode (SuperLU, or CHOLMOD through scikit-sparse when --cholmod is given and
-installed). Prints one `key=value` line like the Rust example `bench_eigs`.
+shift-invert mode (SuperLU, or a CHOLMOD factorization through scikit-sparse with
+--cholmod). Prints one `key=value` line like the Rust example `bench_eigs`.
+
+--cholmod needs scikit-sparse (bench/setup-bench-python.sh installs it): without it the
+script exits with status 3 rather than silently measuring SuperLU. --tol is passed to
+eigsh (0, SciPy's default, means machine precision).
 
 usage: eigs_scipy.py MESH.off K [--mass fem|voronoi-cot|cot] [--sigma S] [--cholmod]
-                     [--save OUT.npz]
+                     [--tol T] [--save OUT.npz]
 """
 import argparse
 import resource
@@ -85,6 +89,7 @@ def main():
     ap.add_argument("--mass", default="fem")
     ap.add_argument("--sigma", type=float, default=None)
     ap.add_argument("--cholmod", action="store_true")
+    ap.add_argument("--tol", type=float, default=0.0)
     ap.add_argument("--save", default=None)
     a = ap.parse_args()
     v, f = read_off(a.mesh)
@@ -95,19 +100,20 @@ def main():
     sn = abs(S).sum(axis=0).max(); bn = abs(B).sum(axis=0).max()
     sigma = a.sigma if a.sigma is not None else -max(0.01 / B.sum(), 1e-10 * sn / bn)
     t1 = time.perf_counter()
-    route = "superlu"
     if a.cholmod:
         try:
             from sksparse.cholmod import cholesky
-            fac = cholesky((S - sigma * B).tocsc())
-            op = sla.LinearOperator(S.shape, matvec=fac, dtype=float)
-            lam, X = sla.eigsh(S, a.k, M=B, sigma=sigma, which="LM", OPinv=op)
-            route = "cholmod"
-        except ImportError:
-            print("scikit-sparse not installed: SuperLU used", file=sys.stderr)
-            lam, X = sla.eigsh(S, a.k, M=B, sigma=sigma, which="LM")
+        except ImportError as e:
+            print(f"--cholmod: scikit-sparse is not importable ({e}); "
+                  "run bench/setup-bench-python.sh", file=sys.stderr)
+            sys.exit(3)
+        route = "cholmod"
+        fac = cholesky((S - sigma * B).tocsc())
+        op = sla.LinearOperator(S.shape, matvec=fac, dtype=float)
+        lam, X = sla.eigsh(S, a.k, M=B, sigma=sigma, which="LM", OPinv=op, tol=a.tol)
     else:
-        lam, X = sla.eigsh(S, a.k, M=B, sigma=sigma, which="LM")
+        route = "superlu"
+        lam, X = sla.eigsh(S, a.k, M=B, sigma=sigma, which="LM", tol=a.tol)
     secs = time.perf_counter() - t1
     order = np.argsort(lam)
     lam, X = lam[order], X[:, order]
@@ -116,8 +122,8 @@ def main():
     G = X.T @ (B @ X)
     orth = abs(G - np.eye(a.k)).max()
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    print(f"mesh={a.mesh} n={len(v)} k={a.k} route=scipy-{route} seconds={secs:.3f} assembly={t_ops:.3f} "
-          f"max_residual={res.max():.2e} orth_error={orth:.2e} lambda_k={lam[-1]:.6e} peak_rss_mib={peak:.0f}")
+    print(f"mesh={a.mesh} n={len(v)} k={a.k} route=scipy-{route} tol={a.tol:g} seconds={secs:.3f} assembly={t_ops:.3f} "
+          f"max_residual={res.max():.2e} orth_error={orth:.2e} lambda_k={lam[-1]:.12e} peak_rss_mib={peak:.0f}")
     if a.save:
         np.savez(a.save, eigenvalues=lam, eigenvectors=X)
 

@@ -114,7 +114,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         })?;
         println!(
-            "raw soft={raw_soft} krylov={raw_krylov} basis={raw_basis} n={} k={k} seconds={:.3} iterations={} solves={} max_residual={:.2e} lambda_k={:.6e} peak_rss_mib={:.0}",
+            "raw soft={raw_soft} krylov={raw_krylov} basis={raw_basis} n={} k={k} seconds={:.3} iterations={} solves={} max_residual={:.2e} lambda_k={:.12e} peak_rss_mib={:.0}",
             ops.n(),
             t1.elapsed().as_secs_f64(),
             r.iterations,
@@ -146,7 +146,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let maxres = basis.residuals.iter().cloned().fold(0.0, f64::max);
     let orth = basis.orthogonality_error();
     println!(
-        "mesh={} n={} k={} laplacian={} seconds={:.3} assembly={:.3} first_iter_at={:.3} iterations={} solves={} max_residual={:.2e} orth_error={:.2e} lambda_k={:.6e} peak_rss_mib={:.0}",
+        "mesh={} n={} k={} laplacian={} seconds={:.3} assembly={:.3} first_iter_at={:.3} iterations={} solves={} max_residual={:.2e} orth_error={:.2e} lambda_k={:.12e} peak_rss_mib={:.0}",
         path.display(),
         ops.n(),
         k,
