@@ -11,6 +11,12 @@ mod progress;
 
 use clap::{Parser, Subcommand};
 
+/// mimalloc keeps freed pages for reuse: the eigensolver and the web server allocate and
+/// free many large temporaries, which with the system allocator cost fresh, zeroed pages
+/// (page faults) every time.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 /// Harmonic maps, heat diffusion and filtered spectral distances on triangle meshes.
 ///
 /// MESH arguments take a file (OFF, OBJ, PLY, STL) or a built-in shape such as

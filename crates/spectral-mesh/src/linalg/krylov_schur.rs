@@ -604,7 +604,7 @@ pub(super) fn krylov_schur(
         }
         rrow = nr;
         qc = q;
-        if expansions % 2 == 0 {
+        if expansions.is_multiple_of(2) {
             progress(EigenProgress::Iteration {
                 iteration: expansions,
                 converged: nconv.min(k),
