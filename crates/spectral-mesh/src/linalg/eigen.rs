@@ -2,11 +2,17 @@
 //! `S x = lambda B x` with `S` symmetric positive semi-definite and `B` symmetric positive
 //! definite (sparse, diagonal or the identity).
 //!
-//! # Method: block Davidson with an exact shift-invert preconditioner
-//!
 //! `K = S - sigma B` with a small negative shift `sigma` (so `K` is positive definite even
-//! though `S` is singular) is factored once by sparse Cholesky. A search space `V`
-//! (`n x m`, `V^T B V = I`) grows by blocks of `p` vectors:
+//! though `S` is singular) is factored once by sparse Cholesky. Two iterations use it:
+//!
+//! - **Block Krylov-Schur** (the default, [`SparseAlgorithm::KrylovSchur`], in
+//!   `krylov_schur.rs`): thick-restart block Lanczos on `K^-1 B`, see that module.
+//! - **Block Davidson** ([`SparseAlgorithm::Davidson`], the earlier method, kept for
+//!   comparison), described below.
+//!
+//! # Block Davidson with an exact shift-invert preconditioner
+//!
+//! A search space `V` (`n x m`, `V^T B V = I`) grows by blocks of `p` vectors:
 //!
 //! 1. Rayleigh-Ritz on the pencil itself: `H = V^T S V` (kept up to date block by block),
 //!    `H y = theta y`, Ritz pairs `(theta, V y)`; residuals `r = S x - theta B x` are
@@ -21,11 +27,11 @@
 //!    decomposition of its Gram matrix, dropping dependent directions).
 //! 4. When `V` reaches its size limit it is restarted with its best Ritz vectors.
 //!
-//! Converged pairs form a prefix (soft locking). The iteration stops only when the first
-//! `k` pairs have converged **and** a converged Ritz value lies clearly above the `k`-th,
-//! so a cluster of (near-)repeated eigenvalues cut by `k` is always resolved completely
-//! before `k` pairs are returned. All heavy dense work (orthogonalization, Rayleigh-Ritz,
-//! Ritz vectors) is BLAS-3 through faer's parallel matrix product.
+//! Converged pairs form a prefix (soft locking). Both iterations stop only when the first
+//! `k` pairs have converged **and** a Ritz value lies clearly above the `k`-th, so a
+//! cluster of (near-)repeated eigenvalues cut by `k` is resolved completely before `k`
+//! pairs are returned. All heavy dense work (orthogonalization, Rayleigh-Ritz, Ritz
+//! vectors) is BLAS-3 through faer's matrix product, split over rows.
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
@@ -257,7 +263,28 @@ pub fn sym_spmm_into(a: &SparseMatrix, x: &[f64], c: usize, y: &mut [f64]) {
 /// row-major, then each row of `Y` is one gather of `C`-wide rows of `X`.
 fn spmm_group<const C: usize>(a: &SparseMatrix, x: &[f64], y: &mut [f64]) {
     let n = a.ncols();
-    let mut xr = vec![[0.0; C]; n];
+    SPMM_SCRATCH.with(|cell| {
+        let mut buf = cell.borrow_mut();
+        if buf.len() < n * C {
+            buf.resize(n * C, 0.0);
+        }
+        let (xr, _) = buf[..n * C].as_chunks_mut::<C>();
+        spmm_group_with::<C>(a, x, y, xr);
+    });
+}
+
+thread_local! {
+    /// Row-major copy of the input block of [`spmm_group`] on this thread (reused).
+    static SPMM_SCRATCH: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+fn spmm_group_with<const C: usize>(
+    a: &SparseMatrix,
+    x: &[f64],
+    y: &mut [f64],
+    xr: &mut [[f64; C]],
+) {
+    let n = a.ncols();
     xr.par_chunks_mut(LEAF_ROWS)
         .enumerate()
         .for_each(|(chunk, rows)| {
@@ -268,6 +295,7 @@ fn spmm_group<const C: usize>(a: &SparseMatrix, x: &[f64], y: &mut [f64]) {
                 }
             }
         });
+    let xr = &*xr;
     // Disjoint row ranges of every output column, one list per chunk.
     let nchunks = n.div_ceil(LEAF_ROWS);
     let mut parts: Vec<Vec<&mut [f64]>> = (0..nchunks).map(|_| Vec::with_capacity(C)).collect();

@@ -6,6 +6,7 @@ pub mod cholesky;
 pub mod dense_eigen;
 pub mod eigen;
 mod krylov_schur;
+mod scratch;
 pub mod sparse;
 
 pub use cholesky::{CholeskyError, SparseCholesky};

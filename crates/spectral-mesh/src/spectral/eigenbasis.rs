@@ -75,8 +75,8 @@ pub enum EigenMethod {
     Auto,
     /// All pairs by the dense O(n^3) solver, truncated to `k` (small meshes only).
     Dense,
-    /// Block Davidson with a sparse Cholesky shift-invert preconditioner
-    /// ([`crate::linalg::sparse_generalized_eigen`]).
+    /// The sparse shift-invert solver ([`crate::linalg::sparse_generalized_eigen`]: block
+    /// Krylov-Schur on a sparse Cholesky factorization of `S - sigma B`).
     ShiftInvertBlock,
 }
 
@@ -488,6 +488,75 @@ mod tests {
         }
         assert!(b.values[3] > 1.0);
         assert!(b.orthogonality_error() < 1e-10);
+    }
+
+    #[test]
+    fn multiplicities_larger_than_the_block_are_complete() {
+        // Three identical spheres: every eigenvalue has multiplicity 3 (2l + 1), up to 15
+        // here, with blocks of 4; the result must equal the dense one pair for pair.
+        let s = icosphere(2, 1.0);
+        let mesh = union(&[
+            (s.clone(), [0.0; 3]),
+            (s.clone(), [3.0, 0.0, 0.0]),
+            (s, [0.0, 3.0, 0.0]),
+        ]);
+        let ops = Operators::new(&mesh, Laplacian::Fem);
+        let k = 40;
+        let dense = compute_eigenbasis(
+            &ops,
+            &EigenParams {
+                k,
+                method: EigenMethod::Dense,
+                ..Default::default()
+            },
+            &mut |_| {},
+        )
+        .unwrap();
+        let it = compute_eigenbasis(
+            &ops,
+            &EigenParams {
+                block_size: 4,
+                ..iterative(k)
+            },
+            &mut |_| {},
+        )
+        .unwrap();
+        for j in 0..k {
+            assert!(
+                (it.values[j] - dense.values[j]).abs() <= 1e-9 * dense.values[k - 1],
+                "pair {j}: {} vs {}",
+                it.values[j],
+                dense.values[j]
+            );
+        }
+        assert!(it.orthogonality_error() < 1e-10);
+    }
+
+    #[test]
+    fn k_close_to_n_with_the_iterative_solver() {
+        // k = 600 of n = 642: the Krylov space fills the whole space.
+        let ops = Operators::new(&icosphere(3, 1.0), Laplacian::VoronoiCot);
+        check_against_dense(&ops, 600);
+    }
+
+    #[test]
+    fn davidson_and_krylov_schur_agree() {
+        use crate::linalg::{SparseAlgorithm, SparseEigenOptions, sparse_generalized_eigen};
+        let ops = Operators::new(&disk(12), Laplacian::Fem);
+        let run = |algorithm| {
+            let o = SparseEigenOptions {
+                k: 25,
+                algorithm,
+                ..Default::default()
+            };
+            sparse_generalized_eigen(&ops.stiffness, &ops.mass, &o, &mut |_| {}).unwrap()
+        };
+        let a = run(SparseAlgorithm::KrylovSchur);
+        let b = run(SparseAlgorithm::Davidson);
+        for j in 0..25 {
+            assert!((a.values[j] - b.values[j]).abs() <= 1e-9 * a.values[24]);
+        }
+        assert!(a.residuals.iter().all(|&r| r <= 1e-10));
     }
 
     #[test]
