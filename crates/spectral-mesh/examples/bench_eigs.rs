@@ -1,6 +1,6 @@
 //! Benchmark of the eigenbasis engine.
 //!
-//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P]`
+//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P] [--basis M] [--davidson]`
 //!
 //! Prints one line of `key=value` pairs: n, k, seconds (assembly excluded, factorization
 //! included), iterations, solves, max residual, orthogonality error, peak RSS.
@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use spectral_mesh::Operators;
 use spectral_mesh::io::read_mesh;
-use spectral_mesh::linalg::{SparseEigenOptions, sparse_generalized_eigen};
+use spectral_mesh::linalg::{SparseAlgorithm, SparseEigenOptions, sparse_generalized_eigen};
 use spectral_mesh::operators::Laplacian;
 use spectral_mesh::spectral::eigenbasis::{
     EigenMethod, EigenParams, EigenProgress, compute_eigenbasis,
@@ -55,6 +55,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut verbose = false;
     let mut raw_soft = false;
     let mut raw_krylov = false;
+    let mut raw_davidson = false;
     let mut raw_basis = 0usize;
     let mut i = 2;
     while i < args.len() {
@@ -82,6 +83,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             "--soft" => raw_soft = true,
             "--krylov" => raw_krylov = true,
+            "--davidson" => raw_davidson = true,
             "--basis" => {
                 raw_basis = args[i + 1].parse()?;
                 i += 1;
@@ -98,15 +100,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut iterations = 0;
     let mut solves = 0;
     let mut t_fact = 0.0;
-    if raw_soft || raw_krylov || raw_basis > 0 {
+    if raw_soft || raw_krylov || raw_davidson || raw_basis > 0 {
         // Solver experiments: call the sparse solver directly.
         let opts = SparseEigenOptions {
             k,
             tolerance: params.tolerance,
             block_size: params.block_size,
             max_basis: raw_basis,
-            locking: !raw_soft && !raw_krylov,
+            locking: false,
             krylov: raw_krylov,
+            algorithm: if raw_soft || raw_krylov || raw_davidson {
+                SparseAlgorithm::Davidson
+            } else {
+                SparseAlgorithm::KrylovSchur
+            },
             ..Default::default()
         };
         let r = sparse_generalized_eigen(&ops.stiffness, &ops.mass, &opts, &mut |e| {
@@ -115,7 +122,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         })?;
         println!(
-            "raw soft={raw_soft} krylov={raw_krylov} basis={raw_basis} n={} k={k} seconds={:.3} iterations={} solves={} max_residual={:.2e} lambda_k={:.12e} peak_rss_mib={:.0}",
+            "raw davidson={} soft={raw_soft} krylov={raw_krylov} basis={raw_basis} n={} k={k} seconds={:.3} iterations={} solves={} max_residual={:.2e} lambda_k={:.12e} peak_rss_mib={:.0}",
+            raw_soft || raw_krylov || raw_davidson,
             ops.n(),
             t1.elapsed().as_secs_f64(),
             r.iterations,
