@@ -713,7 +713,9 @@ pub fn sparse_generalized_eigen(
             },
         };
         let mut rng = Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
-        return super::krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
+        let out = super::krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
+        super::scratch::release();
+        return out;
     }
 
     // Sizes.

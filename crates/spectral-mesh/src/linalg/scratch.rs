@@ -10,6 +10,10 @@ thread_local! {
 
 /// Buffers kept per thread at most.
 const KEEP: usize = 8;
+/// Entries kept per thread at most (64 MiB of f64): returns beyond that are freed. The
+/// solver also calls [`release`] on its own thread when it ends; rayon's worker threads keep
+/// at most this much each.
+const KEEP_ENTRIES: usize = 8 << 20;
 
 /// A zeroed buffer of `len` entries, reusing a returned one when possible.
 pub(crate) fn take(len: usize) -> Vec<f64> {
@@ -41,6 +45,10 @@ pub(crate) fn take(len: usize) -> Vec<f64> {
 pub(crate) fn give(v: Vec<f64>) {
     POOL.with(|p| {
         let mut p = p.borrow_mut();
+        let held: usize = p.iter().map(|b| b.capacity()).sum();
+        if held + v.capacity() > KEEP_ENTRIES {
+            return;
+        }
         if p.len() < KEEP {
             p.push(v);
         } else if let Some(small) = p
@@ -51,6 +59,12 @@ pub(crate) fn give(v: Vec<f64>) {
             *small = v;
         }
     });
+}
+
+/// Frees this thread's buffers (called when a solve ends, so that a long-running process
+/// such as the web server does not hold them).
+pub(crate) fn release() {
+    POOL.with(|p| p.borrow_mut().clear());
 }
 
 #[cfg(test)]
@@ -68,5 +82,13 @@ mod tests {
         assert_eq!(b.len(), 500);
         assert!(b.iter().all(|&x| x == 0.0));
         assert_eq!(b.as_ptr(), ptr, "the returned buffer is reused");
+        give(b);
+        release();
+        let c = take(10);
+        assert_ne!(
+            c.capacity(),
+            1000,
+            "released buffers are not handed out again"
+        );
     }
 }
