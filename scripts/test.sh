@@ -22,6 +22,14 @@ step() {
   fi
 }
 
+# A clean build needs a few GB (debug + release targets, the Python venv, Chromium). A
+# full disk otherwise shows up as a linker crash ("Bus error") deep in cargo test.
+free_kb=$(df -Pk . | awk 'NR==2 {print $4}')
+echo "disk: $((free_kb / 1024)) MiB free in $root"
+if [ "${free_kb:-0}" -lt $((6 * 1024 * 1024)) ]; then
+  echo "warning: less than 6 GiB free; the build may fail with 'No space left on device'" >&2
+fi
+
 if [ -n "${SPECTRAL_MESH_SHARED_MESHES:-}" ] && [ ! -d "$SPECTRAL_MESH_SHARED_MESHES" ]; then
   echo "SPECTRAL_MESH_SHARED_MESHES=$SPECTRAL_MESH_SHARED_MESHES is not a folder" >&2
   exit 1
@@ -50,6 +58,7 @@ done
 step "web app end-to-end (headless Chromium)" bash web/e2e/run.sh
 
 echo
+echo "disk: target folder $(du -sh target 2>/dev/null | cut -f1), $(($(df -Pk . | awk 'NR==2 {print $4}') / 1024)) MiB free"
 if [ "$failed" -gt 0 ]; then
   printf 'failed step: %s\n' "${failures[@]}"
 fi
