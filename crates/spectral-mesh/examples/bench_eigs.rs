@@ -1,6 +1,6 @@
 //! Benchmark of the eigenbasis engine.
 //!
-//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P] [--basis M] [--davidson]`
+//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P] [--basis M] [--davidson] [--ks-plain]`
 //!
 //! Prints one line of `key=value` pairs: n, k, seconds (assembly excluded, factorization
 //! included), iterations, solves, max residual, orthogonality error, peak RSS.
@@ -57,6 +57,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut raw_krylov = false;
     let mut raw_davidson = false;
     let mut raw_basis = 0usize;
+    let mut raw_plain = false;
     let mut i = 2;
     while i < args.len() {
         match args[i].as_str() {
@@ -84,6 +85,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--soft" => raw_soft = true,
             "--krylov" => raw_krylov = true,
             "--davidson" => raw_davidson = true,
+            "--ks-plain" => raw_plain = true,
             "--basis" => {
                 raw_basis = args[i + 1].parse()?;
                 i += 1;
@@ -100,7 +102,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut iterations = 0;
     let mut solves = 0;
     let mut t_fact = 0.0;
-    if raw_soft || raw_krylov || raw_davidson || raw_basis > 0 {
+    if raw_soft || raw_krylov || raw_davidson || raw_plain || raw_basis > 0 {
         // Solver experiments: call the sparse solver directly.
         let opts = SparseEigenOptions {
             k,
@@ -109,6 +111,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             max_basis: raw_basis,
             locking: false,
             krylov: raw_krylov,
+            ks_plain: raw_plain,
             algorithm: if raw_soft || raw_krylov || raw_davidson {
                 SparseAlgorithm::Davidson
             } else {
@@ -122,7 +125,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         })?;
         println!(
-            "raw davidson={} soft={raw_soft} krylov={raw_krylov} basis={raw_basis} n={} k={k} seconds={:.3} iterations={} solves={} max_residual={:.2e} lambda_k={:.12e} peak_rss_mib={:.0}",
+            "raw davidson={} soft={raw_soft} krylov={raw_krylov} ks_plain={raw_plain} basis={raw_basis} n={} k={k} seconds={:.3} iterations={} solves={} max_residual={:.2e} lambda_k={:.12e} peak_rss_mib={:.0}",
             raw_soft || raw_krylov || raw_davidson,
             ops.n(),
             t1.elapsed().as_secs_f64(),
