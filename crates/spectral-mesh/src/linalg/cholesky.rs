@@ -53,11 +53,6 @@ pub struct SparseCholesky {
     row_idx: Vec<usize>,
 }
 
-thread_local! {
-    /// Row-major right-hand-side block of the solves on this thread.
-    static SCRATCH: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
-}
-
 /// Runtime SIMD dispatch of [`Supernodes::solve_rows`] (AVX2/AVX-512 when available).
 struct SolveOp<'a, const C: usize> {
     sn: &'a Supernodes,
@@ -247,28 +242,25 @@ impl Supernodes {
 
     /// Solves for `C` column-major columns of `b` (`n` rows each) in place.
     fn solve_cols<const C: usize>(&self, vals: &[f64], b: &mut [f64], n: usize) {
-        // A per-thread scratch block, reused across solves (fresh large allocations cost
-        // page faults on every call).
-        SCRATCH.with(|cell| {
-            let mut buf = cell.borrow_mut();
-            if buf.len() < n * C {
-                buf.resize(n * C, 0.0);
+        // The row-major block comes from the per-thread scratch pool (fresh large
+        // allocations cost page faults on every call; the pool is capped and released
+        // when an eigensolve ends).
+        let mut buf = super::scratch::take(n * C);
+        let (x, _) = buf.as_chunks_mut::<C>();
+        for (i, row) in x.iter_mut().enumerate() {
+            let src = self.fwd[i];
+            for (q, v) in row.iter_mut().enumerate() {
+                *v = b[q * n + src];
             }
-            let (x, _) = buf[..n * C].as_chunks_mut::<C>();
-            for (i, row) in x.iter_mut().enumerate() {
-                let src = self.fwd[i];
-                for (q, v) in row.iter_mut().enumerate() {
-                    *v = b[q * n + src];
-                }
+        }
+        pulp::Arch::new().dispatch(SolveOp { sn: self, vals, x });
+        for (i, row) in x.iter().enumerate() {
+            let dst = self.fwd[i];
+            for (q, v) in row.iter().enumerate() {
+                b[q * n + dst] = *v;
             }
-            pulp::Arch::new().dispatch(SolveOp { sn: self, vals, x });
-            for (i, row) in x.iter().enumerate() {
-                let dst = self.fwd[i];
-                for (q, v) in row.iter().enumerate() {
-                    b[q * n + dst] = *v;
-                }
-            }
-        });
+        }
+        super::scratch::give(buf);
     }
 
     /// Solves for any number of column-major columns, 8 (then 4, 2, 1) at a time.

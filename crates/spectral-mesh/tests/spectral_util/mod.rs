@@ -19,77 +19,10 @@ impl Lcg {
     }
 }
 
-fn normalize(p: [f64; 3]) -> [f64; 3] {
-    let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-    [p[0] / r, p[1] / r, p[2] / r]
-}
-
-/// Icosphere of radius 1 with `level` subdivisions (12, 42, 162, 642 vertices).
+/// Icosphere of radius 1 with `level` subdivisions (12, 42, 162, 642 vertices): the
+/// library's built-in `sphere:res=level`.
 pub fn icosphere(level: usize) -> Mesh {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut pos: Vec<[f64; 3]> = vec![
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ]
-    .into_iter()
-    .map(normalize)
-    .collect();
-    let mut tris: Vec<[usize; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..level {
-        let mut mid = std::collections::HashMap::new();
-        let mut next = Vec::with_capacity(tris.len() * 4);
-        let mut m = |a: usize, b: usize, pos: &mut Vec<[f64; 3]>| -> usize {
-            let key = (a.min(b), a.max(b));
-            *mid.entry(key).or_insert_with(|| {
-                let (p, q) = (pos[a], pos[b]);
-                pos.push(normalize([
-                    (p[0] + q[0]) / 2.0,
-                    (p[1] + q[1]) / 2.0,
-                    (p[2] + q[2]) / 2.0,
-                ]));
-                pos.len() - 1
-            })
-        };
-        for [a, b, c] in tris {
-            let ab = m(a, b, &mut pos);
-            let bc = m(b, c, &mut pos);
-            let ca = m(c, a, &mut pos);
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        tris = next;
-    }
-    Mesh::new(pos, tris).unwrap()
+    spectral_mesh::shapes::build_str(&format!("sphere:res={level}")).unwrap()
 }
 
 /// Torus grid with `nu x nv` vertices, radii `big` and `small`, optionally jittered.
