@@ -738,9 +738,9 @@ pub fn sparse_generalized_eigen(
         let mut rng = Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
         let mut out = super::krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
         if !opts.ks_plain && matches!(out, Err(SparseEigenError::NoConvergence { .. })) {
-            // Locking is the one place where an early decision is never revisited: run
-            // once more as the plain iteration (no locking, two full Gram-Schmidt passes)
-            // before reporting a failure.
+            // A locked pair is never revisited, and the single full pass trusts the
+            // Krylov relation: before reporting a failure, run once more as the plain
+            // iteration (no locking, two full Gram-Schmidt passes).
             sizes.lock = false;
             sizes.local = false;
             let mut rng = Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);

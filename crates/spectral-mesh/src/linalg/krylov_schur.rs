@@ -27,14 +27,15 @@
 //! accuracy of the solves or of the Krylov relation. The eigenvalues returned are the
 //! Rayleigh quotients `x^T S x / x^T B x`.
 //!
-//! Converged pairs are locked: once a Ritz pair of the converged prefix has a residual
-//! estimate below a tenth of the tolerance, its vector stays at the front of `V`, is no
-//! longer rotated at restarts nor part of the projected eigenproblem, and its coupling to
-//! later blocks (of the size of its residual) is dropped from `T`; new blocks are still
-//! orthogonalized against it (alone, about 10% less time at k = 500 on 26k vertices;
-//! with the Lanczos step, 1.7x). The final check
-//! on the true residuals covers locked pairs too; should one fail, the caller runs the
-//! plain iteration (no locking, two full passes) instead.
+//! Converged pairs are locked (when [`Sizes::lock`] is set; the caller sets it from
+//! k = 100): once a Ritz pair of the converged prefix has a residual estimate below a
+//! tenth of the tolerance, its vector stays at the front of `V`, is no longer rotated at
+//! restarts nor part of the projected eigenproblem, and its coupling to later blocks (of
+//! the size of its residual) is dropped from `T`; new blocks are still orthogonalized
+//! against it. Measured at k = 500 on 26k vertices: locking alone saves about 10% of the
+//! time, locking with the Lanczos step 1.7x. The final check on the true residuals covers
+//! locked pairs too; should one fail, the caller runs the plain iteration (no locking,
+//! two full passes) instead.
 //!
 //! Directions that become numerically dependent (an invariant subspace was found, or `k`
 //! is close to `n`) are replaced by random directions (Op applied to random vectors) B-orthogonal to the basis, so
