@@ -102,6 +102,23 @@ fn col_dots(w: &[f64], bw: &[f64], n: usize, c: usize) -> Vec<f64> {
         .collect()
 }
 
+/// `B W` for the `c` columns of `w`, in a scratch buffer; `given`, when it already holds
+/// `B W` (right size), is used instead (saves one sparse product), and a buffer of the
+/// wrong size is handed back to the pool.
+fn b_times(b: &SparseMatrix, w: &[f64], n: usize, c: usize, given: Option<Vec<f64>>) -> Vec<f64> {
+    match given {
+        Some(bw) if bw.len() == n * c => bw,
+        other => {
+            if let Some(o) = other {
+                scratch::give(o);
+            }
+            let mut bw = scratch::take(n * c);
+            sym_spmm_into(b, &w[..n * c], c, &mut bw);
+            bw
+        }
+    }
+}
+
 /// One classical Gram-Schmidt pass: `W -= V (V^T B W)`; returns `V^T B W`. `bw_given`,
 /// when present, is `B W` (saves one sparse product; handed back to the scratch pool).
 fn project_once(
@@ -119,17 +136,7 @@ fn project_once(
         }
         return Mat::zeros(j, c);
     }
-    let bw = match bw_given {
-        Some(bw) if bw.len() == n * c => bw,
-        other => {
-            if let Some(o) = other {
-                scratch::give(o);
-            }
-            let mut bw = scratch::take(n * c);
-            sym_spmm_into(b, &w[..n * c], c, &mut bw);
-            bw
-        }
-    };
+    let bw = b_times(b, w, n, c, bw_given);
     let coef = gram(&v[..n * j], &bw, n, j, c);
     scratch::give(bw);
     sub_product(&mut w[..n * c], v, coef.as_ref(), n);
@@ -161,17 +168,7 @@ fn svqb_r(
         if cur == 0 || !again {
             break;
         }
-        let bw = match bw_given.take() {
-            Some(bw) if bw.len() == n * cur => bw,
-            other => {
-                if let Some(o) = other {
-                    scratch::give(o);
-                }
-                let mut bw = scratch::take(n * cur);
-                sym_spmm_into(b, &w[..n * cur], cur, &mut bw);
-                bw
-            }
-        };
+        let bw = b_times(b, w, n, cur, bw_given.take());
         let mut g = gram(&w[..n * cur], &bw, n, cur, cur);
         if pass == 0 {
             min_diag = (0..cur).map(|i| g[(i, i)]).fold(f64::INFINITY, f64::min);
@@ -271,8 +268,7 @@ fn orthonormalize(
 ) -> Result<(Mat<f64>, Mat<f64>, usize), SparseEigenError> {
     let (basis, rest) = v.split_at_mut(n * j);
     let w = &mut rest[..n * c];
-    let mut bw = scratch::take(n * c);
-    sym_spmm_into(b, w, c, &mut bw);
+    let bw = b_times(b, w, n, c, None);
     let pre = col_dots(w, &bw, n, c);
     let pre_max = pre.iter().cloned().fold(0.0, f64::max);
     if !pre_max.is_finite() {
@@ -310,8 +306,7 @@ fn orthonormalize(
                 coef[(r0 + i, cc)] += cl[(i, cc)];
             }
         }
-        let mut bw1 = scratch::take(n * c);
-        sym_spmm_into(b, w, c, &mut bw1);
+        let bw1 = b_times(b, w, n, c, None);
         let pre1 = col_dots(w, &bw1, n, c);
         let c2 = gram(&basis[..n * j], &bw1, n, j, c);
         scratch::give(bw1);
@@ -327,8 +322,7 @@ fn orthonormalize(
         }
     } else if j > 0 {
         coef += project_once(w, basis, n, j, c, b, bw_now.take());
-        let mut bw1 = scratch::take(n * c);
-        sym_spmm_into(b, w, c, &mut bw1);
+        let bw1 = b_times(b, w, n, c, None);
         let after = col_dots(w, &bw1, n, c);
         let lost = after
             .iter()
