@@ -102,7 +102,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut iterations = 0;
     let mut solves = 0;
     let mut t_fact = 0.0;
-    if raw_soft || raw_krylov || raw_davidson || raw_plain || raw_basis > 0 {
+    let davidson = raw_soft || raw_krylov || raw_davidson;
+    if davidson || raw_plain || raw_basis > 0 {
         // Solver experiments: call the sparse solver directly.
         let opts = SparseEigenOptions {
             k,
@@ -112,7 +113,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             locking: false,
             krylov: raw_krylov,
             ks_plain: raw_plain,
-            algorithm: if raw_soft || raw_krylov || raw_davidson {
+            algorithm: if davidson {
                 SparseAlgorithm::Davidson
             } else {
                 SparseAlgorithm::KrylovSchur
@@ -125,8 +126,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         })?;
         println!(
-            "raw davidson={} soft={raw_soft} krylov={raw_krylov} ks_plain={raw_plain} basis={raw_basis} n={} k={k} seconds={:.3} iterations={} solves={} max_residual={:.2e} lambda_k={:.12e} peak_rss_mib={:.0}",
-            raw_soft || raw_krylov || raw_davidson,
+            "raw davidson={davidson} soft={raw_soft} krylov={raw_krylov} ks_plain={raw_plain} basis={raw_basis} n={} k={k} seconds={:.3} iterations={} solves={} max_residual={:.2e} lambda_k={:.12e} peak_rss_mib={:.0}",
             ops.n(),
             t1.elapsed().as_secs_f64(),
             r.iterations,

@@ -693,6 +693,9 @@ pub fn sparse_generalized_eigen(
     }
     let chol = chol.ok_or(SparseEigenError::Factorization(last_err))?;
 
+    // The random start of every iteration (and of a rerun) comes from the same seed.
+    let start_rng = || Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
+
     if opts.algorithm == SparseAlgorithm::KrylovSchur {
         let bs = if opts.block_size > 0 {
             opts.block_size
@@ -735,7 +738,7 @@ pub fn sparse_generalized_eigen(
             lock: !opts.ks_plain && k >= 100,
             local: !opts.ks_plain,
         };
-        let mut rng = Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
+        let mut rng = start_rng();
         let mut out = super::krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
         if !opts.ks_plain && matches!(out, Err(SparseEigenError::NoConvergence { .. })) {
             // A locked pair is never revisited, and the single full pass trusts the
@@ -743,7 +746,7 @@ pub fn sparse_generalized_eigen(
             // iteration (no locking, two full Gram-Schmidt passes).
             sizes.lock = false;
             sizes.local = false;
-            let mut rng = Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
+            let mut rng = start_rng();
             out = super::krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
         }
         super::scratch::release();
@@ -769,7 +772,7 @@ pub fn sparse_generalized_eigen(
         200 + 40 * k.div_ceil(p)
     };
 
-    let mut rng = Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
+    let mut rng = start_rng();
     if opts.locking && !opts.krylov {
         let ctx = Ctx {
             s,
