@@ -680,7 +680,7 @@ pub fn sparse_generalized_eigen(
     for _ in 0..5 {
         progress(EigenProgress::Factorization { n, shift });
         let kmat = s.add_scaled(1.0, b, -shift);
-        match SparseCholesky::new(&kmat) {
+        match super::timing::timed(super::timing::Phase::Factor, || SparseCholesky::new(&kmat)) {
             Ok(c) => {
                 chol = Some(c);
                 break;

@@ -49,6 +49,7 @@ use super::eigen::{
     EigenProgress, LEAF_ROWS, PartialEigen, Rng, SparseEigenError, gram, package, residuals_from,
     sub_product, sym_eig, sym_spmm, sym_spmm_into,
 };
+use super::timing::{Phase, timed};
 use super::{SparseCholesky, SparseMatrix, scratch};
 
 /// The factored problem the iteration works on.
@@ -136,10 +137,15 @@ fn project_once(
         }
         return Mat::zeros(j, c);
     }
-    let bw = b_times(b, w, n, c, bw_given);
-    let coef = gram(&v[..n * j], &bw, n, j, c);
-    scratch::give(bw);
-    sub_product(&mut w[..n * c], v, coef.as_ref(), n);
+    let coef = timed(Phase::Gram, || {
+        let bw = b_times(b, w, n, c, bw_given);
+        let coef = gram(&v[..n * j], &bw, n, j, c);
+        scratch::give(bw);
+        coef
+    });
+    timed(Phase::Update, || {
+        sub_product(&mut w[..n * c], v, coef.as_ref(), n)
+    });
     coef
 }
 
@@ -268,8 +274,11 @@ fn orthonormalize(
 ) -> Result<(Mat<f64>, Mat<f64>, usize), SparseEigenError> {
     let (basis, rest) = v.split_at_mut(n * j);
     let w = &mut rest[..n * c];
-    let bw = b_times(b, w, n, c, None);
-    let pre = col_dots(w, &bw, n, c);
+    let (bw, pre) = timed(Phase::Norms, || {
+        let bw = b_times(b, w, n, c, None);
+        let pre = col_dots(w, &bw, n, c);
+        (bw, pre)
+    });
     let pre_max = pre.iter().cloned().fold(0.0, f64::max);
     if !pre_max.is_finite() {
         return Err(SparseEigenError::NonFinite);
@@ -289,28 +298,33 @@ fn orthonormalize(
         // all of V (with a second when it still removed much: DGKS).
         let q0 = j - c;
         let bw0 = bw_now.take().unwrap_or_default();
-        let a = gram(&basis[n * q0..n * j], &bw0, n, c, c);
-        scratch::give(bw0);
-        let mut cl = Mat::<f64>::zeros(j - r0, c);
-        for cc in 0..c {
-            for i in 0..q0 - r0 {
-                cl[(i, cc)] = known[(i, cc)];
+        timed(Phase::Local, || {
+            let a = gram(&basis[n * q0..n * j], &bw0, n, c, c);
+            scratch::give(bw0);
+            let mut cl = Mat::<f64>::zeros(j - r0, c);
+            for cc in 0..c {
+                for i in 0..q0 - r0 {
+                    cl[(i, cc)] = known[(i, cc)];
+                }
+                for i in 0..c {
+                    cl[(q0 - r0 + i, cc)] = a[(i, cc)];
+                }
             }
-            for i in 0..c {
-                cl[(q0 - r0 + i, cc)] = a[(i, cc)];
+            sub_product(w, &basis[n * r0..], cl.as_ref(), n);
+            for cc in 0..c {
+                for i in 0..j - r0 {
+                    coef[(r0 + i, cc)] += cl[(i, cc)];
+                }
             }
-        }
-        sub_product(w, &basis[n * r0..], cl.as_ref(), n);
-        for cc in 0..c {
-            for i in 0..j - r0 {
-                coef[(r0 + i, cc)] += cl[(i, cc)];
-            }
-        }
-        let bw1 = b_times(b, w, n, c, None);
-        let pre1 = col_dots(w, &bw1, n, c);
-        let c2 = gram(&basis[..n * j], &bw1, n, j, c);
-        scratch::give(bw1);
-        sub_product(w, basis, c2.as_ref(), n);
+        });
+        let (pre1, c2) = timed(Phase::Gram, || {
+            let bw1 = b_times(b, w, n, c, None);
+            let pre1 = col_dots(w, &bw1, n, c);
+            let c2 = gram(&basis[..n * j], &bw1, n, j, c);
+            scratch::give(bw1);
+            (pre1, c2)
+        });
+        timed(Phase::Update, || sub_product(w, basis, c2.as_ref(), n));
         // Squared B-norms left (V is B-orthonormal): pre1 - sum_i c2_i^2.
         let lost = (0..c).any(|cc| {
             let removed: f64 = (0..j).map(|i| c2[(i, cc)] * c2[(i, cc)]).sum();
@@ -322,7 +336,7 @@ fn orthonormalize(
         }
     } else if j > 0 {
         coef += project_once(w, basis, n, j, c, b, bw_now.take());
-        let bw1 = b_times(b, w, n, c, None);
+        let bw1 = timed(Phase::Gram, || b_times(b, w, n, c, None));
         let after = col_dots(w, &bw1, n, c);
         let lost = after
             .iter()
@@ -337,7 +351,7 @@ fn orthonormalize(
             bw_now = Some(bw1);
         }
     }
-    let (kept, rq, min_diag) = svqb_r(w, n, c, b, 1e-20 * pre_max, bw_now)?;
+    let (kept, rq, min_diag) = timed(Phase::Svqb, || svqb_r(w, n, c, b, 1e-20 * pre_max, bw_now))?;
     let mut r = rq;
     let mut cur = kept;
     if j > 0 && cur > 0 && min_diag < 1e-6 * pre_max {
@@ -530,6 +544,7 @@ pub(super) fn krylov_schur(
     // then in the range of Op, whose high-frequency components are damped by
     // theta ~ 1 / lambda: a random start would leave white noise in the Ritz vectors that
     // the residual of S (weighted by lambda_max) sees but the residual of Op does not.
+    let start = std::time::Instant::now();
     let mut w: Vec<f64> = (0..n * bs).map(|_| rng.next_f64()).collect();
     let mut bw = sym_spmm(b, &w, bs);
     chol.solve_many_in_place(&mut bw, bs);
@@ -540,6 +555,7 @@ pub(super) fn krylov_schur(
     let (_, _, mut qc) = orthonormalize(&mut v, n, 0, bs, b, chol, rng, &mut solves, None)?;
     // Op V = V T + Q R_row (Q the pending block, R_row its coupling, qc x j).
     let mut rrow = Mat::<f64>::zeros(qc, 0);
+    super::timing::add(Phase::Start, start.elapsed());
     let mut restarts = 0usize;
 
     // Locked pairs: the first `nl` columns of V are converged Ritz vectors, decoupled
@@ -560,7 +576,7 @@ pub(super) fn krylov_schur(
                     tm[(r, c)] = 0.5 * (t[(nl + r, nl + c)] + t[(nl + c, nl + r)]);
                 }
             }
-            let (theta_asc, y_asc) = sym_eig(tm.as_ref())?;
+            let (theta_asc, y_asc) = timed(Phase::Eig, || sym_eig(tm.as_ref()))?;
             // Descending theta = ascending lambda.
             let theta_a: Vec<f64> = theta_asc.iter().rev().cloned().collect();
             let mut y = Mat::<f64>::zeros(ma, ma);
@@ -594,23 +610,27 @@ pub(super) fn krylov_schur(
                     Par::Seq,
                 );
             }
-            let gz = if qc > 0 {
-                let q = &v[n * m..n * (m + qc)];
-                let mut z = sym_spmm(s, q, qc);
-                let bq = sym_spmm(b, q, qc);
-                for (zi, bi) in z.iter_mut().zip(&bq) {
-                    *zi -= pb.shift * bi;
+            let gz = timed(Phase::Estimate, || {
+                if qc > 0 {
+                    let q = &v[n * m..n * (m + qc)];
+                    let mut z = sym_spmm(s, q, qc);
+                    let bq = sym_spmm(b, q, qc);
+                    for (zi, bi) in z.iter_mut().zip(&bq) {
+                        *zi -= pb.shift * bi;
+                    }
+                    gram(&z, &z, n, qc, qc)
+                } else {
+                    Mat::<f64>::zeros(0, 0)
                 }
-                gram(&z, &z, n, qc, qc)
-            } else {
-                Mat::<f64>::zeros(0, 0)
-            };
-            rotate_in_place(
-                &mut v[n * nl..],
-                n,
-                ma,
-                y.as_ref().submatrix(0, 0, ma, keep_a),
-            );
+            });
+            timed(Phase::Rotate, || {
+                rotate_in_place(
+                    &mut v[n * nl..],
+                    n,
+                    ma,
+                    y.as_ref().submatrix(0, 0, ma, keep_a),
+                )
+            });
             let theta_all: Vec<f64> = (0..nl)
                 .map(|c| t[(c, c)])
                 .chain(theta_a[..keep_a].iter().cloned())
@@ -682,7 +702,7 @@ pub(super) fn krylov_schur(
                 let nres = end.unwrap_or(k).max(k).min(total);
                 let cols = &ord[..nres];
                 let fallback: Vec<f64> = cols.iter().map(|&c| lam_est[c]).collect();
-                let (lam, res) = true_residuals(pb, &v, cols, &fallback);
+                let (lam, res) = timed(Phase::Residual, || true_residuals(pb, &v, cols, &fallback));
                 if res.iter().any(|r| !r.is_finite()) {
                     return Err(SparseEigenError::NonFinite);
                 }
@@ -704,6 +724,7 @@ pub(super) fn krylov_schur(
                         residuals.push(res[p]);
                     }
                     drop(v);
+                    super::timing::report();
                     return Ok(package(
                         b,
                         (values, vectors, residuals),
@@ -777,8 +798,10 @@ pub(super) fn krylov_schur(
         {
             let (done, rest) = v.split_at_mut(n * j);
             let w = &mut rest[..n * c];
-            sym_spmm_into(b, &done[n * j0..n * j], c, w);
-            chol.solve_many_in_place(w, c);
+            timed(Phase::Op, || {
+                sym_spmm_into(b, &done[n * j0..n * j], c, w);
+                chol.solve_many_in_place(w, c);
+            });
         }
         solves += c;
         expansions += 1;

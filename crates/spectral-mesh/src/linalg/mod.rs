@@ -8,6 +8,7 @@ pub mod eigen;
 mod krylov_schur;
 mod scratch;
 pub mod sparse;
+mod timing;
 
 pub use cholesky::{CholeskyError, SparseCholesky};
 pub use dense_eigen::{DenseEigenError, dense_generalized_eigen};

@@ -1,0 +1,87 @@
+//! Phase timings of the sparse eigensolver, for tuning: with the environment variable
+//! `SPECTRAL_MESH_EIG_TIMINGS=1`, the wall seconds spent in each phase are summed and
+//! printed to stderr when a solve ends. Off by default (one cached flag test per phase).
+
+use std::sync::OnceLock;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+/// The phases that are timed.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Phase {
+    /// Symbolic and numeric factorization of `S - sigma B`.
+    Factor,
+    /// `Op Q = K^-1 B Q`: the sparse product and the multi-right-hand-side solve.
+    Op,
+    /// The Lanczos step (known coefficients, `Q^T B W`).
+    Local,
+    /// Gram products `V^T B W` of the full passes (with the `B W` they need).
+    Gram,
+    /// Updates `W -= V C` of the full passes.
+    Update,
+    /// SVQB within the new block.
+    Svqb,
+    /// Projected eigenproblems at restarts.
+    Eig,
+    /// Ritz vectors `V Y` at restarts.
+    Rotate,
+    /// Residual estimates at restarts (`K Q` and its Gram matrix).
+    Estimate,
+    /// True residuals of the candidate pairs.
+    Residual,
+    /// The start block (random, `Op` applied, orthonormalized).
+    Start,
+    /// `B W` and the column norms of a new block before its orthogonalization.
+    Norms,
+}
+
+const NAMES: [&str; 12] = [
+    "factor", "op", "local", "gram", "update", "svqb", "eig", "rotate", "estimate", "residual",
+    "start", "norms",
+];
+
+static TOTALS: [AtomicU64; 12] = [const { AtomicU64::new(0) }; 12];
+
+fn enabled() -> bool {
+    static ON: OnceLock<bool> = OnceLock::new();
+    *ON.get_or_init(|| {
+        std::env::var("SPECTRAL_MESH_EIG_TIMINGS").is_ok_and(|v| !v.is_empty() && v != "0")
+    })
+}
+
+/// Runs `f`, adding its wall time to `phase` when timings are on.
+#[inline]
+pub(super) fn timed<R>(phase: Phase, f: impl FnOnce() -> R) -> R {
+    if !enabled() {
+        return f();
+    }
+    let t = Instant::now();
+    let r = f();
+    let ns = u64::try_from(t.elapsed().as_nanos()).unwrap_or(u64::MAX);
+    TOTALS[phase as usize].fetch_add(ns, Ordering::Relaxed);
+    r
+}
+
+/// Adds a measured duration to `phase` (when timings are on).
+pub(super) fn add(phase: Phase, d: std::time::Duration) {
+    if enabled() {
+        let ns = u64::try_from(d.as_nanos()).unwrap_or(u64::MAX);
+        TOTALS[phase as usize].fetch_add(ns, Ordering::Relaxed);
+    }
+}
+
+/// Prints and resets the totals (when timings are on).
+pub(super) fn report() {
+    if !enabled() {
+        return;
+    }
+    let parts: Vec<String> = NAMES
+        .iter()
+        .zip(&TOTALS)
+        .map(|(name, t)| {
+            let s = t.swap(0, Ordering::Relaxed) as f64 * 1e-9;
+            format!("{name}={s:.3}")
+        })
+        .collect();
+    eprintln!("eig timings (s): {}", parts.join(" "));
+}
