@@ -255,6 +255,16 @@ fn svqb_r(
     Ok((cur, r, min_diag))
 }
 
+/// What a Lanczos step needs to know about a new block `W = Op Q` (see [`orthonormalize`]).
+struct LanczosStep {
+    /// First column of `V` with a known nonzero coefficient.
+    r0: usize,
+    /// The known coefficients on columns `r0..j - c` (the coupling row, transposed).
+    known: Mat<f64>,
+    /// `B Q` (`n x c`, column-major; from the scratch pool).
+    bq: Vec<f64>,
+}
+
 /// Turns the `c` columns stored at `v[n j ..]` (the block `W`) into a B-orthonormal block
 /// `Q` orthogonal to `V = v[:, :j]`, with `W = V C + Q R`. Returns `(C, R, q)` where `q`
 /// is the column count of `Q` (`R` is `q x c`). Directions of `W` that are numerically in
@@ -270,37 +280,33 @@ fn orthonormalize(
     chol: &SparseCholesky,
     rng: &mut Rng,
     solves: &mut usize,
-    local: Option<(usize, Mat<f64>)>,
+    local: Option<LanczosStep>,
 ) -> Result<(Mat<f64>, Mat<f64>, usize), SparseEigenError> {
     let (basis, rest) = v.split_at_mut(n * j);
     let w = &mut rest[..n * c];
-    let (bw, pre) = timed(Phase::Norms, || {
-        let bw = b_times(b, w, n, c, None);
-        let pre = col_dots(w, &bw, n, c);
-        (bw, pre)
-    });
-    let pre_max = pre.iter().cloned().fold(0.0, f64::max);
-    if !pre_max.is_finite() {
-        return Err(SparseEigenError::NonFinite);
-    }
-    // Classical Gram-Schmidt (the first pass reuses B W): W_in = V C + W, with a second
-    // pass when the first removed much of some column (see SECOND_PASS_FRACTION).
+    // Classical Gram-Schmidt: W_in = V C + W, with a second pass when the first removed
+    // much of some column (see SECOND_PASS_FRACTION).
     let mut coef = Mat::<f64>::zeros(j, c);
-    let mut bw_now = Some(bw);
-    let local = local.filter(|(r0, known)| {
-        j >= c && *r0 + c <= j && known.nrows() == j - c - r0 && known.ncols() == c
+    let local = local.filter(|l| {
+        j >= c
+            && l.r0 + c <= j
+            && l.known.nrows() == j - c - l.r0
+            && l.known.ncols() == c
+            && l.bq.len() == n * c
     });
-    if let Some((r0, known)) = local {
+    let pre: Vec<f64>;
+    let mut bw_now = None;
+    if let Some(LanczosStep { r0, known, bq }) = local {
         // A Lanczos step: W = Op Q for the last block Q = V[:, j - c..j], whose
         // coefficients on the earlier columns are known (`known`, rows r0..j - c; zero
-        // before r0), and on Q itself are A = Q^T B W. Subtracting them removes the bulk
-        // of W at the cost of a few blocks; one full pass then reorthogonalizes against
-        // all of V (with a second when it still removed much: DGKS).
+        // before r0), and on Q itself are A = Q^T B W = (B Q)^T W (B Q is kept from the
+        // product that made W). Subtracting them removes the bulk of W at the cost of a
+        // few blocks; one full pass then reorthogonalizes against all of V (with a second
+        // when it still removed much: DGKS).
         let q0 = j - c;
-        let bw0 = bw_now.take().unwrap_or_default();
-        timed(Phase::Local, || {
-            let a = gram(&basis[n * q0..n * j], &bw0, n, c, c);
-            scratch::give(bw0);
+        let cl = timed(Phase::Local, || {
+            let a = gram(&bq, w, n, c, c);
+            scratch::give(bq);
             let mut cl = Mat::<f64>::zeros(j - r0, c);
             for cc in 0..c {
                 for i in 0..q0 - r0 {
@@ -316,6 +322,7 @@ fn orthonormalize(
                     coef[(r0 + i, cc)] += cl[(i, cc)];
                 }
             }
+            cl
         });
         let (pre1, c2) = timed(Phase::Gram, || {
             let bw1 = b_times(b, w, n, c, None);
@@ -324,6 +331,14 @@ fn orthonormalize(
             scratch::give(bw1);
             (pre1, c2)
         });
+        // The squared B-norms of the input: what the step removed (on B-orthonormal
+        // columns) plus what it left.
+        pre = (0..c)
+            .map(|cc| pre1[cc] + (0..j - r0).map(|i| cl[(i, cc)] * cl[(i, cc)]).sum::<f64>())
+            .collect();
+        if pre.iter().any(|p| !p.is_finite()) {
+            return Err(SparseEigenError::NonFinite);
+        }
         timed(Phase::Update, || sub_product(w, basis, c2.as_ref(), n));
         // Squared B-norms left (V is B-orthonormal): pre1 - sum_i c2_i^2.
         let lost = (0..c).any(|cc| {
@@ -334,23 +349,36 @@ fn orthonormalize(
         if lost {
             coef += project_once(w, basis, n, j, c, b, None);
         }
-    } else if j > 0 {
-        coef += project_once(w, basis, n, j, c, b, bw_now.take());
-        let bw1 = timed(Phase::Gram, || b_times(b, w, n, c, None));
-        let after = col_dots(w, &bw1, n, c);
-        let lost = after
-            .iter()
-            .zip(&pre)
-            .any(|(&a, &p)| a < SECOND_PASS_FRACTION * p);
-        if lost {
-            let c2 = gram(&basis[..n * j], &bw1, n, j, c);
-            scratch::give(bw1);
-            sub_product(w, basis, c2.as_ref(), n);
-            coef += c2;
-        } else {
-            bw_now = Some(bw1);
+    } else {
+        let (bw, p) = timed(Phase::Norms, || {
+            let bw = b_times(b, w, n, c, None);
+            let p = col_dots(w, &bw, n, c);
+            (bw, p)
+        });
+        pre = p;
+        if pre.iter().any(|p| !p.is_finite()) {
+            return Err(SparseEigenError::NonFinite);
+        }
+        bw_now = Some(bw);
+        if j > 0 {
+            coef += project_once(w, basis, n, j, c, b, bw_now.take());
+            let bw1 = timed(Phase::Gram, || b_times(b, w, n, c, None));
+            let after = col_dots(w, &bw1, n, c);
+            let lost = after
+                .iter()
+                .zip(&pre)
+                .any(|(&a, &p)| a < SECOND_PASS_FRACTION * p);
+            if lost {
+                let c2 = gram(&basis[..n * j], &bw1, n, j, c);
+                scratch::give(bw1);
+                sub_product(w, basis, c2.as_ref(), n);
+                coef += c2;
+            } else {
+                bw_now = Some(bw1);
+            }
         }
     }
+    let pre_max = pre.iter().cloned().fold(0.0, f64::max);
     let (kept, rq, min_diag) = timed(Phase::Svqb, || svqb_r(w, n, c, b, 1e-20 * pre_max, bw_now))?;
     let mut r = rq;
     let mut cur = kept;
@@ -795,21 +823,26 @@ pub(super) fn krylov_schur(
         let j0 = j;
         j += qc;
         let c = qc;
-        {
+        // B Q is kept for the Lanczos step (its A = (B Q)^T W).
+        let bq = {
             let (done, rest) = v.split_at_mut(n * j);
             let w = &mut rest[..n * c];
             timed(Phase::Op, || {
                 sym_spmm_into(b, &done[n * j0..n * j], c, w);
+                let bq = sizes.local.then(|| {
+                    let mut bq = scratch::take(n * c);
+                    bq.copy_from_slice(w);
+                    bq
+                });
                 chol.solve_many_in_place(w, c);
-            });
-        }
+                bq
+            })
+        };
         solves += c;
         expansions += 1;
         // Op V = V T + Q R_row: the coefficients of Op Q on the earlier columns are
         // R_row^T (zero before its first nonzero column r0).
-        let local = if !sizes.local {
-            None
-        } else {
+        let local = if let Some(bq) = bq {
             let r0 = (0..j0)
                 .find(|&col| (0..c).any(|a| rrow[(a, col)] != 0.0))
                 .unwrap_or(j0);
@@ -819,7 +852,9 @@ pub(super) fn krylov_schur(
                     known[(i, cc)] = rrow[(cc, r0 + i)];
                 }
             }
-            Some((r0, known))
+            Some(LanczosStep { r0, known, bq })
+        } else {
+            None
         };
         let (coef, r, q) = orthonormalize(&mut v, n, j, c, b, chol, rng, &mut solves, local)?;
         for cc in 0..c {
