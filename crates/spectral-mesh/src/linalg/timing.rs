@@ -1,6 +1,8 @@
-//! Phase timings of the sparse eigensolver, for tuning: with the environment variable
-//! `SPECTRAL_MESH_EIG_TIMINGS=1`, the wall seconds spent in each phase are summed and
-//! printed to stderr when a solve ends. Off by default (one cached flag test per phase).
+//! Phase timings of the Krylov-Schur eigensolver, for tuning: with the environment
+//! variable `SPECTRAL_MESH_EIG_TIMINGS=1`, the wall seconds spent in each phase are summed
+//! and printed to stderr when a solve succeeds (a failed attempt's time goes into the
+//! next report). The totals are process-wide, so solves running at the same time mix.
+//! Off by default (one cached flag test per phase).
 
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU64, Ordering};
