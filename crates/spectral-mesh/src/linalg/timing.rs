@@ -59,8 +59,7 @@ pub(super) fn timed<R>(phase: Phase, f: impl FnOnce() -> R) -> R {
     }
     let t = Instant::now();
     let r = f();
-    let ns = u64::try_from(t.elapsed().as_nanos()).unwrap_or(u64::MAX);
-    TOTALS[phase as usize].fetch_add(ns, Ordering::Relaxed);
+    add(phase, t.elapsed());
     r
 }
 
