@@ -336,9 +336,6 @@ fn orthonormalize(
         pre = (0..c)
             .map(|cc| pre1[cc] + (0..j - r0).map(|i| cl[(i, cc)] * cl[(i, cc)]).sum::<f64>())
             .collect();
-        if pre.iter().any(|p| !p.is_finite()) {
-            return Err(SparseEigenError::NonFinite);
-        }
         timed(Phase::Update, || sub_product(w, basis, c2.as_ref(), n));
         // Squared B-norms left (V is B-orthonormal): pre1 - sum_i c2_i^2.
         let lost = (0..c).any(|cc| {
@@ -356,9 +353,6 @@ fn orthonormalize(
             (bw, p)
         });
         pre = p;
-        if pre.iter().any(|p| !p.is_finite()) {
-            return Err(SparseEigenError::NonFinite);
-        }
         bw_now = Some(bw);
         if j > 0 {
             coef += project_once(w, basis, n, j, c, b, bw_now.take());
@@ -377,6 +371,9 @@ fn orthonormalize(
                 bw_now = Some(bw1);
             }
         }
+    }
+    if pre.iter().any(|p| !p.is_finite()) {
+        return Err(SparseEigenError::NonFinite);
     }
     let pre_max = pre.iter().cloned().fold(0.0, f64::max);
     let (kept, rq, min_diag) = timed(Phase::Svqb, || svqb_r(w, n, c, b, 1e-20 * pre_max, bw_now))?;
