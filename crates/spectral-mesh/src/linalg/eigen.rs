@@ -279,6 +279,11 @@ fn spmm_group<const C: usize>(a: &SparseMatrix, x: &[f64], y: &mut [f64]) {
     });
 }
 
+/// Frees this thread's [`spmm_group`] buffer (see [`super::scratch::release_all`]).
+pub(super) fn release_spmm_scratch() {
+    SPMM_SCRATCH.with(|cell| *cell.borrow_mut() = Vec::new());
+}
+
 thread_local! {
     /// Row-major copy of the input block of [`spmm_group`] on this thread (reused).
     static SPMM_SCRATCH: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
@@ -383,21 +388,33 @@ pub(super) fn residuals_from(
         .collect()
 }
 
+/// Largest number of values in the block of `B X` that [`b_orthogonality_error`] holds
+/// (2^21 values: 16 MiB), unless that is less than 8 columns.
+const ORTH_BLOCK_VALUES: usize = 1 << 21;
+
 /// `max |X^T B X - I|` for `k` columns of length `n`.
 pub fn b_orthogonality_error(b: &SparseMatrix, vectors: &[f64], k: usize) -> f64 {
     let n = b.ncols();
     if n == 0 || k == 0 {
         return 0.0;
     }
+    orthogonality_error_by_blocks(b, vectors, k, (ORTH_BLOCK_VALUES / n).clamp(8, 64))
+}
+
+/// [`b_orthogonality_error`] with blocks of `block` columns (`n > 0`, `k > 0`).
+fn orthogonality_error_by_blocks(b: &SparseMatrix, vectors: &[f64], k: usize, block: usize) -> f64 {
+    let n = b.ncols();
     // By blocks of columns: `X[:, ..end]^T B X[:, blk]` is the part of the symmetric
     // `X^T B X` on and above the diagonal block, so half the products are made and only
-    // one `n x 64` block of `B X` is held at a time.
-    const BLOCK: usize = 64;
+    // one block of `B X` is held at a time: 64 columns, fewer on large meshes so that
+    // the block stays within ORTH_BLOCK_VALUES (a 64-column block at 411k vertices was
+    // 210 MB, the peak memory of a k = 50 solve).
+    let block = block.clamp(1, k);
     let mut e: f64 = 0.0;
-    let mut bx = vec![0.0; n * BLOCK.min(k)];
+    let mut bx = vec![0.0; n * block];
     let mut start = 0;
     while start < k {
-        let end = (start + BLOCK).min(k);
+        let end = (start + block).min(k);
         let w = end - start;
         sym_spmm_into(b, &vectors[n * start..n * end], w, &mut bx);
         let g = gram(&vectors[..n * end], &bx[..n * w], n, end, w);
@@ -721,8 +738,10 @@ pub fn sparse_generalized_eigen(
         } else {
             // 2k up to k = 300, then k + 300: measured at k = 500 on 26k vertices, a
             // basis of 750-850 needed fewer solves and less time than 1000 (6.5-6.8 s
-            // against 8.1 s) and less memory.
-            (2 * k).min(k + 300).max(k + 100).max(k + 4 * bs)
+            // against 8.1 s) and less memory. At least k + 70: for k = 50 a basis of
+            // 120 took the same time as 150 (256 solves against 248, at 38k to 411k
+            // vertices) and 130 MiB less at 411k.
+            (2 * k).min(k + 300).max(k + 70).max(k + 4 * bs)
         }
         .min(n);
         let pb = super::krylov_schur::Problem {
@@ -760,8 +779,11 @@ pub fn sparse_generalized_eigen(
             let mut rng = start_rng();
             out = super::krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
         }
-        super::scratch::release();
-        return out;
+        super::scratch::release_all();
+        // The factor goes before the eigenvectors are copied out of the basis (see
+        // `Converged`): the copy can then reuse its memory.
+        drop(chol);
+        return out.map(|pairs| pairs.finish(b, progress));
     }
 
     // Sizes.
@@ -1362,6 +1384,12 @@ mod tests {
         assert!(
             (got - want).abs() <= 1e-12 * want.max(1.0),
             "blocked {got} against full {want}"
+        );
+        // The narrower blocks of large meshes (column 130 is then 16 blocks after 3).
+        let got8 = orthogonality_error_by_blocks(&b, &x, k, 8);
+        assert!(
+            (got8 - want).abs() <= 1e-12 * want.max(1.0),
+            "blocks of 8: {got8} against full {want}"
         );
         assert!(
             want > 0.5,

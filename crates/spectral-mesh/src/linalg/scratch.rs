@@ -67,9 +67,52 @@ pub(crate) fn release() {
     POOL.with(|p| p.borrow_mut().clear());
 }
 
+/// Frees the buffers of this thread and of every thread of the rayon pool (the solves
+/// and the row blocks of the dense products run there and keep up to `KEEP_ENTRIES`
+/// values each), and the row-major buffers of the sparse products.
+pub(crate) fn release_all() {
+    let both = || {
+        release();
+        super::eigen::release_spmm_scratch();
+    };
+    both();
+    rayon::broadcast(|_| both());
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn release_all_frees_the_buffers_of_the_pool_threads() {
+        // Every pool thread keeps a buffer with a capacity no other buffer has: `take`
+        // hands out the smallest kept buffer that is large enough, and a fresh buffer
+        // has exactly the capacity asked for...
+        const ODD: usize = 12_345;
+        let marked = |b: &Vec<f64>| b.capacity() == ODD + 7;
+        rayon::broadcast(|_| {
+            let mut b = Vec::with_capacity(ODD + 7);
+            b.resize(ODD, 1.0);
+            give(b)
+        });
+        assert!(
+            rayon::broadcast(|_| {
+                let b = take(ODD);
+                let kept = marked(&b);
+                give(b);
+                kept
+            })
+            .iter()
+            .all(|&kept| kept)
+        );
+        // ...until release_all.
+        release_all();
+        assert!(
+            rayon::broadcast(|_| !marked(&take(ODD)))
+                .iter()
+                .all(|&fresh| fresh)
+        );
+    }
 
     #[test]
     fn buffers_are_zeroed_and_reused() {
