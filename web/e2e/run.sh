@@ -5,6 +5,9 @@
 #   SPECTRAL_MESH_SHARED_MESHES  folder with sphere966.off (default: ../shared/meshes beside
 #                                the clone, then /work/shared/meshes)
 #   SPECTRAL_MESH_WEB_BENCH=1    also run the ~100k-vertex, k = 200 input-to-picture benchmark
+#   SPECTRAL_MESH_SCREENSHOT     where the test saves its screenshot of the app (default:
+#                                target/e2e/web-app.png; set it to docs/web-app.png to
+#                                refresh the README's picture)
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 cd "$ROOT"
@@ -42,6 +45,8 @@ done
 [ -n "$URL" ] || { cat "$LOG"; echo "server printed no URL"; exit 1; }
 echo "server at $URL (pid $PID)"
 export SPECTRAL_MESH_URL="$URL"
-export SPECTRAL_MESH_SCREENSHOT="$ROOT/docs/web-app.png"
+# The screenshot goes to the build folder unless asked for: a test run leaves the
+# repository as it found it.
+export SPECTRAL_MESH_SCREENSHOT="${SPECTRAL_MESH_SCREENSHOT:-${CARGO_TARGET_DIR:-$ROOT/target}/e2e/web-app.png}"
 
 node --test --test-concurrency=1 "$ROOT"/web/e2e/*.test.mjs

@@ -95,76 +95,13 @@ pub fn flat_square(n: usize, jitter: f64, seed: u64) -> (Mesh, Vec<usize>) {
 /// An icosphere of radius 1 (`levels` subdivisions of the icosahedron), rotated by a
 /// generic rotation so that no two vertices share a coordinate.
 pub fn icosphere(levels: usize) -> Mesh {
-    let phi = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut p: Vec<[f64; 3]> = vec![
-        [-1.0, phi, 0.0],
-        [1.0, phi, 0.0],
-        [-1.0, -phi, 0.0],
-        [1.0, -phi, 0.0],
-        [0.0, -1.0, phi],
-        [0.0, 1.0, phi],
-        [0.0, -1.0, -phi],
-        [0.0, 1.0, -phi],
-        [phi, 0.0, -1.0],
-        [phi, 0.0, 1.0],
-        [-phi, 0.0, -1.0],
-        [-phi, 0.0, 1.0],
-    ];
-    let mut t: Vec<[usize; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut mid = std::collections::HashMap::new();
-        let mut nt = Vec::with_capacity(4 * t.len());
-        let mut midpoint = |a: usize, b: usize, p: &mut Vec<[f64; 3]>| -> usize {
-            let key = (a.min(b), a.max(b));
-            *mid.entry(key).or_insert_with(|| {
-                let q = [
-                    (p[a][0] + p[b][0]) / 2.0,
-                    (p[a][1] + p[b][1]) / 2.0,
-                    (p[a][2] + p[b][2]) / 2.0,
-                ];
-                p.push(q);
-                p.len() - 1
-            })
-        };
-        for tri in &t {
-            let ab = midpoint(tri[0], tri[1], &mut p);
-            let bc = midpoint(tri[1], tri[2], &mut p);
-            let ca = midpoint(tri[2], tri[0], &mut p);
-            nt.push([tri[0], ab, ca]);
-            nt.push([tri[1], bc, ab]);
-            nt.push([tri[2], ca, bc]);
-            nt.push([ab, bc, ca]);
-        }
-        t = nt;
-    }
-    // Project to the sphere and rotate generically (about x, then y).
+    let sphere = spectral_mesh::shapes::build_str(&format!("sphere:res={levels}")).unwrap();
+    // Rotate generically (about x, then y).
     let (a, b) = (0.3f64, 0.7f64);
-    let p = p
-        .into_iter()
-        .map(|q| {
-            let l = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
-            let q = [q[0] / l, q[1] / l, q[2] / l];
+    let p = sphere
+        .positions()
+        .iter()
+        .map(|&q| {
             let q = [
                 q[0],
                 a.cos() * q[1] - a.sin() * q[2],
@@ -177,7 +114,7 @@ pub fn icosphere(levels: usize) -> Mesh {
             ]
         })
         .collect();
-    Mesh::new(p, t).unwrap()
+    Mesh::new(p, sphere.triangles().to_vec()).unwrap()
 }
 
 /// The disjoint union of two meshes (the second's indices shifted).
