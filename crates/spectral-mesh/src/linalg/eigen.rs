@@ -279,9 +279,16 @@ fn spmm_group<const C: usize>(a: &SparseMatrix, x: &[f64], y: &mut [f64]) {
     });
 }
 
-/// Frees this thread's [`spmm_group`] buffer (see [`super::scratch::release_all`]).
+/// Frees this thread's [`spmm_group`] buffer (see [`super::scratch::release_all`]),
+/// unless the thread is using it: [`spmm_group`] holds it across a parallel loop, during
+/// which the thread may run the broadcast of another solve's `release_all` (two solves
+/// side by side, as in a study).
 pub(super) fn release_spmm_scratch() {
-    SPMM_SCRATCH.with(|cell| *cell.borrow_mut() = Vec::new());
+    SPMM_SCRATCH.with(|cell| {
+        if let Ok(mut buf) = cell.try_borrow_mut() {
+            *buf = Vec::new();
+        }
+    });
 }
 
 thread_local! {
@@ -1357,6 +1364,20 @@ mod tests {
     /// The blocked, upper-triangle-only orthogonality error equals `max |X^T B X - I|`
     /// computed in full, wherever the largest entry sits (across blocks of 64 columns,
     /// on and off the diagonal).
+    /// Another solve's `release_all` can reach a thread inside `spmm_group`, which holds
+    /// the buffer across a parallel loop: the buffer is then left alone, not a panic.
+    #[test]
+    fn releasing_a_busy_spmm_buffer_is_skipped() {
+        SPMM_SCRATCH.with(|cell| {
+            let mut busy = cell.borrow_mut();
+            busy.resize(10, 1.0);
+            release_spmm_scratch();
+            assert_eq!(busy.len(), 10);
+        });
+        release_spmm_scratch();
+        SPMM_SCRATCH.with(|cell| assert_eq!(cell.borrow().capacity(), 0));
+    }
+
     #[test]
     fn orthogonality_error_matches_the_full_product() {
         let n = 200;

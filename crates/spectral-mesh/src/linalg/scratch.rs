@@ -64,7 +64,13 @@ pub(crate) fn give(v: Vec<f64>) {
 /// Frees this thread's buffers (called when a solve ends, so that a long-running process
 /// such as the web server does not hold them).
 pub(crate) fn release() {
-    POOL.with(|p| p.borrow_mut().clear());
+    // `try_`: [`release_all`] may run here from another solve's broadcast (never while
+    // `take` or `give` hold the pool, but a panic there would be the wrong answer).
+    POOL.with(|p| {
+        if let Ok(mut p) = p.try_borrow_mut() {
+            p.clear();
+        }
+    });
 }
 
 /// Frees the buffers of this thread and of every thread of the rayon pool (the solves
@@ -112,6 +118,14 @@ mod tests {
                 .iter()
                 .all(|&fresh| fresh)
         );
+    }
+
+    #[test]
+    fn releasing_a_busy_pool_is_skipped() {
+        POOL.with(|p| {
+            let _busy = p.borrow_mut();
+            release();
+        });
     }
 
     #[test]
