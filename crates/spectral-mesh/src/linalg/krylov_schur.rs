@@ -782,23 +782,16 @@ pub(super) fn krylov_schur(
                     // Sort the first k (Rayleigh quotients may swap inside a tight cluster).
                     let mut order: Vec<usize> = (0..k).collect();
                     order.sort_by(|&a, &c| lam[a].total_cmp(&lam[c]));
-                    let mut pairs = Converged {
-                        basis: Vec::new(),
+                    return Ok(Converged {
+                        basis: v,
                         n,
-                        cols: Vec::with_capacity(k),
-                        values: Vec::with_capacity(k),
-                        residuals: Vec::with_capacity(k),
+                        cols: order.iter().map(|&p| cols[p]).collect(),
+                        values: order.iter().map(|&p| lam[p]).collect(),
+                        residuals: order.iter().map(|&p| res[p]).collect(),
                         iterations: expansions,
                         solves,
                         shift: pb.shift,
-                    };
-                    for &p in &order {
-                        pairs.cols.push(cols[p]);
-                        pairs.values.push(lam[p]);
-                        pairs.residuals.push(res[p]);
-                    }
-                    pairs.basis = v;
-                    return Ok(pairs);
+                    });
                 }
                 if cols[good] < nl {
                     // A locked pair failed its true residual (its estimate was wrong);
