@@ -7,6 +7,7 @@
 //! mass B); operators give an eigenbasis; the basis (or a direct solve) gives fields.
 //! Conventions are those of the project's `MATH.md`.
 
+pub mod cancel;
 pub mod experiments;
 pub mod fields;
 pub mod io;
@@ -17,7 +18,8 @@ pub mod perturb;
 pub mod shapes;
 pub mod spectral;
 
+pub use cancel::CancelToken;
 pub use linalg::SparseMatrix;
 pub use mesh::Mesh;
 pub use operators::{Laplacian, Operators};
-pub use spectral::Eigenbasis;
+pub use spectral::{BasisView, Eigenbasis};

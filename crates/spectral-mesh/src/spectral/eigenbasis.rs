@@ -1,5 +1,8 @@
 //! The k smallest generalized eigenpairs of (S, B): `S X = B X Lambda`, `X^T B X = I`.
 
+use std::sync::Arc;
+
+use crate::cancel::CancelToken;
 use crate::linalg::{
     SparseEigenError, SparseEigenOptions, SparseMatrix, b_orthogonality_error,
     dense_generalized_eigen, relative_residuals, sparse_generalized_eigen,
@@ -43,6 +46,9 @@ pub enum EigenError {
         /// Iterations used.
         iterations: usize,
     },
+    /// The computation was cancelled through its [`CancelToken`].
+    #[error("the eigenbasis computation was cancelled")]
+    Cancelled,
 }
 
 impl From<SparseEigenError> for EigenError {
@@ -304,6 +310,142 @@ impl Eigenbasis {
     /// `max |X^T B X - I|` over the stored vectors (zero for an exactly B-orthonormal basis).
     pub fn orthogonality_error(&self) -> f64 {
         b_orthogonality_error(&self.mass, &self.vectors, self.k())
+    }
+}
+
+/// A borrowed view of the first `k` pairs of an [`Eigenbasis`]: what every spectral
+/// quantity (heat kernel, distances, signatures, embeddings) is computed from. A basis of
+/// `K` pairs serves any `k <= K` without copying its `n x K` vectors.
+#[derive(Debug, Clone, Copy)]
+pub struct BasisView<'a> {
+    /// The discretization the basis was computed for.
+    pub laplacian: Laplacian,
+    /// Number of vertices `n`.
+    pub n: usize,
+    /// The first `k` eigenvalues, ascending.
+    pub values: &'a [f64],
+    /// The first `k` eigenvectors, `n x k` column-major (`vectors[j * n + i]` = `x_j(p_i)`).
+    pub vectors: &'a [f64],
+    /// The mass matrix B the vectors are orthonormal in (`n x n`).
+    pub mass: &'a SparseMatrix,
+}
+
+impl<'a> BasisView<'a> {
+    /// Number of pairs `k` in the view.
+    pub fn k(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Eigenvector `j` (`n` entries).
+    pub fn vector(&self, j: usize) -> &'a [f64] {
+        &self.vectors[j * self.n..(j + 1) * self.n]
+    }
+}
+
+impl<'a> From<&'a Eigenbasis> for BasisView<'a> {
+    fn from(b: &'a Eigenbasis) -> Self {
+        b.view(b.k())
+    }
+}
+
+impl Eigenbasis {
+    /// The view of the first `min(k, self.k())` pairs.
+    pub fn view(&self, k: usize) -> BasisView<'_> {
+        let k = k.min(self.k());
+        BasisView {
+            laplacian: self.laplacian,
+            n: self.n,
+            values: &self.values[..k],
+            vectors: &self.vectors[..k * self.n],
+            mass: &self.mass,
+        }
+    }
+}
+
+/// Factor once, answer many `k`: holds the operators, the factorization of the shifted
+/// pencil and the largest basis computed so far (geometry-central's solver pattern).
+///
+/// Contract: the pairs returned for a given `k` depend only on the operators, the
+/// parameters and `k`, never on what was asked before (a larger `k` runs a fresh
+/// iteration on the kept factorization), so a replay that asks for the same `k` gets the
+/// same bits. Asking for fewer pairs than held returns the held basis; use
+/// [`Eigenbasis::view`] to take its first `k` pairs.
+#[derive(Debug)]
+pub struct EigenSolver {
+    ops: Arc<Operators>,
+    params: EigenParams,
+    basis: Option<Arc<Eigenbasis>>,
+    factorizations: usize,
+}
+
+impl EigenSolver {
+    /// A solver of the pencil of `ops` with `params` (`params.k` is ignored: each
+    /// [`EigenSolver::solve`] names its `k`). Nothing is computed yet.
+    pub fn new(ops: Arc<Operators>, params: EigenParams) -> Self {
+        Self {
+            ops,
+            params,
+            basis: None,
+            factorizations: 0,
+        }
+    }
+
+    /// The operators.
+    pub fn operators(&self) -> &Arc<Operators> {
+        &self.ops
+    }
+
+    /// The parameters (`k` ignored).
+    pub fn params(&self) -> &EigenParams {
+        &self.params
+    }
+
+    /// The basis held, if any.
+    pub fn held(&self) -> Option<Arc<Eigenbasis>> {
+        self.basis.clone()
+    }
+
+    /// How many times the shifted pencil was factored (a counter, for tests and reports).
+    pub fn factorizations(&self) -> usize {
+        self.factorizations
+    }
+
+    /// A basis of at least `k` pairs: the held one when it has enough, otherwise `k` pairs
+    /// computed afresh (see the type's contract). Progress goes to `progress`; `cancel`
+    /// stops the computation with [`EigenError::Cancelled`].
+    pub fn solve(
+        &mut self,
+        k: usize,
+        progress: &mut dyn FnMut(EigenProgress),
+        cancel: &CancelToken,
+    ) -> Result<Arc<Eigenbasis>, EigenError> {
+        if let Some(b) = &self.basis
+            && b.k() >= k
+        {
+            return Ok(b.clone());
+        }
+        if cancel.is_cancelled() {
+            return Err(EigenError::Cancelled);
+        }
+        let params = EigenParams {
+            k,
+            ..self.params.clone()
+        };
+        let mut count = 0usize;
+        let b = compute_eigenbasis(
+            &self.ops,
+            &params,
+            &mut |p: EigenProgress| {
+                if matches!(p, EigenProgress::Factorization { .. }) {
+                    count += 1;
+                }
+                progress(p)
+            },
+        )?;
+        self.factorizations += count;
+        let b = Arc::new(b);
+        self.basis = Some(b.clone());
+        Ok(b)
     }
 }
 
