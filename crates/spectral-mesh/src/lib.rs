@@ -7,6 +7,7 @@
 //! mass B); operators give an eigenbasis; the basis (or a direct solve) gives fields.
 //! Conventions are those of the project's `MATH.md`.
 
+pub mod analysis;
 pub mod cancel;
 pub mod experiments;
 pub mod fields;
@@ -18,6 +19,7 @@ pub mod perturb;
 pub mod shapes;
 pub mod spectral;
 
+pub use analysis::{Analysis, AnalysisOptions, Field, FieldRequest};
 pub use cancel::CancelToken;
 pub use linalg::SparseMatrix;
 pub use mesh::Mesh;

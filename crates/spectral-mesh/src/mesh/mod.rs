@@ -114,6 +114,13 @@ impl Mesh {
         &self.triangles
     }
 
+    /// The vertex of largest x (lowest index on ties): the default source and anchor of
+    /// every spectral field (0 for an empty mesh).
+    pub fn vertex_of_largest_x(&self) -> usize {
+        let p = &self.positions;
+        (0..p.len()).fold(0, |best, i| if p[i][0] > p[best][0] { i } else { best })
+    }
+
     /// Number of vertices `n`.
     pub fn n_vertices(&self) -> usize {
         self.positions.len()

@@ -23,7 +23,7 @@
 
 use rayon::prelude::*;
 
-use super::Eigenbasis;
+use super::BasisView;
 use super::filters::{Filter, FilterError};
 
 /// Errors of the distance functions.
@@ -57,7 +57,7 @@ pub enum DistanceError {
 /// the limit).
 pub const ALL_PAIRS_LIMIT: usize = 10_000;
 
-fn check_vertex(basis: &Eigenbasis, v: usize) -> Result<(), DistanceError> {
+fn check_vertex(basis: BasisView<'_>, v: usize) -> Result<(), DistanceError> {
     if v >= basis.n {
         Err(DistanceError::VertexOutOfRange {
             vertex: v,
@@ -97,32 +97,34 @@ fn weighted_sq_from(x: &[f64], n: usize, w: &[f64], source: usize) -> Vec<f64> {
 
 /// Filtered spectral distances from `source` to every vertex (`n` values), O(nk):
 /// `d(p,q) = sqrt(sum_{lambda_k > 0} w(lambda_k) (x_k(p) - x_k(q))^2)`.
-pub fn distances_from(
-    basis: &Eigenbasis,
+pub fn distances_from<'a>(
+    basis: impl Into<BasisView<'a>>,
     source: usize,
     filter: &Filter,
 ) -> Result<Vec<f64>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
     check_vertex(basis, source)?;
-    let w = filter.weights(&basis.values)?;
-    let mut d = weighted_sq_from(&basis.vectors, basis.n, &w, source);
+    let w = filter.weights(basis.values)?;
+    let mut d = weighted_sq_from(basis.vectors, basis.n, &w, source);
     d.iter_mut().for_each(|v| *v = v.sqrt());
     Ok(d)
 }
 
 /// Distances from each of `sources` (one `n`-vector per source), parallel over sources.
-pub fn distances_from_many(
-    basis: &Eigenbasis,
+pub fn distances_from_many<'a>(
+    basis: impl Into<BasisView<'a>>,
     sources: &[usize],
     filter: &Filter,
 ) -> Result<Vec<Vec<f64>>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
     for &s in sources {
         check_vertex(basis, s)?;
     }
-    let w = filter.weights(&basis.values)?;
+    let w = filter.weights(basis.values)?;
     Ok(sources
         .par_iter()
         .map(|&s| {
-            let mut d = weighted_sq_from(&basis.vectors, basis.n, &w, s);
+            let mut d = weighted_sq_from(basis.vectors, basis.n, &w, s);
             d.iter_mut().for_each(|v| *v = v.sqrt());
             d
         })
@@ -130,7 +132,7 @@ pub fn distances_from_many(
 }
 
 /// Row-major `n x m` embedding with the pairs of non-zero weight scaled by `sqrt(w)`.
-fn weighted_rows(basis: &Eigenbasis, w: &[f64]) -> (Vec<f64>, usize) {
+fn weighted_rows(basis: BasisView<'_>, w: &[f64]) -> (Vec<f64>, usize) {
     let n = basis.n;
     let used: Vec<usize> = (0..w.len()).filter(|&j| w[j] > 0.0).collect();
     let m = used.len();
@@ -147,7 +149,11 @@ fn weighted_rows(basis: &Eigenbasis, w: &[f64]) -> (Vec<f64>, usize) {
 /// diagonal. O(n^2 k), parallel over rows; refused above [`ALL_PAIRS_LIMIT`] vertices.
 /// Each entry is computed from differences (not from the Gram matrix), so small distances
 /// keep their relative accuracy.
-pub fn all_pairs(basis: &Eigenbasis, filter: &Filter) -> Result<Vec<f64>, DistanceError> {
+pub fn all_pairs<'a>(
+    basis: impl Into<BasisView<'a>>,
+    filter: &Filter,
+) -> Result<Vec<f64>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
     let n = basis.n;
     if n > ALL_PAIRS_LIMIT {
         return Err(DistanceError::TooLarge {
@@ -155,7 +161,7 @@ pub fn all_pairs(basis: &Eigenbasis, filter: &Filter) -> Result<Vec<f64>, Distan
             limit: ALL_PAIRS_LIMIT,
         });
     }
-    let w = filter.weights(&basis.values)?;
+    let w = filter.weights(basis.values)?;
     let (e, m) = weighted_rows(basis, &w);
     let mut out = vec![0.0; n * n];
     out.par_chunks_mut(n).enumerate().for_each(|(i, row)| {
@@ -176,22 +182,31 @@ pub fn all_pairs(basis: &Eigenbasis, filter: &Filter) -> Result<Vec<f64>, Distan
 }
 
 /// The row `G(p, .)` of the generalized Green kernel `G = X diag(w) X^T` (`n` values).
-pub fn green_row(basis: &Eigenbasis, p: usize, filter: &Filter) -> Result<Vec<f64>, DistanceError> {
+pub fn green_row<'a>(
+    basis: impl Into<BasisView<'a>>,
+    p: usize,
+    filter: &Filter,
+) -> Result<Vec<f64>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
     check_vertex(basis, p)?;
-    let w = filter.weights(&basis.values)?;
+    let w = filter.weights(basis.values)?;
     let n = basis.n;
     let c: Vec<f64> = w
         .iter()
         .enumerate()
         .map(|(j, wj)| wj * basis.vectors[j * n + p])
         .collect();
-    Ok(super::heat::combine_columns(&basis.vectors, n, &c))
+    Ok(super::heat::combine_columns(basis.vectors, n, &c))
 }
 
 /// The generalized spectral function `p -> G(p,p) = sum_k w_k x_k(p)^2` (`n` values). With
 /// the diffusion filter this is the auto-diffusion function.
-pub fn spectral_function(basis: &Eigenbasis, filter: &Filter) -> Result<Vec<f64>, DistanceError> {
-    let w = filter.weights(&basis.values)?;
+pub fn spectral_function<'a>(
+    basis: impl Into<BasisView<'a>>,
+    filter: &Filter,
+) -> Result<Vec<f64>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
+    let w = filter.weights(basis.values)?;
     let n = basis.n;
     let mut g = vec![0.0; n];
     for (j, &wj) in w.iter().enumerate() {
@@ -204,37 +219,59 @@ pub fn spectral_function(basis: &Eigenbasis, filter: &Filter) -> Result<Vec<f64>
     Ok(g)
 }
 
+/// `B X` (column-major `n x k`) of a basis view: what [`wfem_diffusion_distances_with`]
+/// reuses across sources and times. O(nnz(B) k), parallel over columns.
+pub fn mass_times_vectors<'a>(basis: impl Into<BasisView<'a>>) -> Vec<f64> {
+    let basis: BasisView<'a> = basis.into();
+    let n = basis.n;
+    let mut y = vec![0.0; n * basis.k()];
+    y.par_chunks_mut(n.max(1)).enumerate().for_each(|(j, col)| {
+        col.copy_from_slice(&basis.mass.mul_vec(basis.vector(j)));
+    });
+    y
+}
+
 /// The wFEM diffusion distances of eq. 15 from `source`:
 /// `d_t(i,j)^2 = (e_i - e_j)^T S_t (e_i - e_j)`, `S_t = B X D_t X^T B`, all `k` pairs
 /// (including the zero eigenvalue), O(nk + nnz(B) k).
-pub fn wfem_diffusion_distances_from(
-    basis: &Eigenbasis,
+pub fn wfem_diffusion_distances_from<'a>(
+    basis: impl Into<BasisView<'a>>,
     source: usize,
     t: f64,
 ) -> Result<Vec<f64>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
+    check_vertex(basis, source)?;
+    wfem_diffusion_distances_with(basis, &mass_times_vectors(basis), source, t)
+}
+
+/// [`wfem_diffusion_distances_from`] with `B X` given (`bx`, column-major `n x K` for any
+/// `K >= k`: the first `k` columns are used), O(nk).
+pub fn wfem_diffusion_distances_with<'a>(
+    basis: impl Into<BasisView<'a>>,
+    bx: &[f64],
+    source: usize,
+    t: f64,
+) -> Result<Vec<f64>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
     check_vertex(basis, source)?;
     if !(t.is_finite() && t >= 0.0) {
         return Err(DistanceError::InvalidTime(t));
     }
-    let n = basis.n;
-    let k = basis.k();
-    // Y = B X, column-major n x k.
-    let mut y = vec![0.0; n * k];
-    y.par_chunks_mut(n.max(1)).enumerate().for_each(|(j, col)| {
-        col.copy_from_slice(&basis.mass.mul_vec(&basis.vectors[j * n..(j + 1) * n]));
-    });
+    let (n, k) = (basis.n, basis.k());
+    assert!(bx.len() >= n * k, "B X holds fewer than k columns");
     let w: Vec<f64> = basis.values.iter().map(|l| (-l * t).exp()).collect();
-    let mut d = weighted_sq_from(&y, n, &w, source);
+    let mut d = weighted_sq_from(&bx[..n * k], n, &w, source);
     d.iter_mut().for_each(|v| *v = v.max(0.0).sqrt());
     Ok(d)
 }
 
 /// The wFEM diffusion kernel matrix entries `S_t(source, .)` (`n` values) of eq. 15.
-pub fn wfem_diffusion_kernel_row(
-    basis: &Eigenbasis,
+pub fn wfem_diffusion_kernel_row<'a>(
+    basis: impl Into<BasisView<'a>>,
     source: usize,
     t: f64,
 ) -> Result<Vec<f64>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
     check_vertex(basis, source)?;
     if !(t.is_finite() && t >= 0.0) {
         return Err(DistanceError::InvalidTime(t));
@@ -246,11 +283,11 @@ pub fn wfem_diffusion_kernel_row(
         e[source] = 1.0;
         basis.mass.mul_vec(&e)
     };
-    let mut c = super::heat::project(&basis.vectors, n, &bs);
-    for (cj, l) in c.iter_mut().zip(&basis.values) {
+    let mut c = super::heat::project(basis.vectors, n, &bs);
+    for (cj, l) in c.iter_mut().zip(basis.values) {
         *cj *= (-l * t).exp();
     }
     Ok(basis
         .mass
-        .mul_vec(&super::heat::combine_columns(&basis.vectors, n, &c)))
+        .mul_vec(&super::heat::combine_columns(basis.vectors, n, &c)))
 }

@@ -35,7 +35,7 @@
 
 use rayon::prelude::*;
 
-use super::Eigenbasis;
+use super::{BasisView, Eigenbasis};
 use crate::linalg::{CholeskyError, SparseCholesky};
 use crate::operators::Operators;
 
@@ -178,7 +178,7 @@ fn check_time(t: f64) -> Result<(), HeatError> {
 }
 
 /// The row `i` of `X^T M` for the kernel's right factor `M` (B, D or I): `k` entries.
-fn anchor_coefficients(basis: &Eigenbasis, anchor: usize, kind: KernelKind) -> Vec<f64> {
+fn anchor_coefficients(basis: BasisView<'_>, anchor: usize, kind: KernelKind) -> Vec<f64> {
     let n = basis.n;
     let k = basis.k();
     match kind {
@@ -206,12 +206,13 @@ fn anchor_coefficients(basis: &Eigenbasis, anchor: usize, kind: KernelKind) -> V
 /// The basis function `K_t e_anchor` (`n` values) of the truncated kernel of `kind`, in
 /// O(nk). Times are those of the basis as given (no scale normalisation; see
 /// [`HeatSolver`] for that).
-pub fn basis_function(
-    basis: &Eigenbasis,
+pub fn basis_function<'a>(
+    basis: impl Into<BasisView<'a>>,
     anchor: usize,
     t: f64,
     kind: KernelKind,
 ) -> Result<Vec<f64>, HeatError> {
+    let basis: BasisView<'a> = basis.into();
     if anchor >= basis.n {
         return Err(HeatError::VertexOutOfRange {
             vertex: anchor,
@@ -220,20 +221,21 @@ pub fn basis_function(
     }
     check_time(t)?;
     let mut c = anchor_coefficients(basis, anchor, kind);
-    for (cj, l) in c.iter_mut().zip(&basis.values) {
+    for (cj, l) in c.iter_mut().zip(basis.values) {
         *cj *= (-l * t).exp();
     }
-    Ok(combine_columns(&basis.vectors, basis.n, &c))
+    Ok(combine_columns(basis.vectors, basis.n, &c))
 }
 
 /// The diffusion `K_t f` (`n` values) of the signal `f` by the truncated kernel of `kind`,
 /// in O(nk + nnz(B)).
-pub fn diffuse(
-    basis: &Eigenbasis,
+pub fn diffuse<'a>(
+    basis: impl Into<BasisView<'a>>,
     f: &[f64],
     t: f64,
     kind: KernelKind,
 ) -> Result<Vec<f64>, HeatError> {
+    let basis: BasisView<'a> = basis.into();
     if f.len() != basis.n {
         return Err(HeatError::LengthMismatch {
             got: f.len(),
@@ -252,11 +254,11 @@ pub fn diffuse(
             .collect(),
         KernelKind::Standard => f.to_vec(),
     };
-    let mut c = project(&basis.vectors, basis.n, &g);
-    for (cj, l) in c.iter_mut().zip(&basis.values) {
+    let mut c = project(basis.vectors, basis.n, &g);
+    for (cj, l) in c.iter_mut().zip(basis.values) {
         *cj *= (-l * t).exp();
     }
-    Ok(combine_columns(&basis.vectors, basis.n, &c))
+    Ok(combine_columns(basis.vectors, basis.n, &c))
 }
 
 /// A heat-kernel solver: holds a (normalised) basis and the precomputed rows of `X^T M`
@@ -284,7 +286,7 @@ impl HeatSolver {
             .par_chunks_mut(k.max(1))
             .enumerate()
             .for_each(|(i, row)| {
-                row.copy_from_slice(&anchor_coefficients(&b, i, kind));
+                row.copy_from_slice(&anchor_coefficients(b.view(k), i, kind));
             });
         let lumped = b.mass.row_sums();
         Self {
