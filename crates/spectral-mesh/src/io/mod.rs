@@ -38,6 +38,7 @@
 //! caller decides that policy). OFF, OBJ and PLY store positions bit-exactly (shortest
 //! round-trip decimal text, or binary doubles); STL stores `f32` and is lossy.
 
+mod atomic;
 mod lexer;
 mod obj;
 mod off;
@@ -52,6 +53,7 @@ use std::str::FromStr;
 
 use crate::mesh::Mesh;
 
+pub use atomic::{AtomicWriteError, write_atomic, write_atomic_with};
 pub use polygon::triangulate_polygon;
 
 /// An error while reading or writing a mesh file. Its `Display` is
@@ -356,53 +358,11 @@ fn rename_error(e: IoError, name: &str) -> IoError {
 }
 
 fn atomic_write(path: &Path, name: &str, data: &[u8]) -> Result<(), IoError> {
-    let io = |action: &'static str| {
-        move |source: std::io::Error| IoError::Io {
-            path: name.to_string(),
-            action,
-            source,
-        }
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let file_name = path
-        .file_name()
-        .map(|f| f.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "mesh".to_string());
-    let stamp = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_nanos())
-        .unwrap_or(0);
-    let mut attempt = 0u32;
-    let (tmp, mut file) = loop {
-        let tmp = dir.join(format!(
-            ".{file_name}.tmp-{}-{stamp}-{attempt}",
-            std::process::id()
-        ));
-        match std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)
-        {
-            Ok(f) => break (tmp, f),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempt < 100 => {
-                attempt += 1;
-            }
-            Err(e) => return Err(io("create a temporary file next to")(e)),
-        }
-    };
-    let result = file
-        .write_all(data)
-        .and_then(|()| file.sync_all())
-        .map_err(io("write"));
-    drop(file);
-    let result = result.and_then(|()| std::fs::rename(&tmp, path).map_err(io("rename into")));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    write_atomic(path, data).map_err(|e| IoError::Io {
+        path: name.to_string(),
+        action: e.action,
+        source: e.source,
+    })
 }
 
 /// Writes `mesh` in `format` to any writer (no temporary file). Errors name the format

@@ -114,6 +114,25 @@ impl Mesh {
         &self.triangles
     }
 
+    /// The content hash every face uses to name a mesh: blake3 (64 hex digits) of the
+    /// positions as little-endian `f64` followed by the triangle indices as little-endian
+    /// `u64`. Experiment files record it; the web app's mesh ids are its first 16 digits;
+    /// cached bases are keyed by it.
+    pub fn content_hash(&self) -> String {
+        let mut h = blake3::Hasher::new();
+        for p in &self.positions {
+            for c in p {
+                h.update(&c.to_le_bytes());
+            }
+        }
+        for t in &self.triangles {
+            for &v in t {
+                h.update(&(v as u64).to_le_bytes());
+            }
+        }
+        h.finalize().to_hex().to_string()
+    }
+
     /// The vertex of largest x (lowest index on ties): the default source and anchor of
     /// every spectral field (0 for an empty mesh).
     pub fn vertex_of_largest_x(&self) -> usize {

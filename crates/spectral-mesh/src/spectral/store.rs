@@ -12,7 +12,7 @@
 //!   the Laplacian name, `n`, `k`, the mesh hash and the solver parameters.
 
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use npyz::WriterBuilder;
 
@@ -82,20 +82,7 @@ impl BasisMeta {
 /// A content hash of the mesh: BLAKE3 (hex) of the vertex count, the positions as
 /// little-endian f64, the triangle count and the triangles as little-endian u64.
 pub fn mesh_hash(mesh: &Mesh) -> String {
-    let mut h = blake3::Hasher::new();
-    h.update(&(mesh.positions().len() as u64).to_le_bytes());
-    for p in mesh.positions() {
-        for c in p {
-            h.update(&c.to_le_bytes());
-        }
-    }
-    h.update(&(mesh.triangles().len() as u64).to_le_bytes());
-    for t in mesh.triangles() {
-        for &i in t {
-            h.update(&(i as u64).to_le_bytes());
-        }
-    }
-    h.finalize().to_hex().to_string()
+    mesh.content_hash()
 }
 
 fn io_err(path: &Path) -> impl Fn(std::io::Error) -> StoreError + '_ {
@@ -189,13 +176,7 @@ pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(),
         ),
         ("meta", npy_u8(&meta_json).map_err(&e)?),
     ];
-    let tmp: PathBuf = {
-        let mut name = path.file_name().unwrap_or_default().to_os_string();
-        name.push(format!(".tmp{}", std::process::id()));
-        path.with_file_name(name)
-    };
-    let result = (|| -> std::io::Result<()> {
-        let file = std::fs::File::create(&tmp)?;
+    crate::io::write_atomic_with(path, |file| {
         let mut zip = zip::ZipWriter::new(std::io::BufWriter::new(file));
         let opts = zip::write::SimpleFileOptions::default()
             .compression_method(zip::CompressionMethod::Deflated)
@@ -206,14 +187,9 @@ pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(),
             zip.write_all(bytes)?;
         }
         let mut inner = zip.finish().map_err(std::io::Error::other)?;
-        inner.flush()?;
-        Ok(())
-    })();
-    if let Err(err) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e(err));
-    }
-    std::fs::rename(&tmp, path).map_err(&e)
+        inner.flush()
+    })
+    .map_err(|err| e(err.source))
 }
 
 /// Reads an archive written by [`save_npz`] (or by NumPy with the same arrays; the
