@@ -18,6 +18,6 @@ pub mod shapes;
 pub mod spectral;
 
 pub use linalg::SparseMatrix;
-pub use mesh::Mesh;
+pub use mesh::{Mesh, PointCloud};
 pub use operators::{Laplacian, Operators};
 pub use spectral::Eigenbasis;
