@@ -5,7 +5,7 @@ use std::str::FromStr;
 
 use super::mass::{MassKind, mass_matrix};
 use super::point_cloud::{PointCloudParams, point_cloud_laplacian};
-use super::robust::{RobustError, RobustParams, robust_from_soup};
+use super::robust::{Gluing, RobustError, RobustParams, robust_from_soup};
 use super::stiffness::{cotan_stiffness, uniform_laplacian};
 use crate::linalg::SparseMatrix;
 use crate::mesh::{Mesh, PointCloud};
@@ -138,6 +138,7 @@ impl Operators {
                 mesh.triangles(),
                 &RobustParams::default(),
                 1.0,
+                Gluing::Angular,
             );
             return Self {
                 laplacian,
@@ -162,7 +163,13 @@ impl Operators {
     /// ([`super::robust::robust_laplacian`]); `laplacian` is [`Laplacian::Robust`].
     pub fn robust(mesh: &Mesh, params: &RobustParams) -> Result<Self, RobustError> {
         params.validate()?;
-        let r = robust_from_soup(mesh.positions(), mesh.triangles(), params, 1.0);
+        let r = robust_from_soup(
+            mesh.positions(),
+            mesh.triangles(),
+            params,
+            1.0,
+            Gluing::Angular,
+        );
         Ok(Self {
             laplacian: Laplacian::Robust,
             stiffness: r.stiffness,

@@ -20,6 +20,9 @@ pub mod stiffness;
 
 pub use discretization::{Laplacian, Operators};
 pub use mass::{MassKind, mass_matrix};
-pub use point_cloud::{NormalSource, PointCloudLaplacian, PointCloudParams, point_cloud_laplacian};
+pub use point_cloud::{
+    NormalSource, PointCloudLaplacian, PointCloudParams, TriangleUnion, point_cloud_laplacian,
+    point_cloud_triangles,
+};
 pub use robust::{RobustError, RobustLaplacian, RobustParams, RobustStats, robust_laplacian};
 pub use stiffness::{cotan_stiffness, uniform_laplacian};

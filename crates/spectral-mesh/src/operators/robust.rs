@@ -163,7 +163,20 @@ pub fn robust_laplacian(
         mesh.triangles(),
         params,
         1.0,
+        Gluing::Angular,
     ))
+}
+
+/// How the triangles around an edge are ordered before consecutive ones are glued.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Gluing {
+    /// By angle about the edge (geometry-central's rule; copies of one triangle end up
+    /// next to each other and are glued as folds).
+    Angular,
+    /// By angle, then copies of one triangle spread out so that consecutive faces are
+    /// different triangles wherever the counts allow (copies glued in parallel sheets,
+    /// not folded onto each other). The same as `Angular` when no triangle repeats.
+    InterleaveCopies,
 }
 
 /// The robust pipeline on raw arrays, scaled by `factor` (1 for a mesh, 1/3 for the union
@@ -174,13 +187,14 @@ pub(crate) fn robust_from_soup(
     triangles: &[[usize; 3]],
     params: &RobustParams,
     factor: f64,
+    gluing: Gluing,
 ) -> RobustLaplacian {
     // 6 halfedges per triangle in the cover: 32-bit indices whenever they fit.
     if triangles.len().saturating_mul(6) < u32::MAX as usize && positions.len() < u32::MAX as usize
     {
-        run::<u32>(positions, triangles, params, factor)
+        run::<u32>(positions, triangles, params, factor, gluing)
     } else {
-        run::<usize>(positions, triangles, params, factor)
+        run::<usize>(positions, triangles, params, factor, gluing)
     }
 }
 
@@ -237,6 +251,7 @@ fn run<I: Ix>(
     tris: &[[usize; 3]],
     params: &RobustParams,
     factor: f64,
+    gluing: Gluing,
 ) -> RobustLaplacian {
     let n = positions.len();
     let m = tris.len();
@@ -345,7 +360,7 @@ fn run<I: Ix>(
         }
     }
     drop(he_len);
-    glue(&mut cover, positions, tris, &order, &runs);
+    glue(&mut cover, positions, tris, &order, &runs, gluing);
     drop(order);
     drop(runs);
 
@@ -396,6 +411,7 @@ fn glue<I: Ix>(
     tris: &[[usize; 3]],
     order: &[I],
     runs: &[usize],
+    gluing: Gluing,
 ) {
     let m = tris.len();
     let n_edges = runs.len() - 1;
@@ -414,6 +430,7 @@ fn glue<I: Ix>(
     }
     cover.primary = vec![I::of(0); next_id];
     let mut ring: Vec<(f64, usize)> = Vec::new();
+    let mut groups: Vec<Vec<(f64, usize)>> = Vec::new();
     let mut link: Vec<usize> = Vec::new();
     let mut removed: Vec<bool> = Vec::new();
     for (id, &r) in by_first.iter().enumerate() {
@@ -437,6 +454,10 @@ fn glue<I: Ix>(
                 e.0 = dot(by, out).atan2(dot(bx, out));
             }
             ring.sort_by(|a, b| b.0.partial_cmp(&a.0).unwrap_or(std::cmp::Ordering::Equal));
+            if gluing == Gluing::InterleaveCopies {
+                let third = |h: usize| tris[h / 3][(h % 3 + 2) % 3];
+                interleave_copies(&mut ring, &third, &mut groups);
+            }
         }
         // The sheet of front halfedge h running s -> tip ("true") or tip -> s ("false").
         let sheet = |h: usize, forward: bool| {
@@ -499,6 +520,49 @@ fn glue<I: Ix>(
             cover.edge[next] = I::of(eid);
             curr = sheet(ring[(i + 1) % k].1, false);
         }
+    }
+}
+
+/// Reorders a ring sorted by angle so that copies of one triangle (same third vertex) are
+/// not neighbours where avoidable: repeatedly the group with the most copies left that is
+/// not the previous one (ties: the first in angular order). Without copies the order is
+/// unchanged.
+fn interleave_copies(
+    ring: &mut Vec<(f64, usize)>,
+    third: &impl Fn(usize) -> usize,
+    groups: &mut Vec<Vec<(f64, usize)>>,
+) {
+    groups.clear();
+    for &e in ring.iter() {
+        match groups.iter_mut().find(|g| third(g[0].1) == third(e.1)) {
+            Some(g) => g.push(e),
+            None => groups.push(vec![e]),
+        }
+    }
+    if groups.len() == ring.len() {
+        return;
+    }
+    for g in groups.iter_mut() {
+        g.reverse(); // pop() then takes them in their original order
+    }
+    ring.clear();
+    let mut prev = usize::MAX;
+    loop {
+        let mut best = usize::MAX;
+        for (i, g) in groups.iter().enumerate() {
+            if i != prev && !g.is_empty() && (best == usize::MAX || g.len() > groups[best].len()) {
+                best = i;
+            }
+        }
+        if best == usize::MAX {
+            // Only the previous group has copies left: they must follow each other.
+            best = prev;
+        }
+        match groups.get_mut(best).and_then(|g| g.pop()) {
+            Some(e) => ring.push(e),
+            None => break,
+        }
+        prev = best;
     }
 }
 
