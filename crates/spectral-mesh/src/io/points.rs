@@ -241,6 +241,9 @@ fn tokens(line: &str) -> Vec<&str> {
 }
 
 fn read_text(bytes: &[u8], ctx: &Ctx) -> Result<LoadedPoints, IoError> {
+    if bytes.is_empty() {
+        return Err(ctx.invalid(None, "the file is empty"));
+    }
     let mut warnings = Vec::new();
     let mut positions: Vec<[f64; 3]> = Vec::new();
     let mut normals: Vec<[f64; 3]> = Vec::new();
