@@ -335,15 +335,16 @@ fn local_star(
         let pos = spade::mitigate_underflow(Point2::new(dot(d, e1), dot(d, e2)));
         locals.push(Local { pos, idx: k });
     }
-    // Coincident 2D positions: bulk_load_stable keeps the first (the centre, then the
-    // nearer neighbour).
-    let Ok(tri) = DelaunayTriangulation::<Local>::bulk_load_stable(locals) else {
+    // Neighbours that project onto the centre are left out (the centre must stay itself);
+    // among coincident neighbours the triangulation keeps one.
+    locals.retain(|l| l.idx == usize::MAX || l.pos.x != 0.0 || l.pos.y != 0.0);
+    let Ok(tri) = DelaunayTriangulation::<Local>::bulk_load(locals) else {
         return;
     };
     if tri.num_vertices() < 3 {
         return;
     }
-    let Some(centre) = tri.vertices().next() else {
+    let Some(centre) = tri.vertices().find(|v| v.data().idx == usize::MAX) else {
         return;
     };
     for e in centre.out_edges() {
@@ -409,7 +410,9 @@ pub fn point_cloud_triangles(
     Ok(match params.union {
         TriangleUnion::ConsensusOnly => consensus(cloud.positions(), &nbrs, count_triangles(&tris)),
         TriangleUnion::Multiplicity | TriangleUnion::Interleaved => tris,
-        TriangleUnion::Consensus => patched_union(cloud.positions(), &nbrs, count_triangles(&tris)),
+        TriangleUnion::Consensus => {
+            patched_union(cloud.positions(), &nbrs, count_triangles(&tris), &mut 0)
+        }
     })
 }
 
@@ -594,8 +597,10 @@ fn patched_union(
     pts: &[[f64; 3]],
     nbrs: &[Vec<usize>],
     counted: Vec<([usize; 3], usize)>,
+    consensus_len: &mut usize,
 ) -> Vec<[usize; 3]> {
     let chosen = consensus(pts, nbrs, counted.clone());
+    *consensus_len = chosen.len();
     let key = |a: usize, b: usize| (a.min(b), a.max(b));
     let mut edge_use: HashMap<(usize, usize), u8> = HashMap::with_capacity(2 * chosen.len());
     let mut state = vec![0u8; pts.len()]; // 0 unused, 1 interior, 2 on the boundary
@@ -752,16 +757,23 @@ pub fn point_cloud_laplacian(
     let counted = count_triangles(&tris);
     stats.distinct_triangles = counted.len();
     stats.agreed_triangles = counted.iter().filter(|c| c.1 >= 3).count();
-    let (soup, factor, gluing) = match params.union {
+    let mut consensus_len = usize::MAX;
+    let (mut soup, mut factor, gluing) = match params.union {
         TriangleUnion::ConsensusOnly => (consensus(pts, &nbrs, counted), 1.0, Gluing::Angular),
         TriangleUnion::Multiplicity => (tris, 1.0 / 3.0, Gluing::Angular),
         TriangleUnion::Interleaved => (tris, 1.0 / 3.0, Gluing::InterleaveCopies),
         TriangleUnion::Consensus => (
-            patched_union(pts, &nbrs, counted),
+            patched_union(pts, &nbrs, counted, &mut consensus_len),
             1.0 / 3.0,
             Gluing::InterleaveCopies,
         ),
     };
+    if params.union == TriangleUnion::Consensus && soup.len() == 3 * consensus_len {
+        // Nothing was added in holes: three copies of one consistent set give the same
+        // operator as the set once.
+        soup = soup.into_iter().step_by(3).collect();
+        factor = 1.0;
+    }
     stats.triangles = soup.len();
     let r = robust_from_soup(pts, &soup, &params.robust(), factor, gluing);
     stats.robust = r.stats;
