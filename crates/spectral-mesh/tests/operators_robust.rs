@@ -394,7 +394,7 @@ fn degenerate_clouds_do_not_break_anything() {
     // Collinear points (no triangle anywhere), duplicates, two points, one point.
     let line: Vec<[f64; 3]> = (0..20).map(|i| [i as f64, 0.0, 0.0]).collect();
     let mut dup = random_sphere(200, 3).positions().to_vec();
-    dup.extend_from_slice(&dup[..50].to_vec());
+    dup.extend_from_within(..50);
     for (name, pts) in [
         ("line", line),
         ("duplicates", dup),

@@ -247,7 +247,7 @@ pub fn pca_normal(pts: impl Iterator<Item = [f64; 3]> + Clone) -> [f64; 3] {
 fn smallest_eigenvector(mut a: [[f64; 3]; 3]) -> [f64; 3] {
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     let scale_ = a[0][0].abs() + a[1][1].abs() + a[2][2].abs();
-    if !(scale_ > 0.0) || !scale_.is_finite() {
+    if !scale_.is_finite() || scale_ <= 0.0 {
         return [0.0, 0.0, 1.0];
     }
     for _sweep in 0..50 {
@@ -320,7 +320,7 @@ fn local_star(
         .iter()
         .map(|&j| norm(sub(points[j], p)))
         .fold(0.0f64, f64::max);
-    if !(len_scale > 0.0 && len_scale.is_finite()) {
+    if !len_scale.is_finite() || len_scale <= 0.0 {
         return;
     }
     let e1 = perpendicular(normal);
@@ -461,7 +461,7 @@ fn points_in_circumball(pts: &[[f64; 3]], t: &[usize; 3], cand: &[usize]) -> usi
     let w = cross(u, v);
     let ww = dot(w, w);
     let scale_ = dot(u, u).max(dot(v, v));
-    if !(ww > 1e-24 * scale_ * scale_) {
+    if ww.is_nan() || ww <= 1e-24 * scale_ * scale_ {
         return usize::MAX;
     }
     let c = add(

@@ -576,7 +576,11 @@ fn sheet_at<I: Ix>(
 ) -> usize {
     let j = p / 2;
     let front = if j == 0 { h1 } else { hs[k - j].us() };
-    if p % 2 == 0 { front } else { mirror(front) }
+    if p.is_multiple_of(2) {
+        front
+    } else {
+        mirror(front)
+    }
 }
 
 /// geometry-central's `Vector3::buildTangentBasis`, operation for operation.
@@ -604,7 +608,7 @@ fn half_cot<I: Ix>(c: &Cover<I>, h: usize) -> f64 {
     let h2 = c.next[h1].us();
     let (a, b, d) = (c.len[h], c.len[h1], c.len[h2]);
     let dbl = double_area_from_lengths([a, b, d]);
-    if !(dbl > f64::EPSILON * (a * a + b * b + d * d)) {
+    if dbl.is_nan() || dbl <= f64::EPSILON * (a * a + b * b + d * d) {
         return 0.0;
     }
     // cot = (b^2 + d^2 - a^2) / (4 area) = (b^2 + d^2 - a^2) / (2 dbl).
@@ -681,7 +685,7 @@ fn flip_to_delaunay<I: Ix>(c: &mut Cover<I>, tol: f64) -> (usize, usize) {
 /// (b, a, d) glued along ab: `l_ab`, `l_bc`, `l_ca`, `l_ad`, `l_db`. Lays ab on the x axis,
 /// c above and d below it. `None` when a triangle is degenerate or the result is not finite.
 fn flipped_length(l_ab: f64, l_bc: f64, l_ca: f64, l_ad: f64, l_db: f64) -> Option<f64> {
-    if !(l_ab > 0.0) {
+    if l_ab.is_nan() || l_ab <= 0.0 {
         return None;
     }
     // c = (x_c, y_c): |ac| = l_ca, |bc| = l_bc; y from the area (stable).
