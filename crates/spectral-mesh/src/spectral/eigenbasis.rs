@@ -432,16 +432,12 @@ impl EigenSolver {
             ..self.params.clone()
         };
         let mut count = 0usize;
-        let b = compute_eigenbasis(
-            &self.ops,
-            &params,
-            &mut |p: EigenProgress| {
-                if matches!(p, EigenProgress::Factorization { .. }) {
-                    count += 1;
-                }
-                progress(p)
-            },
-        )?;
+        let b = compute_eigenbasis(&self.ops, &params, &mut |p: EigenProgress| {
+            if matches!(p, EigenProgress::Factorization { .. }) {
+                count += 1;
+            }
+            progress(p)
+        })?;
         self.factorizations += count;
         let b = Arc::new(b);
         self.basis = Some(b.clone());
