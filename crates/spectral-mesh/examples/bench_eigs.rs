@@ -1,9 +1,16 @@
 //! Benchmark of the eigenbasis engine.
 //!
-//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P] [--basis M] [--davidson] [--ks-plain]`
+//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P] [--basis M] [--davidson] [--ks-plain] [--solver K1,K2,...] [--copies N]`
 //!
 //! Prints one line of `key=value` pairs: n, k, seconds (assembly excluded, factorization
 //! included), iterations, solves, max residual, orthogonality error, peak RSS.
+//!
+//! MESH is a mesh file or a built-in shape spec (`irregular-double-torus:res=5`);
+//! `--copies N` solves on N disjoint copies of it side by side.
+//!
+//! `--solver K1,K2,...` instead asks one `EigenSolver` for `K1`, then `K2`, ... pairs (K is
+//! then unused) and prints one line per solve: its seconds, the factorizations so far,
+//! and a hash of the bits of the pairs (equal hashes: equal results).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -18,8 +25,9 @@ use spectral_mesh::Operators;
 use spectral_mesh::io::read_mesh;
 use spectral_mesh::linalg::{SparseAlgorithm, SparseEigenOptions, sparse_generalized_eigen};
 use spectral_mesh::operators::Laplacian;
+use spectral_mesh::cancel::CancelToken;
 use spectral_mesh::spectral::eigenbasis::{
-    EigenMethod, EigenParams, EigenProgress, compute_eigenbasis,
+    EigenMethod, EigenParams, EigenProgress, EigenSolver, compute_eigenbasis,
 };
 use spectral_mesh::spectral::store::{BasisMeta, save_npz};
 
@@ -34,6 +42,31 @@ fn peak_rss_mib() -> f64 {
         })
         .map(|kib| kib / 1024.0)
         .unwrap_or(f64::NAN)
+}
+
+/// `copies` disjoint copies of `mesh` in a row along x (`copies` connected components per
+/// component of `mesh`).
+fn side_by_side(
+    mesh: &spectral_mesh::mesh::Mesh,
+    copies: usize,
+) -> Result<spectral_mesh::mesh::Mesh, Box<dyn std::error::Error>> {
+    let p = mesh.positions();
+    let (lo, hi) = p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v[0]), hi.max(v[0]))
+    });
+    let step = 1.5 * (hi - lo).max(f64::MIN_POSITIVE);
+    let mut pos = Vec::with_capacity(p.len() * copies);
+    let mut tri = Vec::with_capacity(mesh.triangles().len() * copies);
+    for c in 0..copies {
+        let base = pos.len();
+        pos.extend(p.iter().map(|v| [v[0] + step * c as f64, v[1], v[2]]));
+        tri.extend(
+            mesh.triangles()
+                .iter()
+                .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+        );
+    }
+    Ok(spectral_mesh::mesh::Mesh::new(pos, tri)?)
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -58,6 +91,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut raw_davidson = false;
     let mut raw_basis = 0usize;
     let mut raw_plain = false;
+    let mut solver_ks: Vec<usize> = Vec::new();
+    let mut copies = 1usize;
     let mut i = 2;
     while i < args.len() {
         match args[i].as_str() {
@@ -90,14 +125,53 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 raw_basis = args[i + 1].parse()?;
                 i += 1;
             }
+            "--copies" => {
+                copies = args[i + 1].parse()?;
+                i += 1;
+            }
+            "--solver" => {
+                for v in args[i + 1].split(',') {
+                    solver_ks.push(v.parse()?);
+                }
+                i += 1;
+            }
             other => lap = other.parse()?,
         }
         i += 1;
     }
-    let mesh = read_mesh(&path)?.mesh;
+    let mesh = if spectral_mesh::shapes::is_shape_spec(&args[0]) {
+        spectral_mesh::shapes::build_str(&args[0])?
+    } else {
+        read_mesh(&path)?.mesh
+    };
+    let mesh = if copies > 1 { side_by_side(&mesh, copies)? } else { mesh };
     let t0 = Instant::now();
     let ops = Operators::new(&mesh, lap);
     let t_ops = t0.elapsed().as_secs_f64();
+    if !solver_ks.is_empty() {
+        let mut solver = EigenSolver::new(std::sync::Arc::new(ops), params.clone());
+        let cancel = CancelToken::new();
+        for &ks in &solver_ks {
+            let t = Instant::now();
+            let basis = solver.solve(ks, &mut |_| {}, &cancel)?;
+            let secs = t.elapsed().as_secs_f64();
+            use std::hash::{Hash, Hasher};
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            for v in basis.values.iter().chain(&basis.vectors) {
+                v.to_bits().hash(&mut h);
+            }
+            println!(
+                "solver mesh={} n={} k={ks} seconds={secs:.3} factorizations={} lambda_k={:.12e} bits={:016x} peak_rss_mib={:.0}",
+                path.display(),
+                basis.n,
+                solver.factorizations(),
+                basis.values[ks - 1],
+                h.finish(),
+                peak_rss_mib()
+            );
+        }
+        return Ok(());
+    }
     let t1 = Instant::now();
     let mut iterations = 0;
     let mut solves = 0;

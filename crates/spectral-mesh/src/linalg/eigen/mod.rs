@@ -26,6 +26,8 @@
 //!   (its row buffer lives in `linalg/scratch.rs`);
 //! - `result.rs`: [`PartialEigen`] and its packaging;
 //! - `rng.rs`: the deterministic random numbers of the start blocks;
+//! - `shift_invert.rs`: [`ShiftInvert`], the factored `S - sigma B` (built once, reused
+//!   by every solve of the same pencil);
 //! - `davidson.rs` and `krylov_schur/` (the iteration in `mod.rs`, the block
 //!   orthonormalization in `orthonormalize.rs`): the two iterations;
 //! - this file: the driver (checks, shift, factorization, sizes, fallback).
@@ -36,37 +38,51 @@ mod kernels;
 mod krylov_schur;
 mod result;
 mod rng;
+mod shift_invert;
 mod types;
 
 pub use kernels::{b_orthogonality_error, norm1, relative_residuals, sym_spmm, sym_spmm_into};
 pub use result::PartialEigen;
+pub use shift_invert::{ShiftInvert, default_shift};
 pub use types::{EigenProgress, SparseAlgorithm, SparseEigenError, SparseEigenOptions};
 
-use super::{SparseCholesky, SparseMatrix, scratch, timing};
+use super::{SparseMatrix, scratch};
 use rng::Rng;
+use shift_invert::check_sizes;
 
 /// The `k` smallest pairs of `S x = lambda B x` by block Krylov-Schur (default) or block
 /// Davidson on the shift-inverted pencil (see the module documentation). `S` must be
 /// symmetric positive semi-definite and `B` symmetric positive definite, both `n x n`.
 /// Works for any `1 <= k <= n` (the search space is capped at `n`), but for small `n` or
 /// `k` close to `n` the dense path is faster.
+///
+/// Factors `S - sigma B` itself (see [`ShiftInvert::new`]) and frees the factor before the
+/// eigenvectors are copied out; [`sparse_generalized_eigen_with`] takes a factor built
+/// once for several solves.
 pub fn sparse_generalized_eigen(
     s: &SparseMatrix,
     b: &SparseMatrix,
     opts: &SparseEigenOptions,
     progress: &mut dyn FnMut(EigenProgress),
 ) -> Result<PartialEigen, SparseEigenError> {
-    let n = s.ncols();
+    sparse_generalized_eigen_with(s, b, opts, None, progress)
+}
+
+/// [`sparse_generalized_eigen`] with an optional factor of `S - sigma B` built beforehand
+/// by [`ShiftInvert::new`] from the same `S` and `B` (then `opts.shift` is not used):
+/// the result is, bit for bit, the one [`sparse_generalized_eigen`] gives with the shift
+/// of that factor, so one factor serves every `k` and a larger `k` costs only a fresh
+/// iteration. `None`: the factor is built here and freed before the eigenvectors are
+/// copied out of the basis (lower peak memory).
+pub fn sparse_generalized_eigen_with(
+    s: &SparseMatrix,
+    b: &SparseMatrix,
+    opts: &SparseEigenOptions,
+    factor: Option<&ShiftInvert>,
+    progress: &mut dyn FnMut(EigenProgress),
+) -> Result<PartialEigen, SparseEigenError> {
+    let n = check_sizes(s, b)?;
     let k = opts.k;
-    if s.nrows() != n || b.nrows() != n || b.ncols() != n {
-        return Err(SparseEigenError::Invalid(format!(
-            "S is {} x {}, B is {} x {}",
-            s.nrows(),
-            s.ncols(),
-            b.nrows(),
-            b.ncols()
-        )));
-    }
     if k == 0 || k > n {
         return Err(SparseEigenError::Invalid(format!(
             "asked for k = {k} pairs of an n = {n} problem"
@@ -81,34 +97,24 @@ pub fn sparse_generalized_eigen(
     if !sn.is_finite() || !bn.is_finite() {
         return Err(SparseEigenError::NonFinite);
     }
-
-    // Shift: well below the smallest eigenvalue of interest but scale-aware. The total
-    // mass M = 1^T B 1 sets the eigenvalue scale of the low modes (lambda_2 ~ 10 / M for
-    // a round surface; for B = I the same holds with M = n), and a floor relative to
-    // ||S|| / ||B|| keeps K well conditioned enough for Cholesky.
-    let total_mass: f64 = b.values().iter().sum::<f64>().abs().max(f64::MIN_POSITIVE);
-    let auto_shift = -(1e-2 / total_mass).max(1e-10 * sn / bn.max(f64::MIN_POSITIVE));
-    let mut shift = opts.shift.unwrap_or(auto_shift);
-    if shift >= 0.0 {
-        shift = auto_shift;
-    }
-    let mut chol = None;
-    let mut last_err = String::new();
-    for _ in 0..5 {
-        progress(EigenProgress::Factorization { n, shift });
-        let kmat = s.add_scaled(1.0, b, -shift);
-        match timing::timed(timing::Phase::Factor, || SparseCholesky::new(&kmat)) {
-            Ok(c) => {
-                chol = Some(c);
-                break;
-            }
-            Err(e) => {
-                last_err = e.to_string();
-                shift *= 100.0;
-            }
+    let mut owned = None;
+    let factor = match factor {
+        Some(f) if f.n() != n => {
+            return Err(SparseEigenError::Invalid(format!(
+                "the factorization is of size {} but the problem is {n} x {n}",
+                f.n()
+            )));
         }
-    }
-    let chol = chol.ok_or(SparseEigenError::Factorization(last_err))?;
+        Some(f) => f,
+        None => owned.insert(ShiftInvert::with_norms(
+            s,
+            b,
+            opts.shift,
+            (sn, bn),
+            progress,
+        )?),
+    };
+    let (chol, shift) = (factor.cholesky(), factor.shift());
 
     // The random start of every iteration (and of a rerun) comes from the same seed.
     let start_rng = || Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
@@ -136,7 +142,7 @@ pub fn sparse_generalized_eigen(
         let pb = krylov_schur::Problem {
             s,
             b,
-            chol: &chol,
+            chol,
             shift,
             k,
             tol,
@@ -169,16 +175,16 @@ pub fn sparse_generalized_eigen(
             out = krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
         }
         scratch::release_all();
-        // The factor goes before the eigenvectors are copied out of the basis (see
-        // `Converged`): the copy can then reuse its memory.
-        drop(chol);
+        // A factor built here goes before the eigenvectors are copied out of the basis
+        // (see `Converged`): the copy can then reuse its memory.
+        drop(owned);
         return out.map(|pairs| pairs.finish(b, progress));
     }
 
     davidson::davidson(
         s,
         b,
-        &chol,
+        chol,
         shift,
         opts,
         (tol, sn, bn),
@@ -257,5 +263,98 @@ pub(crate) mod tests {
             sparse_generalized_eigen(&s, &b, &opts, &mut |_| {}),
             Err(SparseEigenError::Invalid(_))
         ));
+    }
+
+    fn same_bits(a: &PartialEigen, b: &PartialEigen) {
+        assert_eq!(a.values, b.values);
+        assert_eq!(a.vectors, b.vectors);
+        assert_eq!(a.residuals, b.residuals);
+        assert_eq!((a.iterations, a.solves), (b.iterations, b.solves));
+        assert_eq!(a.shift, b.shift);
+    }
+
+    /// A factor built beforehand serves several `k` without a new factorization and gives
+    /// the bits of the solve that factors for itself.
+    #[test]
+    fn a_given_factor_gives_the_same_bits() {
+        let (s, b) = path_laplacian(300);
+        let f = ShiftInvert::new(&s, &b, None, &mut |_| {}).unwrap();
+        assert_eq!(f.shift(), default_shift(&s, &b));
+        assert_eq!(f.n(), 300);
+        for k in [20, 35] {
+            let opts = SparseEigenOptions {
+                k,
+                ..Default::default()
+            };
+            let own = sparse_generalized_eigen(&s, &b, &opts, &mut |_| {}).unwrap();
+            let mut factored = 0;
+            let given = sparse_generalized_eigen_with(&s, &b, &opts, Some(&f), &mut |e| {
+                if matches!(e, EigenProgress::Factorization { .. }) {
+                    factored += 1;
+                }
+            })
+            .unwrap();
+            assert_eq!(factored, 0);
+            same_bits(&own, &given);
+        }
+        // A factor of another size is refused.
+        let (s2, b2) = path_laplacian(100);
+        let opts = SparseEigenOptions {
+            k: 5,
+            ..Default::default()
+        };
+        assert!(matches!(
+            sparse_generalized_eigen_with(&s2, &b2, &opts, Some(&f), &mut |_| {}),
+            Err(SparseEigenError::Invalid(_))
+        ));
+    }
+
+    /// `ShiftInvert::refactor` (same patterns, new values: the analysis is reused) gives
+    /// the factor, shift and eigenpairs of a fresh `ShiftInvert::new`.
+    #[test]
+    fn refactor_equals_a_fresh_factor() {
+        let (s, b) = path_laplacian(300);
+        let mut f = ShiftInvert::new(&s, &b, None, &mut |_| {}).unwrap();
+        let s2 = s.add_scaled(2.0, &s, 0.0);
+        let b2 = b.add_scaled(1.5, &b, 0.0);
+        f.refactor(&s2, &b2, None, &mut |_| {}).unwrap();
+        let fresh = ShiftInvert::new(&s2, &b2, None, &mut |_| {}).unwrap();
+        assert_eq!(f.shift(), fresh.shift());
+        assert_ne!(f.shift(), default_shift(&s, &b));
+        let opts = SparseEigenOptions {
+            k: 12,
+            ..Default::default()
+        };
+        let a = sparse_generalized_eigen_with(&s2, &b2, &opts, Some(&f), &mut |_| {}).unwrap();
+        let c = sparse_generalized_eigen_with(&s2, &b2, &opts, Some(&fresh), &mut |_| {}).unwrap();
+        same_bits(&a, &c);
+    }
+
+    /// When `S - sigma B` is not positive definite the shift grows 100-fold, and the
+    /// analysis of the first attempt is reused (same pattern).
+    #[test]
+    fn a_failed_factorization_is_retried_with_a_larger_shift() {
+        let n = 10;
+        // B = I, so the default shift is -0.01 / n = -1e-3; S has an eigenvalue -2e-3.
+        let mut t: Vec<(usize, usize, f64)> = (1..n).map(|i| (i, i, 1.0)).collect();
+        t.push((0, 0, -2e-3));
+        let s = SparseMatrix::from_triplets(n, n, &t);
+        let b = SparseMatrix::from_triplets(n, n, &(0..n).map(|i| (i, i, 1.0)).collect::<Vec<_>>());
+        let auto = default_shift(&s, &b);
+        assert!((auto + 1e-3).abs() < 1e-15);
+        let mut shifts = Vec::new();
+        let f = ShiftInvert::new(&s, &b, None, &mut |e| {
+            if let EigenProgress::Factorization { shift, .. } = e {
+                shifts.push(shift);
+            }
+        })
+        .unwrap();
+        assert_eq!(shifts, vec![auto, auto * 100.0]);
+        assert_eq!(f.shift(), auto * 100.0);
+        // K = S + 0.1 I: K^-1 e_0 = e_0 / 0.098.
+        let mut x = vec![0.0; n];
+        x[0] = 1.0;
+        f.cholesky().solve_in_place(&mut x);
+        assert!((x[0] - 1.0 / 0.098).abs() < 1e-12);
     }
 }
