@@ -1,6 +1,6 @@
 //! Benchmark of the eigenbasis engine.
 //!
-//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P] [--basis M] [--davidson] [--ks-plain] [--solver K1,K2,...] [--copies N]`
+//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P] [--basis M] [--davidson] [--ks-plain] [--solver K1,K2,...] [--cancel-after S] [--copies N]`
 //!
 //! Prints one line of `key=value` pairs: n, k, seconds (assembly excluded, factorization
 //! included), iterations, solves, max residual, orthogonality error, peak RSS.
@@ -10,7 +10,9 @@
 //!
 //! `--solver K1,K2,...` instead asks one `EigenSolver` for `K1`, then `K2`, ... pairs (K is
 //! then unused) and prints one line per solve: its seconds, the factorizations so far,
-//! and a hash of the bits of the pairs (equal hashes: equal results).
+//! and a hash of the bits of the pairs (equal hashes: equal results). With
+//! `--cancel-after S` each of those solves is cancelled from another thread after `S`
+//! seconds, and the line gives the time from `cancel()` to the solve's return.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -22,10 +24,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use spectral_mesh::Operators;
+use spectral_mesh::cancel::CancelToken;
 use spectral_mesh::io::read_mesh;
 use spectral_mesh::linalg::{SparseAlgorithm, SparseEigenOptions, sparse_generalized_eigen};
 use spectral_mesh::operators::Laplacian;
-use spectral_mesh::cancel::CancelToken;
 use spectral_mesh::spectral::eigenbasis::{
     EigenMethod, EigenParams, EigenProgress, EigenSolver, compute_eigenbasis,
 };
@@ -51,9 +53,11 @@ fn side_by_side(
     copies: usize,
 ) -> Result<spectral_mesh::mesh::Mesh, Box<dyn std::error::Error>> {
     let p = mesh.positions();
-    let (lo, hi) = p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-        (lo.min(v[0]), hi.max(v[0]))
-    });
+    let (lo, hi) = p
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v[0]), hi.max(v[0]))
+        });
     let step = 1.5 * (hi - lo).max(f64::MIN_POSITIVE);
     let mut pos = Vec::with_capacity(p.len() * copies);
     let mut tri = Vec::with_capacity(mesh.triangles().len() * copies);
@@ -93,6 +97,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut raw_plain = false;
     let mut solver_ks: Vec<usize> = Vec::new();
     let mut copies = 1usize;
+    let mut cancel_after: Option<f64> = None;
     let mut i = 2;
     while i < args.len() {
         match args[i].as_str() {
@@ -125,6 +130,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 raw_basis = args[i + 1].parse()?;
                 i += 1;
             }
+            "--cancel-after" => {
+                cancel_after = Some(args[i + 1].parse()?);
+                i += 1;
+            }
             "--copies" => {
                 copies = args[i + 1].parse()?;
                 i += 1;
@@ -144,7 +153,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } else {
         read_mesh(&path)?.mesh
     };
-    let mesh = if copies > 1 { side_by_side(&mesh, copies)? } else { mesh };
+    let mesh = if copies > 1 {
+        side_by_side(&mesh, copies)?
+    } else {
+        mesh
+    };
     let t0 = Instant::now();
     let ops = Operators::new(&mesh, lap);
     let t_ops = t0.elapsed().as_secs_f64();
@@ -153,6 +166,31 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let cancel = CancelToken::new();
         for &ks in &solver_ks {
             let t = Instant::now();
+            if let Some(after) = cancel_after {
+                // Cancel from another thread after `after` seconds; report how long the
+                // solve took to return from there.
+                let token = CancelToken::new();
+                let remote = token.clone();
+                let canceller = std::thread::spawn(move || {
+                    std::thread::sleep(std::time::Duration::from_secs_f64(after));
+                    remote.cancel();
+                    Instant::now()
+                });
+                let r = solver.solve(ks, &mut |_| {}, &token);
+                let back = Instant::now();
+                let at = canceller.join().map_err(|_| "canceller thread")?;
+                println!(
+                    "cancel mesh={} k={ks} cancel_at={after:.3} outcome={} latency_seconds={:.3} factorizations={}",
+                    path.display(),
+                    match &r {
+                        Ok(_) => "finished".to_string(),
+                        Err(e) => format!("{e:?}"),
+                    },
+                    back.saturating_duration_since(at).as_secs_f64(),
+                    solver.factorizations()
+                );
+                continue;
+            }
             let basis = solver.solve(ks, &mut |_| {}, &cancel)?;
             let secs = t.elapsed().as_secs_f64();
             use std::hash::{Hash, Hasher};

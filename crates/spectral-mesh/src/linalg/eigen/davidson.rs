@@ -23,10 +23,13 @@
 use faer::Mat;
 
 use super::dense::{gram, product, sub_product, sym_eig};
-use super::kernels::{b_orthogonality_error, relative_residuals, residuals_from, sym_spmm};
+use super::kernels::{
+    b_orthogonality_error_cancellable, relative_residuals, residuals_from, sym_spmm,
+};
 use super::result::{PartialEigen, package};
 use super::rng::Rng;
-use super::types::{EigenProgress, SparseEigenError, SparseEigenOptions};
+use super::types::{EigenProgress, SparseEigenError, SparseEigenOptions, check};
+use crate::cancel::CancelToken;
 use crate::linalg::{SparseCholesky, SparseMatrix};
 
 /// B-orthonormalizes the `c` columns of `w` in place (SVQB), dropping numerically dependent
@@ -139,6 +142,7 @@ pub(super) fn davidson(
     (tol, sn, bn): (f64, f64, f64),
     mut rng: Rng,
     progress: &mut dyn FnMut(EigenProgress),
+    cancel: &CancelToken,
 ) -> Result<PartialEigen, SparseEigenError> {
     let n = s.ncols();
     let k = opts.k;
@@ -174,6 +178,7 @@ pub(super) fn davidson(
             bn,
             shift,
             max_iter,
+            cancel,
         };
         let ma_max = if opts.max_basis > 0 {
             opts.max_basis
@@ -201,6 +206,7 @@ pub(super) fn davidson(
     let mut nconv = 0usize;
     let mut iteration = 0usize;
     loop {
+        check(cancel)?;
         iteration += 1;
         let (theta, y) = sym_eig(h.as_ref().submatrix(0, 0, m, m))?;
         // Window of pairs to test.
@@ -258,7 +264,7 @@ pub(super) fn davidson(
             let bad = residuals.iter().position(|&r| r > tol && !full_space);
             match bad {
                 None => {
-                    let orthogonality_error = b_orthogonality_error(b, &x, k);
+                    let orthogonality_error = b_orthogonality_error_cancellable(b, &x, k, cancel)?;
                     let max_residual = residuals.iter().cloned().fold(0.0, f64::max);
                     progress(EigenProgress::Finished {
                         iterations: iteration,
@@ -382,6 +388,7 @@ struct Ctx<'a> {
     bn: f64,
     shift: f64,
     max_iter: usize,
+    cancel: &'a CancelToken,
 }
 
 /// Makes a new block orthogonal to `xl[:, :nl]` and `v[:, :m]`, B-orthonormal.
@@ -448,6 +455,7 @@ fn locked(
 
     let mut iteration = 0usize;
     loop {
+        check(ctx.cancel)?;
         iteration += 1;
         let nl = ll.len();
         let (theta, y) = if m > 0 {
@@ -606,14 +614,15 @@ fn finish(
     }
     drop(xl);
     let residuals = relative_residuals(ctx.s, ctx.b, &values, &vectors);
-    Ok(package(
+    package(
         ctx.b,
         (values, vectors, residuals),
         iterations,
         solves,
         ctx.shift,
         progress,
-    ))
+        ctx.cancel,
+    )
 }
 
 /// Appends the `c` B-orthonormal columns `w` (already orthogonal to `v[:, :m]`) to the

@@ -4,6 +4,8 @@
 use rayon::prelude::*;
 
 use super::dense::{LEAF_ROWS, gram};
+use super::types::SparseEigenError;
+use crate::cancel::CancelToken;
 use crate::linalg::{SparseMatrix, scratch};
 
 /// `max_j sum_i |A(i, j)|`, the matrix 1-norm.
@@ -197,11 +199,39 @@ pub fn b_orthogonality_error(b: &SparseMatrix, vectors: &[f64], k: usize) -> f64
     if n == 0 || k == 0 {
         return 0.0;
     }
-    orthogonality_error_by_blocks(b, vectors, k, (ORTH_BLOCK_VALUES / n).clamp(8, 64))
+    orthogonality_error_by_blocks(b, vectors, k, orth_block(n), None).unwrap_or(f64::NAN)
 }
 
-/// [`b_orthogonality_error`] with blocks of `block` columns (`n > 0`, `k > 0`).
-fn orthogonality_error_by_blocks(b: &SparseMatrix, vectors: &[f64], k: usize, block: usize) -> f64 {
+/// Columns per block of [`b_orthogonality_error`] for vectors of length `n > 0`.
+fn orth_block(n: usize) -> usize {
+    (ORTH_BLOCK_VALUES / n).clamp(8, 64)
+}
+
+/// [`b_orthogonality_error`] that stops (`Err(Cancelled)`) between two blocks once
+/// `cancel` is set: at 411k vertices and k = 500 the check takes seconds.
+pub(super) fn b_orthogonality_error_cancellable(
+    b: &SparseMatrix,
+    vectors: &[f64],
+    k: usize,
+    cancel: &CancelToken,
+) -> Result<f64, SparseEigenError> {
+    let n = b.ncols();
+    if n == 0 || k == 0 {
+        return Ok(0.0);
+    }
+    orthogonality_error_by_blocks(b, vectors, k, orth_block(n), Some(cancel))
+        .ok_or(SparseEigenError::Cancelled)
+}
+
+/// [`b_orthogonality_error`] with blocks of `block` columns (`n > 0`, `k > 0`); `None`
+/// when `cancel` was set before a block.
+fn orthogonality_error_by_blocks(
+    b: &SparseMatrix,
+    vectors: &[f64],
+    k: usize,
+    block: usize,
+    cancel: Option<&CancelToken>,
+) -> Option<f64> {
     let n = b.ncols();
     // By blocks of columns: `X[:, ..end]^T B X[:, blk]` is the part of the symmetric
     // `X^T B X` on and above the diagonal block, so half the products are made and only
@@ -213,6 +243,9 @@ fn orthogonality_error_by_blocks(b: &SparseMatrix, vectors: &[f64], k: usize, bl
     let mut bx = vec![0.0; n * block];
     let mut start = 0;
     while start < k {
+        if cancel.is_some_and(|c| c.is_cancelled()) {
+            return None;
+        }
         let end = (start + block).min(k);
         let w = end - start;
         sym_spmm_into(b, &vectors[n * start..n * end], w, &mut bx);
@@ -225,7 +258,7 @@ fn orthogonality_error_by_blocks(b: &SparseMatrix, vectors: &[f64], k: usize, bl
         }
         start = end;
     }
-    e
+    Some(e)
 }
 
 #[cfg(test)]
@@ -266,7 +299,7 @@ mod tests {
             "blocked {got} against full {want}"
         );
         // The narrower blocks of large meshes (column 130 is then 16 blocks after 3).
-        let got8 = orthogonality_error_by_blocks(&b, &x, k, 8);
+        let got8 = orthogonality_error_by_blocks(&b, &x, k, 8, None).unwrap();
         assert!(
             (got8 - want).abs() <= 1e-12 * want.max(1.0),
             "blocks of 8: {got8} against full {want}"

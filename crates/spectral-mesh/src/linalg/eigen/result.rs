@@ -1,17 +1,18 @@
 //! The result of a sparse solve and its packaging (shared by every iteration).
 
-use super::kernels::b_orthogonality_error;
-use super::types::EigenProgress;
+use super::kernels::b_orthogonality_error_cancellable;
+use super::types::{EigenProgress, SparseEigenError};
+use crate::cancel::CancelToken;
 use crate::linalg::SparseMatrix;
 
-/// The result of [`sparse_generalized_eigen`].
+/// The result of [`super::sparse_generalized_eigen`].
 #[derive(Debug, Clone)]
 pub struct PartialEigen {
     /// The `k` smallest eigenvalues, ascending.
     pub values: Vec<f64>,
     /// Eigenvectors, `n x k` column-major, `X^T B X = I`.
     pub vectors: Vec<f64>,
-    /// Relative residuals (see [`relative_residuals`]).
+    /// Relative residuals (see [`super::relative_residuals`]).
     pub residuals: Vec<f64>,
     /// `max |X^T B X - I|`.
     pub orthogonality_error: f64,
@@ -25,7 +26,7 @@ pub struct PartialEigen {
 
 /// The result of a solve from its sorted pairs `(values, vectors, residuals)`: measures
 /// the B-orthogonality, reports [`EigenProgress::Finished`] and builds the
-/// [`PartialEigen`] (shared by every iterative method).
+/// [`PartialEigen`] (shared by every iterative method); stops when `cancel` is set.
 pub(super) fn package(
     b: &SparseMatrix,
     (values, vectors, residuals): (Vec<f64>, Vec<f64>, Vec<f64>),
@@ -33,8 +34,9 @@ pub(super) fn package(
     solves: usize,
     shift: f64,
     progress: &mut dyn FnMut(EigenProgress),
-) -> PartialEigen {
-    let orthogonality_error = b_orthogonality_error(b, &vectors, values.len());
+    cancel: &CancelToken,
+) -> Result<PartialEigen, SparseEigenError> {
+    let orthogonality_error = b_orthogonality_error_cancellable(b, &vectors, values.len(), cancel)?;
     let max_residual = residuals.iter().cloned().fold(0.0, f64::max);
     progress(EigenProgress::Finished {
         iterations,
@@ -42,7 +44,7 @@ pub(super) fn package(
         max_residual,
         orthogonality_error,
     });
-    PartialEigen {
+    Ok(PartialEigen {
         values,
         vectors,
         residuals,
@@ -50,5 +52,5 @@ pub(super) fn package(
         iterations,
         solves,
         shift,
-    }
+    })
 }

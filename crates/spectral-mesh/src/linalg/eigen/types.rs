@@ -1,6 +1,8 @@
 //! The types of the sparse eigensolver's interface: options, the choice of iteration,
 //! progress reports and errors.
 
+use crate::cancel::CancelToken;
+
 /// Options of [`sparse_generalized_eigen`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct SparseEigenOptions {
@@ -135,4 +137,16 @@ pub enum SparseEigenError {
     /// NaN or infinity appeared (the matrices hold non-finite values?).
     #[error("non-finite values appeared in the eigensolver")]
     NonFinite,
+    /// The solve was stopped through its [`crate::cancel::CancelToken`].
+    #[error("the eigensolver was cancelled")]
+    Cancelled,
+}
+
+/// [`SparseEigenError::Cancelled`] once `cancel` is set.
+pub(super) fn check(cancel: &CancelToken) -> Result<(), SparseEigenError> {
+    if cancel.is_cancelled() {
+        Err(SparseEigenError::Cancelled)
+    } else {
+        Ok(())
+    }
 }

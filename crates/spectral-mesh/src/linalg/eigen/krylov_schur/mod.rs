@@ -51,7 +51,8 @@ use super::dense::{LEAF_ROWS, gram, sym_eig};
 use super::kernels::{residuals_from, sym_spmm, sym_spmm_into};
 use super::result::{PartialEigen, package};
 use super::rng::Rng;
-use super::types::{EigenProgress, SparseEigenError};
+use super::types::{EigenProgress, SparseEigenError, check};
+use crate::cancel::CancelToken;
 use crate::linalg::timing::{Phase, timed};
 use crate::linalg::{SparseCholesky, SparseMatrix, scratch};
 
@@ -65,6 +66,8 @@ pub(super) struct Problem<'a> {
     pub tol: f64,
     pub sn: f64,
     pub bn: f64,
+    /// Checked at every expansion, restart and row block of a rotation.
+    pub cancel: &'a CancelToken,
 }
 
 /// Sizes of the iteration.
@@ -95,7 +98,7 @@ fn true_residuals(
     v: &[f64],
     cols: &[usize],
     fallback: &[f64],
-) -> (Vec<f64>, Vec<f64>) {
+) -> Result<(Vec<f64>, Vec<f64>), SparseEigenError> {
     let n = pb.s.ncols();
     let c = cols.len();
     let mut lam = Vec::with_capacity(c);
@@ -106,6 +109,7 @@ fn true_residuals(
     let mut bx = vec![0.0; n * width];
     let mut done = 0;
     while done < c {
+        check(pb.cancel)?;
         let w = (c - done).min(8);
         for (q, &col) in cols[done..done + w].iter().enumerate() {
             xs[q * n..(q + 1) * n].copy_from_slice(&v[col * n..(col + 1) * n]);
@@ -144,20 +148,32 @@ fn true_residuals(
         lam.extend(l);
         done += w;
     }
-    (lam, res)
+    Ok((lam, res))
 }
 
 /// `V[:, :p] = V[:, :m] Y` in place (`Y` is `m x p`, `p <= m`), row block by row block.
-fn rotate_in_place(v: &mut [f64], n: usize, m: usize, y: MatRef<'_, f64>) {
+/// Once `cancel` is set the remaining row blocks are skipped (`V` is then garbage) and
+/// `Err(Cancelled)` is returned: at 411k vertices a rotation takes seconds.
+fn rotate_in_place(
+    v: &mut [f64],
+    n: usize,
+    m: usize,
+    y: MatRef<'_, f64>,
+    cancel: &CancelToken,
+) -> Result<(), SparseEigenError> {
     if n == 0 || m == 0 || y.ncols() == 0 {
-        return;
+        return Ok(());
     }
     let vm = MatMut::from_column_major_slice_mut(&mut v[..n * m], n, m);
-    rotate_rec(vm, y);
+    rotate_rec(vm, y, cancel);
+    check(cancel)
 }
 
-fn rotate_rec(mut vm: MatMut<'_, f64>, y: MatRef<'_, f64>) {
+fn rotate_rec(mut vm: MatMut<'_, f64>, y: MatRef<'_, f64>, cancel: &CancelToken) {
     let rows = vm.nrows();
+    if cancel.is_cancelled() {
+        return;
+    }
     if rows <= LEAF_ROWS {
         let p = y.ncols();
         let mut buf = scratch::take(rows * p);
@@ -169,7 +185,7 @@ fn rotate_rec(mut vm: MatMut<'_, f64>, y: MatRef<'_, f64>) {
     }
     let mid = (rows / 2).next_multiple_of(64).min(rows);
     let (a, bm) = vm.split_at_row_mut(mid);
-    rayon::join(|| rotate_rec(a, y), || rotate_rec(bm, y));
+    rayon::join(|| rotate_rec(a, y, cancel), || rotate_rec(bm, y, cancel));
 }
 
 /// A converged solve whose eigenvectors are still columns of the Krylov basis. Copying
@@ -191,12 +207,13 @@ pub(super) struct Converged {
 
 impl Converged {
     /// Copies the eigenvectors out of the basis, frees it, and measures and reports the
-    /// result (see [`package`]).
+    /// result (see [`package`]; stops when `cancel` is set).
     pub(super) fn finish(
         self,
         b: &SparseMatrix,
         progress: &mut dyn FnMut(EigenProgress),
-    ) -> PartialEigen {
+        cancel: &CancelToken,
+    ) -> Result<PartialEigen, SparseEigenError> {
         let n = self.n;
         let mut vectors = Vec::with_capacity(n * self.cols.len());
         for &c in &self.cols {
@@ -211,6 +228,7 @@ impl Converged {
             self.solves,
             self.shift,
             progress,
+            cancel,
         )
     }
 }
@@ -223,6 +241,7 @@ pub(super) fn krylov_schur(
     progress: &mut dyn FnMut(EigenProgress),
 ) -> Result<Converged, SparseEigenError> {
     let (s, b, chol) = (pb.s, pb.b, pb.chol);
+    check(pb.cancel)?;
     let n = s.ncols();
     let k = pb.k;
     let bs = sizes.block.clamp(1, n);
@@ -246,7 +265,7 @@ pub(super) fn krylov_schur(
     v[..n * bs].copy_from_slice(&w);
     drop(w);
     let mut solves = bs;
-    let (_, _, mut qc) = orthonormalize(&mut v, n, 0, bs, b, chol, rng, &mut solves, None)?;
+    let (_, _, mut qc) = orthonormalize(&mut v, n, 0, bs, pb, rng, &mut solves, None)?;
     // Op V = V T + Q R_row (Q the pending block, R_row its coupling, qc x j).
     let mut rrow = Mat::<f64>::zeros(qc, 0);
     crate::linalg::timing::add(Phase::Start, start.elapsed());
@@ -259,6 +278,7 @@ pub(super) fn krylov_schur(
     // eigenproblem.
     let mut nl = 0usize;
     loop {
+        check(pb.cancel)?;
         let full_space = j + qc > n || qc == 0;
         if j + qc > m_max || full_space {
             // ---- Restart and convergence check ----
@@ -271,6 +291,7 @@ pub(super) fn krylov_schur(
                 }
             }
             let (theta_asc, y_asc) = timed(Phase::Eig, || sym_eig(tm.as_ref()))?;
+            check(pb.cancel)?;
             // Descending theta = ascending lambda.
             let theta_a: Vec<f64> = theta_asc.iter().rev().cloned().collect();
             let mut y = Mat::<f64>::zeros(ma, ma);
@@ -323,8 +344,9 @@ pub(super) fn krylov_schur(
                     n,
                     ma,
                     y.as_ref().submatrix(0, 0, ma, keep_a),
+                    pb.cancel,
                 )
-            });
+            })?;
             let theta_all: Vec<f64> = (0..nl)
                 .map(|c| t[(c, c)])
                 .chain(theta_a[..keep_a].iter().cloned())
@@ -396,7 +418,8 @@ pub(super) fn krylov_schur(
                 let nres = end.unwrap_or(k).max(k).min(total);
                 let cols = &ord[..nres];
                 let fallback: Vec<f64> = cols.iter().map(|&c| lam_est[c]).collect();
-                let (lam, res) = timed(Phase::Residual, || true_residuals(pb, &v, cols, &fallback));
+                let (lam, res) =
+                    timed(Phase::Residual, || true_residuals(pb, &v, cols, &fallback))?;
                 if res.iter().any(|r| !r.is_finite()) {
                     return Err(SparseEigenError::NonFinite);
                 }
@@ -497,6 +520,14 @@ pub(super) fn krylov_schur(
         };
         solves += c;
         expansions += 1;
+        // The solves of a block are the longest step that cannot be interrupted (about
+        // 0.4 s for 16 columns at 411k vertices).
+        if pb.cancel.is_cancelled() {
+            if let Some(bq) = bq {
+                scratch::give(bq);
+            }
+            return Err(SparseEigenError::Cancelled);
+        }
         // Op V = V T + Q R_row: the coefficients of Op Q on the earlier columns are
         // R_row^T (zero before its first nonzero column r0).
         let local = if let Some(bq) = bq {
@@ -513,7 +544,7 @@ pub(super) fn krylov_schur(
         } else {
             None
         };
-        let (coef, r, q) = orthonormalize(&mut v, n, j, c, b, chol, rng, &mut solves, local)?;
+        let (coef, r, q) = orthonormalize(&mut v, n, j, c, pb, rng, &mut solves, local)?;
         for cc in 0..c {
             for rr in 0..j {
                 let val = coef[(rr, cc)];
@@ -578,6 +609,7 @@ mod tests {
             tol: 1e-10,
             sn: norm1(s),
             bn: norm1(b),
+            cancel: &CancelToken::new(),
         };
         let mut runs = Vec::new();
         for (lock, local) in [(false, false), (true, false), (false, true), (true, true)] {
@@ -590,7 +622,8 @@ mod tests {
             };
             let out = krylov_schur(&pb, &sizes, &mut Rng(7), &mut |_| {})
                 .unwrap()
-                .finish(b, &mut |_| {});
+                .finish(b, &mut |_| {}, pb.cancel)
+                .unwrap();
             assert!(
                 out.residuals.iter().all(|&r| r <= 1e-10),
                 "lock {lock} local {local}: {:?}",

@@ -8,9 +8,10 @@ use faer::{Accum, Mat, MatMut, Par};
 use super::super::dense::{gram, matmul_rows, sub_product, sym_eig, view};
 use super::super::kernels::{sym_spmm, sym_spmm_into};
 use super::super::rng::Rng;
-use super::super::types::SparseEigenError;
+use super::super::types::{SparseEigenError, check};
+use super::Problem;
 use crate::linalg::timing::{Phase, timed};
-use crate::linalg::{SparseCholesky, SparseMatrix, scratch};
+use crate::linalg::{SparseMatrix, scratch};
 
 /// A second Gram-Schmidt pass is made when a column keeps less than this fraction of its
 /// squared B-norm after the first: the classical "twice is enough" test (Daniel, Gragg,
@@ -205,12 +206,12 @@ pub(super) fn orthonormalize(
     n: usize,
     j: usize,
     c: usize,
-    b: &SparseMatrix,
-    chol: &SparseCholesky,
+    pb: &Problem<'_>,
     rng: &mut Rng,
     solves: &mut usize,
     local: Option<LanczosStep>,
 ) -> Result<(Mat<f64>, Mat<f64>, usize), SparseEigenError> {
+    let (b, chol) = (pb.b, pb.chol);
     let (basis, rest) = v.split_at_mut(n * j);
     let w = &mut rest[..n * c];
     // Classical Gram-Schmidt: W_in = V C + W, with a second pass when the first removed
@@ -342,6 +343,7 @@ pub(super) fn orthonormalize(
         let extra = want - cur;
         let mut filled = 0;
         for _attempt in 0..3 {
+            check(pb.cancel)?;
             let need = extra - filled;
             if need == 0 {
                 break;
