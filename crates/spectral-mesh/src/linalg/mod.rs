@@ -12,8 +12,9 @@ mod timing;
 pub use cholesky::{CholeskyError, SparseCholesky};
 pub use dense_eigen::{DenseEigenError, dense_generalized_eigen};
 pub use eigen::{
-    EigenProgress, PartialEigen, ShiftInvert, SparseAlgorithm, SparseEigenError,
-    SparseEigenOptions, b_orthogonality_error, default_shift, norm1, relative_residuals,
-    sparse_generalized_eigen, sparse_generalized_eigen_with, sym_spmm, sym_spmm_into,
+    ComponentNullSpace, EigenProgress, PartialEigen, ShiftInvert, SparseAlgorithm,
+    SparseEigenError, SparseEigenOptions, b_orthogonality_error, default_shift, norm1,
+    relative_residuals, sparse_generalized_eigen, sparse_generalized_eigen_with, sym_spmm,
+    sym_spmm_into,
 };
 pub use sparse::SparseMatrix;

@@ -5,8 +5,9 @@ use std::sync::Arc;
 
 use crate::cancel::CancelToken;
 use crate::linalg::{
-    ShiftInvert, SparseEigenError, SparseEigenOptions, SparseMatrix, b_orthogonality_error,
-    dense_generalized_eigen, relative_residuals, sparse_generalized_eigen_with,
+    ComponentNullSpace, ShiftInvert, SparseEigenError, SparseEigenOptions, SparseMatrix,
+    b_orthogonality_error, dense_generalized_eigen, relative_residuals,
+    sparse_generalized_eigen_with,
 };
 use crate::operators::{Laplacian, Operators};
 
@@ -132,11 +133,20 @@ pub const DENSE_MAX_N_LARGE_K: usize = 1500;
 /// [`Eigenbasis::fix_signs`], residuals filled in. With `params.dirichlet` the problem is
 /// solved on the free vertices and the vectors are zero on the Dirichlet ones.
 ///
-/// A mesh with `c` components has `c` (numerically) zero eigenvalues under natural
-/// boundary conditions. Repeated eigenvalues are resolved: if the `k`-th eigenvalue lies
-/// in a cluster, the iterative solver converges past the cluster before returning `k`
-/// pairs. Progress (factorization, iterations with the converged count) goes to
-/// `progress`.
+/// **Zero eigenvalues.** A mesh with `c` connected components has `c` zero eigenvalues
+/// under natural boundary conditions (any `c`, on both paths). They are returned first,
+/// as exactly `0.0`, and their eigenvectors are the B-normalized component indicators
+/// `1_C / sqrt(1_C^T B 1_C)` (positive on the component, zero elsewhere), in the order
+/// of each component's smallest vertex index; for `k < c` these are the first `k`
+/// components in that order. Components are those of the graph of the nonzero entries
+/// of `S` and `B` (isolated vertices count when the mass gives them some, as `B = I`
+/// does; under a mass that gives them none the problem is singular and an error). A
+/// component that touches a Dirichlet vertex has no zero mode. See
+/// [`crate::linalg::ComponentNullSpace`].
+///
+/// Repeated eigenvalues are resolved: if the `k`-th eigenvalue lies in a cluster, the
+/// iterative solver converges past the cluster before returning `k` pairs. Progress
+/// (factorization, iterations with the converged count) goes to `progress`.
 pub fn compute_eigenbasis(
     ops: &Operators,
     params: &EigenParams,
@@ -241,8 +251,21 @@ fn solve_pencil(
         let (vals, vecs) =
             dense_generalized_eigen(s, b).map_err(|e| EigenError::Numerical(e.to_string()))?;
         cancelled()?;
-        let values = vals[..k].to_vec();
-        let vecs = vecs[..nf * k].to_vec();
+        let mut values = vals[..k].to_vec();
+        let mut vecs = vecs[..nf * k].to_vec();
+        // The same convention as the sparse path: the null space is given by the
+        // component indicators, with eigenvalue 0 (unless S has more null vectors than
+        // indicators: then the dense basis of the zero cluster is kept).
+        let null = ComponentNullSpace::find(s, b, sparse_options(params).effective_tolerance())?;
+        let c = null.count();
+        let lmax = vals.last().map_or(0.0, |v| v.abs());
+        if c > 0 && (c == nf || vals[c] > 1e-8 * lmax) {
+            for (i, col) in vecs.chunks_mut(nf).take(c).enumerate() {
+                col.iter_mut().for_each(|x| *x = 0.0);
+                null.write_indicator(i, col);
+                values[i] = 0.0;
+            }
+        }
         let residuals = relative_residuals(s, b, &values, &vecs);
         let orthogonality_error = b_orthogonality_error(b, &vecs, k);
         progress(EigenProgress::Finished {
@@ -323,7 +346,9 @@ impl Eigenbasis {
     }
 
     /// The documented sign convention: each eigenvector is flipped so that its entry of
-    /// largest magnitude is positive (ties: the lowest vertex index wins).
+    /// largest magnitude is positive (ties: the lowest vertex index wins). The component
+    /// indicators of the zero eigenvalues (see [`compute_eigenbasis`]) are positive and
+    /// stay as they are.
     pub fn fix_signs(&mut self) {
         let n = self.n;
         for col in self.vectors.chunks_mut(n) {
@@ -521,10 +546,14 @@ impl EigenSolver {
         let pencil = Pencil::new(&self.ops, params.dirichlet.as_deref())?;
         pencil.check_k(k)?;
         if self.factor.is_none() && !pencil.uses_dense(params.method, k) {
+            // No factor is needed when the k pairs are component indicators.
             let opts = sparse_options(&params);
-            let f = ShiftInvert::new(&pencil.s, &pencil.b, opts.shift, progress)?;
-            self.factor = Some(f);
-            self.factorizations += 1;
+            let null = ComponentNullSpace::find(&pencil.s, &pencil.b, opts.effective_tolerance())?;
+            if k > null.count() {
+                let f = ShiftInvert::new(&pencil.s, &pencil.b, opts.shift, progress)?;
+                self.factor = Some(f);
+                self.factorizations += 1;
+            }
         }
         let b = Arc::new(solve_pencil(
             &self.ops,

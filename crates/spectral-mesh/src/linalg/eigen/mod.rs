@@ -28,11 +28,14 @@
 //! - `rng.rs`: the deterministic random numbers of the start blocks;
 //! - `shift_invert.rs`: [`ShiftInvert`], the factored `S - sigma B` (built once, reused
 //!   by every solve of the same pencil);
+//! - `deflation.rs`: [`ComponentNullSpace`], the indicators of the connected components,
+//!   deflated exactly (any number of components);
 //! - `davidson.rs` and `krylov_schur/` (the iteration in `mod.rs`, the block
 //!   orthonormalization in `orthonormalize.rs`): the two iterations;
 //! - this file: the driver (checks, shift, factorization, sizes, fallback).
 
 mod davidson;
+mod deflation;
 mod dense;
 mod kernels;
 mod krylov_schur;
@@ -41,6 +44,7 @@ mod rng;
 mod shift_invert;
 mod types;
 
+pub use deflation::ComponentNullSpace;
 pub use kernels::{b_orthogonality_error, norm1, relative_residuals, sym_spmm, sym_spmm_into};
 pub use result::PartialEigen;
 pub use shift_invert::{ShiftInvert, default_shift};
@@ -96,16 +100,28 @@ pub fn sparse_generalized_eigen_with(
             "asked for k = {k} pairs of an n = {n} problem"
         )));
     }
-    let tol = if opts.tolerance > 0.0 {
-        opts.tolerance
-    } else {
-        1e-10
-    };
+    let tol = opts.effective_tolerance();
     let (sn, bn) = (norm1(s), norm1(b));
     if !sn.is_finite() || !bn.is_finite() {
         return Err(SparseEigenError::NonFinite);
     }
     check(cancel)?;
+    // The known null space (component indicators), deflated by Krylov-Schur.
+    let krylov = opts.algorithm == SparseAlgorithm::KrylovSchur;
+    let null = if opts.deflate && krylov {
+        ComponentNullSpace::find(s, b, tol)?
+    } else {
+        ComponentNullSpace::none(n)
+    };
+    let nz = null.count();
+    if k <= nz {
+        // The first k indicators are the answer: nothing to factor nor iterate.
+        let shift = factor.map_or_else(
+            || shift_invert::first_shift(b, opts.shift, (sn, bn)),
+            |f| f.shift(),
+        );
+        return indicators_only(&null, k, b, shift, progress, cancel);
+    }
     let mut owned = None;
     let factor = match factor {
         Some(f) if f.n() != n => {
@@ -129,7 +145,10 @@ pub fn sparse_generalized_eigen_with(
     // The random start of every iteration (and of a rerun) comes from the same seed.
     let start_rng = || Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
 
-    if opts.algorithm == SparseAlgorithm::KrylovSchur {
+    if krylov {
+        // The iteration finds the k - nz pairs after the deflated null space, in a space
+        // of dimension n - nz.
+        let (k, dim) = (k - nz, n - nz);
         let bs = if opts.block_size > 0 {
             opts.block_size
         } else {
@@ -137,7 +156,7 @@ pub fn sparse_generalized_eigen_with(
             // need more solves, smaller ones give thin, slow matrix products).
             (k / 12).clamp(8, 16)
         }
-        .min(n);
+        .min(dim);
         let max_basis = if opts.max_basis > 0 {
             opts.max_basis.max(k + 2 * bs)
         } else {
@@ -148,7 +167,7 @@ pub fn sparse_generalized_eigen_with(
             // vertices) and 130 MiB less at 411k.
             (2 * k).min(k + 300).max(k + 70).max(k + 4 * bs)
         }
-        .min(n);
+        .min(dim);
         let pb = krylov_schur::Problem {
             s,
             b,
@@ -159,6 +178,8 @@ pub fn sparse_generalized_eigen_with(
             sn,
             bn,
             cancel,
+            deflation: (nz > 0).then_some(&null),
+            dim,
         };
         let mut sizes = krylov_schur::Sizes {
             block: bs,
@@ -189,7 +210,8 @@ pub fn sparse_generalized_eigen_with(
         // A factor built here goes before the eigenvectors are copied out of the basis
         // (see `Converged`): the copy can then reuse its memory.
         drop(owned);
-        return out.and_then(|pairs| pairs.finish(b, progress, cancel));
+        let null = (nz > 0).then_some(&null);
+        return out.and_then(|pairs| pairs.finish(b, null, progress, cancel));
     }
 
     davidson::davidson(
@@ -200,6 +222,32 @@ pub fn sparse_generalized_eigen_with(
         opts,
         (tol, sn, bn),
         start_rng(),
+        progress,
+        cancel,
+    )
+}
+
+/// The first `k <= null.count()` indicators as the result (eigenvalues 0).
+fn indicators_only(
+    null: &ComponentNullSpace,
+    k: usize,
+    b: &SparseMatrix,
+    shift: f64,
+    progress: &mut dyn FnMut(EigenProgress),
+    cancel: &CancelToken,
+) -> Result<PartialEigen, SparseEigenError> {
+    let n = b.ncols();
+    let mut vectors = vec![0.0; n * k];
+    for (i, col) in vectors.chunks_mut(n).enumerate() {
+        null.write_indicator(i, col);
+    }
+    let residuals = (0..k).map(|i| null.residual(i)).collect();
+    result::package(
+        b,
+        (vec![0.0; k], vectors, residuals),
+        0,
+        0,
+        shift,
         progress,
         cancel,
     )

@@ -52,6 +52,16 @@ fn shift_from(b: &SparseMatrix, sn: f64, bn: f64) -> f64 {
     -(1e-2 / total_mass).max(1e-10 * sn / bn.max(f64::MIN_POSITIVE))
 }
 
+/// The first shift tried for `(S, B)` with norms `(sn, bn)`: `shift` when it is negative,
+/// else the default.
+pub(super) fn first_shift(b: &SparseMatrix, shift: Option<f64>, (sn, bn): (f64, f64)) -> f64 {
+    let auto_shift = shift_from(b, sn, bn);
+    match shift {
+        Some(s) if s < 0.0 => s,
+        _ => auto_shift,
+    }
+}
+
 /// Checks that `S` and `B` are square of one size; returns that size.
 pub(super) fn check_sizes(s: &SparseMatrix, b: &SparseMatrix) -> Result<usize, SparseEigenError> {
     let n = s.ncols();
@@ -98,11 +108,7 @@ impl ShiftInvert {
         progress: &mut dyn FnMut(EigenProgress),
     ) -> Result<Self, SparseEigenError> {
         let n = s.ncols();
-        let auto_shift = shift_from(b, sn, bn);
-        let mut shift = shift.unwrap_or(auto_shift);
-        if shift >= 0.0 || shift.is_nan() {
-            shift = auto_shift;
-        }
+        let mut shift = first_shift(b, shift, (sn, bn));
         let mut analysis: Option<CholeskyAnalysis> = None;
         let mut last_err = String::new();
         for _ in 0..ATTEMPTS {
@@ -143,11 +149,7 @@ impl ShiftInvert {
         if !sn.is_finite() || !bn.is_finite() {
             return Err(SparseEigenError::NonFinite);
         }
-        let auto_shift = shift_from(b, sn, bn);
-        let mut sigma = shift.unwrap_or(auto_shift);
-        if sigma >= 0.0 || sigma.is_nan() {
-            sigma = auto_shift;
-        }
+        let sigma = first_shift(b, shift, (sn, bn));
         progress(EigenProgress::Factorization {
             n: s.ncols(),
             shift: sigma,

@@ -39,6 +39,26 @@ pub struct SparseEigenOptions {
     /// (the same answer, measured 1.2-1.7x slower; kept for comparison and as the
     /// fallback when the default run does not converge).
     pub ks_plain: bool,
+    /// Krylov-Schur only (default `true`): deflate the known null space exactly. The
+    /// indicators of the connected components that `S` annihilates (see
+    /// [`super::ComponentNullSpace`]) are returned as the first pairs, with eigenvalue
+    /// exactly 0, and the iteration finds the `k - c` pairs after them in their
+    /// B-orthogonal complement: any number `c` of components works, also `c >= k` (then
+    /// no iteration runs). `false`: the whole pencil is iterated on, as before (a null
+    /// cluster larger than the basis then does not converge).
+    pub deflate: bool,
+}
+
+impl SparseEigenOptions {
+    /// The convergence target used: [`SparseEigenOptions::tolerance`], or `1e-10` when
+    /// that is not positive.
+    pub fn effective_tolerance(&self) -> f64 {
+        if self.tolerance > 0.0 {
+            self.tolerance
+        } else {
+            1e-10
+        }
+    }
 }
 
 /// The iteration used by [`sparse_generalized_eigen`].
@@ -68,6 +88,7 @@ impl Default for SparseEigenOptions {
             locking: false,
             algorithm: SparseAlgorithm::KrylovSchur,
             ks_plain: false,
+            deflate: true,
         }
     }
 }
@@ -137,6 +158,15 @@ pub enum SparseEigenError {
     /// NaN or infinity appeared (the matrices hold non-finite values?).
     #[error("non-finite values appeared in the eigensolver")]
     NonFinite,
+    /// A connected component whose indicator `S` annihilates has no mass
+    /// (`1_C^T B 1_C = 0`): the mass matrix is singular (an unreferenced vertex?).
+    #[error(
+        "the mass matrix is singular: the component of vertex {vertex} has no mass (an unreferenced vertex?)"
+    )]
+    ZeroMass {
+        /// The smallest vertex of that component.
+        vertex: usize,
+    },
     /// The solve was stopped through its [`crate::cancel::CancelToken`].
     #[error("the eigensolver was cancelled")]
     Cancelled,

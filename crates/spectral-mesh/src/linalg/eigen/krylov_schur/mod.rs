@@ -47,6 +47,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 use self::orthonormalize::{LanczosStep, orthonormalize};
+use super::deflation::ComponentNullSpace;
 use super::dense::{LEAF_ROWS, gram, sym_eig};
 use super::kernels::{residuals_from, sym_spmm, sym_spmm_into};
 use super::result::{PartialEigen, package};
@@ -68,6 +69,21 @@ pub(super) struct Problem<'a> {
     pub bn: f64,
     /// Checked at every expansion, restart and row block of a rotation.
     pub cancel: &'a CancelToken,
+    /// The known null space, deflated: every block is kept B-orthogonal to it (see
+    /// `deflation.rs`), and `k` counts the pairs after it. `None`: nothing deflated.
+    pub deflation: Option<&'a ComponentNullSpace>,
+    /// Dimension of the space the iteration works in: `n` minus the deflated indicators.
+    pub dim: usize,
+}
+
+impl Problem<'_> {
+    /// Projects the `c` columns of `w` on the B-orthogonal complement of the deflated
+    /// null space (nothing when none is deflated).
+    fn deflate(&self, w: &mut [f64], c: usize) {
+        if let Some(d) = self.deflation {
+            d.project(w, c);
+        }
+    }
 }
 
 /// Sizes of the iteration.
@@ -207,23 +223,42 @@ pub(super) struct Converged {
 
 impl Converged {
     /// Copies the eigenvectors out of the basis, frees it, and measures and reports the
-    /// result (see [`package`]; stops when `cancel` is set).
+    /// result (see [`package`]; stops when `cancel` is set). With `null`, its indicators
+    /// (eigenvalue 0) come first, merged by eigenvalue with the pairs found (which come
+    /// after them unless one is negative).
     pub(super) fn finish(
         self,
         b: &SparseMatrix,
+        null: Option<&ComponentNullSpace>,
         progress: &mut dyn FnMut(EigenProgress),
         cancel: &CancelToken,
     ) -> Result<PartialEigen, SparseEigenError> {
         let n = self.n;
-        let mut vectors = Vec::with_capacity(n * self.cols.len());
-        for &c in &self.cols {
-            vectors.extend_from_slice(&self.basis[c * n..(c + 1) * n]);
+        let nz = null.map_or(0, |z| z.count());
+        let total = nz + self.cols.len();
+        // Entry p < nz is indicator p, entry nz + q the q-th pair found.
+        let value_of = |p: usize| if p < nz { 0.0 } else { self.values[p - nz] };
+        let mut order: Vec<usize> = (0..total).collect();
+        order.sort_by(|&p, &q| value_of(p).total_cmp(&value_of(q)));
+        let mut vectors = vec![0.0; n * total];
+        let mut values = Vec::with_capacity(total);
+        let mut residuals = Vec::with_capacity(total);
+        for (col, &p) in vectors.chunks_mut(n.max(1)).zip(&order) {
+            if let (Some(z), true) = (null, p < nz) {
+                z.write_indicator(p, col);
+                residuals.push(z.residual(p));
+            } else {
+                let c = self.cols[p - nz];
+                col.copy_from_slice(&self.basis[c * n..(c + 1) * n]);
+                residuals.push(self.residuals[p - nz]);
+            }
+            values.push(value_of(p));
         }
         drop(self.basis);
         crate::linalg::timing::report();
         package(
             b,
-            (self.values, vectors, self.residuals),
+            (values, vectors, residuals),
             self.iterations,
             self.solves,
             self.shift,
@@ -243,11 +278,13 @@ pub(super) fn krylov_schur(
     let (s, b, chol) = (pb.s, pb.b, pb.chol);
     check(pb.cancel)?;
     let n = s.ncols();
+    // The dimension of the space (n minus the deflated null space).
+    let dim = pb.dim.min(n);
     let k = pb.k;
-    let bs = sizes.block.clamp(1, n);
-    let m_max = sizes.max_basis.clamp(k.min(n), n);
+    let bs = sizes.block.clamp(1, dim);
+    let m_max = sizes.max_basis.clamp(k.min(dim), dim);
     // Storage: the basis plus room for one pending block.
-    let mut v = vec![0.0; n * (m_max + bs).min(n + bs)];
+    let mut v = vec![0.0; n * (m_max + bs).min(dim + bs)];
     let mut t = Mat::<f64>::zeros(m_max + bs, m_max + bs);
     let mut j = 0usize;
     let mut expansions = 0usize;
@@ -261,6 +298,7 @@ pub(super) fn krylov_schur(
     let mut w: Vec<f64> = (0..n * bs).map(|_| rng.next_f64()).collect();
     let mut bw = sym_spmm(b, &w, bs);
     chol.solve_many_in_place(&mut bw, bs);
+    pb.deflate(&mut bw, bs);
     w = bw;
     v[..n * bs].copy_from_slice(&w);
     drop(w);
@@ -279,7 +317,7 @@ pub(super) fn krylov_schur(
     let mut nl = 0usize;
     loop {
         check(pb.cancel)?;
-        let full_space = j + qc > n || qc == 0;
+        let full_space = j + qc > dim || qc == 0;
         if j + qc > m_max || full_space {
             // ---- Restart and convergence check ----
             let m = j;
@@ -409,7 +447,7 @@ pub(super) fn krylov_schur(
                 basis: m,
             });
             let ready = match end {
-                _ if full_space || keep >= n => nconv >= k,
+                _ if full_space || keep >= dim => nconv >= k,
                 Some(e) => nconv >= e && est_end <= pb.tol.sqrt(),
                 None => false,
             };
@@ -515,6 +553,7 @@ pub(super) fn krylov_schur(
                     bq
                 });
                 chol.solve_many_in_place(w, c);
+                pb.deflate(w, c);
                 bq
             })
         };
@@ -610,6 +649,8 @@ mod tests {
             sn: norm1(s),
             bn: norm1(b),
             cancel: &CancelToken::new(),
+            deflation: None,
+            dim: s.ncols(),
         };
         let mut runs = Vec::new();
         for (lock, local) in [(false, false), (true, false), (false, true), (true, true)] {
@@ -622,7 +663,7 @@ mod tests {
             };
             let out = krylov_schur(&pb, &sizes, &mut Rng(7), &mut |_| {})
                 .unwrap()
-                .finish(b, &mut |_| {}, pb.cancel)
+                .finish(b, None, &mut |_| {}, pb.cancel)
                 .unwrap();
             assert!(
                 out.residuals.iter().all(|&r| r <= 1e-10),

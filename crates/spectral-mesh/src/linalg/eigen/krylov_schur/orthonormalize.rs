@@ -305,6 +305,14 @@ pub(super) fn orthonormalize(
     if pre.iter().any(|p| !p.is_finite()) {
         return Err(SparseEigenError::NonFinite);
     }
+    if pb.deflation.is_some() {
+        // Twice is enough: the null-space components that rounding left in the block
+        // are removed again before it is orthonormalized (its B W is then stale).
+        pb.deflate(w, c);
+        if let Some(bw) = bw_now.take() {
+            scratch::give(bw);
+        }
+    }
     let pre_max = pre.iter().cloned().fold(0.0, f64::max);
     let (kept, rq, min_diag) = timed(Phase::Svqb, || svqb_r(w, n, c, b, 1e-20 * pre_max, bw_now))?;
     let mut r = rq;
@@ -313,6 +321,7 @@ pub(super) fn orthonormalize(
         // The block lost most of its norm to the projection: rounding in the two passes
         // matters, so project the orthonormalized block once more (W_in = V (C + Cp R) + Q R).
         let cp = project_once(w, basis, n, j, cur, b, None);
+        pb.deflate(w, cur);
         let mut add = Mat::<f64>::zeros(j, c);
         matmul(
             add.as_mut(),
@@ -337,7 +346,7 @@ pub(super) fn orthonormalize(
         cur = kept2;
     }
     // Refill dropped directions with random ones (not part of W_in: zero rows of R).
-    let room = n.saturating_sub(j);
+    let room = pb.dim.min(n).saturating_sub(j);
     let want = c.min(room);
     if cur < want {
         let extra = want - cur;
@@ -353,6 +362,7 @@ pub(super) fn orthonormalize(
             let rnd: Vec<f64> = (0..n * need).map(|_| rng.next_f64()).collect();
             let mut brnd = sym_spmm(b, &rnd, need);
             chol.solve_many_in_place(&mut brnd, need);
+            pb.deflate(&mut brnd, need);
             *solves += need;
             w[n * start..n * (start + need)].copy_from_slice(&brnd);
             let pre_t = {
@@ -373,6 +383,7 @@ pub(super) fn orthonormalize(
                 // Against the columns of Q found so far.
                 let (qpart, tpart) = w.split_at_mut(n * start);
                 project_once(&mut tpart[..n * need], qpart, n, start, need, b, None);
+                pb.deflate(&mut tpart[..n * need], need);
             }
             let tail = &mut w[n * start..n * (start + need)];
             let (got, _, _) = svqb_r(tail, n, need, b, 1e-20 * pre_t, None)?;
