@@ -368,3 +368,22 @@ fn blobby_three_components_against_dense() {
     assert!(it.residuals.iter().all(|&r| r <= 1e-10));
     assert!(it.orthogonality_error() <= 1e-10);
 }
+
+/// k = n with components: the deflated iteration fills the whole complement.
+#[test]
+fn every_pair_of_a_mesh_with_components() {
+    let parts = vec![
+        part(&sphere(1), 1.0, [0.0; 3]),
+        part(&sphere(0), 1.0, [3.0, 0.0, 0.0]),
+        part(&sphere(1), 0.7, [6.0, 0.0, 0.0]),
+    ];
+    let ops = Operators::new(&union(&parts, 0), Laplacian::VoronoiCot);
+    let n = ops.n(); // 42 + 12 + 42
+    for k in [n - 1, n] {
+        let it = compute_eigenbasis(&ops, &iterative(k), &mut |_| {}).unwrap();
+        assert_indicators(&it, &ops, &ranges(&parts));
+        let dense = Eigenbasis::dense(&ops, k).unwrap();
+        assert_values_close(&it.values, &dense.values, &format!("k = {k}"));
+        assert!(it.orthogonality_error() <= 1e-10);
+    }
+}

@@ -3,13 +3,13 @@
 
 use crate::cancel::CancelToken;
 
-/// Options of [`sparse_generalized_eigen`].
+/// Options of [`super::sparse_generalized_eigen`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct SparseEigenOptions {
     /// Number of wanted pairs (the smallest eigenvalues).
     pub k: usize,
     /// Convergence target for the relative residual of every pair (see
-    /// [`relative_residuals`]).
+    /// [`super::relative_residuals`]).
     pub tolerance: f64,
     /// Block size `p`; `0` picks one from `k`.
     pub block_size: usize,
@@ -61,7 +61,7 @@ impl SparseEigenOptions {
     }
 }
 
-/// The iteration used by [`sparse_generalized_eigen`].
+/// The iteration used by [`super::sparse_generalized_eigen`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SparseAlgorithm {
     /// Thick-restart block Lanczos (Krylov-Schur) on `(S - sigma B)^-1 B`, with full
