@@ -109,7 +109,9 @@ pub fn sparse_generalized_eigen_with(
     // The known null space (component indicators), deflated by Krylov-Schur.
     let krylov = opts.algorithm == SparseAlgorithm::KrylovSchur;
     let null = if opts.deflate && krylov {
-        ComponentNullSpace::find(s, b, tol)?
+        super::timing::timed(super::timing::Phase::Deflate, || {
+            ComponentNullSpace::find(s, b, tol)
+        })?
     } else {
         ComponentNullSpace::none(n)
     };

@@ -78,10 +78,13 @@ pub(super) struct Problem<'a> {
 
 impl Problem<'_> {
     /// Projects the `c` columns of `w` on the B-orthogonal complement of the deflated
-    /// null space (nothing when none is deflated).
+    /// null space (nothing when none is deflated). Done once per new block, after its
+    /// orthogonalization against the basis (which is B-orthogonal to the null space, so
+    /// leaves the null-space components alone) and before its orthonormalization: the
+    /// components `Op` amplified from rounding are removed to rounding again.
     fn deflate(&self, w: &mut [f64], c: usize) {
         if let Some(d) = self.deflation {
-            d.project(w, c);
+            timed(Phase::Deflate, || d.project(w, c));
         }
     }
 }
@@ -298,7 +301,6 @@ pub(super) fn krylov_schur(
     let mut w: Vec<f64> = (0..n * bs).map(|_| rng.next_f64()).collect();
     let mut bw = sym_spmm(b, &w, bs);
     chol.solve_many_in_place(&mut bw, bs);
-    pb.deflate(&mut bw, bs);
     w = bw;
     v[..n * bs].copy_from_slice(&w);
     drop(w);
@@ -553,7 +555,6 @@ pub(super) fn krylov_schur(
                     bq
                 });
                 chol.solve_many_in_place(w, c);
-                pb.deflate(w, c);
                 bq
             })
         };

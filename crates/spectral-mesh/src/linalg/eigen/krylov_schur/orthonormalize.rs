@@ -306,8 +306,8 @@ pub(super) fn orthonormalize(
         return Err(SparseEigenError::NonFinite);
     }
     if pb.deflation.is_some() {
-        // Twice is enough: the null-space components that rounding left in the block
-        // are removed again before it is orthonormalized (its B W is then stale).
+        // The null-space components that rounding left in the block (amplified by Op)
+        // go before it is orthonormalized (its B W is then stale).
         pb.deflate(w, c);
         if let Some(bw) = bw_now.take() {
             scratch::give(bw);
