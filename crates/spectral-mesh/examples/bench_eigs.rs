@@ -1,6 +1,6 @@
 //! Benchmark of the eigenbasis engine.
 //!
-//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P] [--basis M] [--davidson] [--ks-plain] [--raw] [--no-deflate] [--solver K1,K2,...] [--cancel-after S] [--copies N] [--per-component]`
+//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P] [--basis M] [--davidson] [--ks-plain] [--raw] [--no-deflate] [--solver K1,K2,...] [--cancel-after S] [--copies N [--copy-scale F]] [--per-component]`
 //!
 //! Prints one line of `key=value` pairs: n, k, seconds (assembly excluded, factorization
 //! included), iterations, solves, max residual, orthogonality error, peak RSS.
@@ -9,7 +9,8 @@
 //! solving each connected component alone (see `per_component_bound`).
 //!
 //! MESH is a mesh file or a built-in shape spec (`irregular-double-torus:res=5`);
-//! `--copies N` solves on N disjoint copies of it side by side.
+//! `--copies N` solves on N disjoint copies of it side by side (`--copy-scale F`: copy `c`
+//! scaled by `F^c`, so that the copies' eigenvalues differ).
 //!
 //! `--solver K1,K2,...` instead asks one `EigenSolver` for `K1`, then `K2`, ... pairs (K is
 //! then unused) and prints one line per solve: its seconds, the factorizations so far,
@@ -50,10 +51,12 @@ fn peak_rss_mib() -> f64 {
 }
 
 /// `copies` disjoint copies of `mesh` in a row along x (`copies` connected components per
-/// component of `mesh`).
+/// component of `mesh`), copy `c` scaled by `scale^c` (1: identical copies, whose
+/// eigenvalues all repeat `copies` times).
 fn side_by_side(
     mesh: &spectral_mesh::mesh::Mesh,
     copies: usize,
+    scale: f64,
 ) -> Result<spectral_mesh::mesh::Mesh, Box<dyn std::error::Error>> {
     let p = mesh.positions();
     let (lo, hi) = p
@@ -61,12 +64,15 @@ fn side_by_side(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
             (lo.min(v[0]), hi.max(v[0]))
         });
-    let step = 1.5 * (hi - lo).max(f64::MIN_POSITIVE);
+    let width = (hi - lo).max(f64::MIN_POSITIVE);
     let mut pos = Vec::with_capacity(p.len() * copies);
     let mut tri = Vec::with_capacity(mesh.triangles().len() * copies);
+    let mut at = 0.0;
     for c in 0..copies {
         let base = pos.len();
-        pos.extend(p.iter().map(|v| [v[0] + step * c as f64, v[1], v[2]]));
+        let f = scale.powi(c as i32);
+        pos.extend(p.iter().map(|v| [at + f * (v[0] - lo), f * v[1], f * v[2]]));
+        at += 1.5 * f * width;
         tri.extend(
             mesh.triangles()
                 .iter()
@@ -98,20 +104,24 @@ fn per_component_bound(
     let t_whole = t.elapsed().as_secs_f64();
     let n = ops.n();
     let comps = ComponentNullSpace::find(s, b, opts.effective_tolerance())?;
+    let bx = spectral_mesh::linalg::sym_spmm(b, &whole.vectors, k);
     let mut t_parts = 0.0;
     let mut solved = 0;
     let mut lambda_k: f64 = 0.0;
     for c in 0..comps.count() {
         let verts = comps.vertices(c);
-        // Pairs of the whole solve supported on this component.
-        let kc = (0..k)
-            .filter(|&j| {
-                let x = &whole.vectors[j * n..(j + 1) * n];
-                verts.iter().any(|&v| x[v] != 0.0)
-                    && verts.iter().map(|&v| x[v] * x[v]).sum::<f64>()
-                        > 0.5 * x.iter().map(|v| v * v).sum::<f64>()
+        // Pairs of the whole solve on this component: the B-mass of the first k vectors
+        // there (the trace of the projector; vectors of eigenvalues shared by several
+        // components spread over them), rounded.
+        let share: f64 = (0..k)
+            .map(|j| {
+                verts
+                    .iter()
+                    .map(|&v| whole.vectors[j * n + v] * bx[j * n + v])
+                    .sum::<f64>()
             })
-            .count();
+            .sum();
+        let kc = share.round() as usize;
         if kc == 0 {
             continue;
         }
@@ -167,6 +177,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut raw = false;
     let mut solver_ks: Vec<usize> = Vec::new();
     let mut copies = 1usize;
+    let mut copy_scale = 1.0f64;
     let mut cancel_after: Option<f64> = None;
     let mut i = 2;
     while i < args.len() {
@@ -207,6 +218,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 cancel_after = Some(args[i + 1].parse()?);
                 i += 1;
             }
+            "--copy-scale" => {
+                copy_scale = args[i + 1].parse()?;
+                i += 1;
+            }
             "--copies" => {
                 copies = args[i + 1].parse()?;
                 i += 1;
@@ -227,7 +242,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         read_mesh(&path)?.mesh
     };
     let mesh = if copies > 1 {
-        side_by_side(&mesh, copies)?
+        side_by_side(&mesh, copies, copy_scale)?
     } else {
         mesh
     };

@@ -13,8 +13,8 @@ pub use cholesky::{CholeskyError, SparseCholesky};
 pub use dense_eigen::{DenseEigenError, dense_generalized_eigen};
 pub use eigen::{
     ComponentNullSpace, EigenProgress, PartialEigen, ShiftInvert, SparseAlgorithm,
-    SparseEigenError, SparseEigenOptions, b_orthogonality_error, default_shift, norm1,
-    relative_residuals, sparse_generalized_eigen, sparse_generalized_eigen_with, sym_spmm,
-    sym_spmm_into,
+    SparseEigenError, SparseEigenOptions, b_orthogonality_error, connected_components,
+    default_shift, norm1, relative_residuals, sparse_generalized_eigen,
+    sparse_generalized_eigen_with, sym_spmm, sym_spmm_into,
 };
 pub use sparse::SparseMatrix;

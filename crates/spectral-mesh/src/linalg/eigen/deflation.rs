@@ -54,6 +54,52 @@ pub struct ComponentNullSpace {
     components: usize,
 }
 
+/// The label of each vertex's connected component in the graph of the nonzero entries of
+/// `S` and `B` (both `n x n`, symmetric patterns), components numbered in the order of
+/// their smallest vertex; and the number of components.
+fn component_labels(s: &SparseMatrix, b: &SparseMatrix) -> (Vec<u32>, usize) {
+    let n = s.ncols();
+    let mut label = vec![NONE; n];
+    let mut components = 0u32;
+    let mut stack = Vec::new();
+    for root in 0..n {
+        if label[root] != NONE {
+            continue;
+        }
+        label[root] = components;
+        stack.push(root);
+        while let Some(v) = stack.pop() {
+            for m in [s, b] {
+                let (rows, vals) = m.col(v);
+                for (&r, &x) in rows.iter().zip(vals) {
+                    if x != 0.0 && label[r] == NONE {
+                        label[r] = components;
+                        stack.push(r);
+                    }
+                }
+            }
+        }
+        components += 1;
+    }
+    (label, components as usize)
+}
+
+/// The connected components of the graph of the nonzero entries of `S` and `B` (both
+/// `n x n`): the vertices of each, ascending, components in the order of their smallest
+/// vertex. The pencil is block diagonal over them: each can be solved on its own.
+pub fn connected_components(
+    s: &SparseMatrix,
+    b: &SparseMatrix,
+) -> Result<Vec<Vec<usize>>, SparseEigenError> {
+    check_sizes(s, b)?;
+    let (label, nc) = component_labels(s, b);
+    let mut parts = vec![Vec::new(); nc];
+    for (v, &c) in label.iter().enumerate() {
+        parts[c as usize].push(v);
+    }
+    Ok(parts)
+}
+
 impl ComponentNullSpace {
     /// The indicator null space of `(S, B)` (both `n x n`) at relative tolerance `tol`
     /// (see the type's documentation). Linear time in the number of nonzeros. Fails when
@@ -61,30 +107,7 @@ impl ComponentNullSpace {
     /// mass that gives it none).
     pub fn find(s: &SparseMatrix, b: &SparseMatrix, tol: f64) -> Result<Self, SparseEigenError> {
         let n = check_sizes(s, b)?;
-        // Components of the graph of the nonzero entries, numbered by smallest vertex.
-        let mut label = vec![NONE; n];
-        let mut components = 0u32;
-        let mut stack = Vec::new();
-        for root in 0..n {
-            if label[root] != NONE {
-                continue;
-            }
-            label[root] = components;
-            stack.push(root);
-            while let Some(v) = stack.pop() {
-                for m in [s, b] {
-                    let (rows, vals) = m.col(v);
-                    for (&r, &x) in rows.iter().zip(vals) {
-                        if x != 0.0 && label[r] == NONE {
-                            label[r] = components;
-                            stack.push(r);
-                        }
-                    }
-                }
-            }
-            components += 1;
-        }
-        let nc = components as usize;
+        let (label, nc) = component_labels(s, b);
         // Mass 1_C^T B 1_C and size of each component.
         let ones = vec![1.0; n];
         let b1 = sym_spmm(b, &ones, 1);
@@ -304,6 +327,10 @@ mod tests {
         assert_eq!(ns.vertices(0), &[0, 2, 4]);
         assert_eq!(ns.vertices(1), &[1, 3]);
         assert_eq!(ns.vertices(2), &[5]);
+        assert_eq!(
+            connected_components(&s, &b).unwrap(),
+            vec![vec![0, 2, 4], vec![1, 3], vec![5]]
+        );
         let z0 = ns.indicator(0);
         let m0 = 1.0 + 3.0 + 5.0;
         assert_eq!(z0[2], 1.0 / f64::sqrt(m0));

@@ -44,7 +44,7 @@ mod rng;
 mod shift_invert;
 mod types;
 
-pub use deflation::ComponentNullSpace;
+pub use deflation::{ComponentNullSpace, connected_components};
 pub use kernels::{b_orthogonality_error, norm1, relative_residuals, sym_spmm, sym_spmm_into};
 pub use result::PartialEigen;
 pub use shift_invert::{ShiftInvert, default_shift};
