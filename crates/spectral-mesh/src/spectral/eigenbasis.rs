@@ -284,13 +284,13 @@ fn solve_pencil(
         });
         (values, vecs, residuals)
     } else {
-        let comps = connected_components(s, b)?;
         let null = ComponentNullSpace::find(s, b, opts.effective_tolerance())?;
         if k <= null.count() {
             // Component indicators only: nothing to factor.
             let r = sparse_generalized_eigen_with(s, b, &opts, None, progress, cancel)?;
             (r.values, r.vectors, r.residuals)
-        } else if comps.len() > 1 {
+        } else if null.components() > 1 {
+            let comps = connected_components(s, b)?;
             let mut local = Factors::default();
             let (factors, kept) = match keep {
                 Some(f) => (f, true),
