@@ -31,7 +31,9 @@ pub use request::{
 };
 
 use crate::cancel::CancelToken;
-use crate::fields::critical_points::{CriticalPoints, CriticalPointsError};
+use crate::fields::critical_points::{
+    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError,
+};
 use crate::fields::harmonic::{Constraint, HarmonicError, HarmonicSolver};
 use crate::fields::segmentation::SegmentationError;
 use crate::linalg::EigenProgress;
@@ -176,6 +178,8 @@ pub struct Analysis {
     input_mass: f64,
     ops: Arc<Operators>,
     topology: OnceLock<Topology>,
+    /// The link edges of every vertex, for critical points (built on first use).
+    critical: OnceLock<CriticalPointFinder>,
     solver: Mutex<EigenSolver>,
     held: RwLock<Option<Arc<Eigenbasis>>>,
     /// `B X` of the held basis, computed on first use by the wFEM distance.
@@ -236,6 +240,7 @@ impl Analysis {
             input_mass,
             ops,
             topology: OnceLock::new(),
+            critical: OnceLock::new(),
             solver: Mutex::new(solver),
             held: RwLock::new(None),
             bx: Mutex::new(None),
@@ -385,7 +390,10 @@ impl Analysis {
 
     /// The critical points of a field on this mesh, with the Euler check of its topology.
     pub fn critical_points(&self, values: &[f64]) -> Result<CriticalReport, AnalysisError> {
-        let cp = crate::fields::critical_points::critical_points(&self.mesh, values)?;
+        let cp = self
+            .critical
+            .get_or_init(|| CriticalPointFinder::new(&self.mesh))
+            .find(values, BoundaryRule::default())?;
         Ok(CriticalReport::new(cp, self.topology()))
     }
 
