@@ -483,7 +483,13 @@ async fn start_basis(
             s.cache.capacity()
         )));
     }
-    let analysis = s.analysis(e, &key);
+    // Assembling the operators is O(n): off the async threads.
+    let (s2, key2, item2) = (s.clone(), key.clone(), item.clone());
+    let analysis = tokio::task::spawn_blocking(move || -> ApiResult<Arc<Analysis>> {
+        Ok(s2.analysis(entry(&item2)?, &key2))
+    })
+    .await
+    .map_err(internal)??;
     let held = analysis.held_k();
     let mut jobs = s.jobs();
     if held >= k {

@@ -150,12 +150,12 @@ impl AppState {
         {
             return a.clone();
         }
-        if let Some(a) = self
+        let running = self
             .jobs()
             .get(&key.id)
             .filter(|slot| &slot.key == key)
-            .and_then(|slot| slot.analysis.clone())
-        {
+            .and_then(|slot| slot.analysis.clone());
+        if let Some(a) = running {
             self.remember(key, &a);
             return a;
         }
