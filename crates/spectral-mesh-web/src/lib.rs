@@ -29,9 +29,11 @@
 //! - `POST /api/mesh/{id}/basis` `{"k": 100, "laplacian": "fem", "normalize": true}` (all
 //!   optional, these are the defaults) -> a job `{state, laplacian, normalize, k, held_k,
 //!   progress, message, seconds}`: 200 with `state = "done"` when the analysis already
-//!   holds `k` pairs, else 202 and `analysis.basis(k)` runs off the request thread. A
-//!   request for other parameters while one runs cancels the running one (its state
-//!   becomes `"cancelled"`); the same or a smaller `k` of the same analysis joins it.
+//!   holds `k` pairs, else 202 and `analysis.basis(k)` runs off the request thread. The
+//!   same or a smaller `k` of the same analysis joins the running job; other parameters
+//!   replace it and cancel its token (its state becomes `"cancelled"`). The eigensolver
+//!   looks at the token before it starts: a job still waiting for its analysis' solver
+//!   stops at once, a solve under way finishes and its pairs are kept.
 //! - `GET  /api/mesh/{id}/basis/status` -> the job (`state`: `idle`, `running`, `done`,
 //!   `error` or `cancelled`).
 //! - `DELETE /api/mesh/{id}/basis` cancels the running computation.
