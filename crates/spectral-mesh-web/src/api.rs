@@ -632,16 +632,18 @@ fn parse_body(bytes: &[u8]) -> ApiResult<FieldBody> {
 
 /// The reply to `body` on mesh `id` (off the request thread); 409 when the basis is not
 /// there yet.
+/// With `encode`, the binary reply too (on the field threads as well).
 async fn compute(
     s: &Arc<AppState>,
     id: &str,
     body: FieldBody,
-) -> ApiResult<(FieldReply, Arc<Item>)> {
+    encode: bool,
+) -> ApiResult<(FieldReply, Option<Vec<u8>>, Arc<Item>)> {
     let item = get_mesh(s, id)?;
     let s2 = s.clone();
     let item2 = item.clone();
     let id = id.to_string();
-    let reply = tokio::task::spawn_blocking(move || -> ApiResult<FieldReply> {
+    let (reply, bytes) = tokio::task::spawn_blocking(move || -> ApiResult<_> {
         let e = entry(&item2)?;
         let key = AnalysisKey {
             id: id.clone(),
@@ -650,20 +652,31 @@ async fn compute(
         };
         let analysis = s2.analysis(e, &key);
         let before = analysis.held_k();
-        match field_reply(&analysis, &body.request, body.levels)? {
-            Some(r) => {
+        let reply = s2.on_field_threads(|| -> ApiResult<_> {
+            let Some(r) = field_reply(&analysis, &body.request, body.levels)? else {
+                return Ok(None);
+            };
+            let bytes = if encode {
+                Some(r.to_bytes().map_err(internal)?)
+            } else {
+                None
+            };
+            Ok(Some((r, bytes)))
+        })?;
+        match reply {
+            Some((r, bytes)) => {
                 if r.field.request.eigenpairs().is_none() && before == analysis.held_k() {
                     // Harmonic maps factor a solver: account for it.
                     s2.remember(&key, &analysis);
                 }
-                Ok(r)
+                Ok((r, bytes))
             }
             None => Err(missing_basis(&s2, &key, &body, analysis.held_k())),
         }
     })
     .await
     .map_err(internal)??;
-    Ok((reply, item))
+    Ok((reply, bytes, item))
 }
 
 /// The 409 of a field whose eigenbasis is not there yet.
@@ -694,8 +707,8 @@ fn missing_basis(s: &AppState, key: &AnalysisKey, body: &FieldBody, held: usize)
 
 async fn field(State(s): St, Path(id): Path<String>, body: Bytes) -> ApiResult<Response> {
     let body = parse_body(&body)?;
-    let (reply, _) = compute(&s, &id, body).await?;
-    Ok(octet(reply.to_bytes().map_err(internal)?))
+    let (_, bytes, _) = compute(&s, &id, body, true).await?;
+    Ok(octet(bytes.unwrap_or_default()))
 }
 
 // ---------- downloads ----------
@@ -749,7 +762,7 @@ async fn download(s: &Arc<AppState>, id: &str, body: FieldBody) -> ApiResult<Res
     }
     let options = body.figure_options()?;
     let (laplacian, normalize) = (body.laplacian, body.normalize);
-    let (reply, item) = compute(s, id, FieldBody { levels: 0, ..body }).await?;
+    let (reply, _, item) = compute(s, id, FieldBody { levels: 0, ..body }, false).await?;
     let name = format!("{}-{}.{format}", reply.field.request.kind(), &id[..8]);
     let mime = match format.as_str() {
         "png" => "image/png",

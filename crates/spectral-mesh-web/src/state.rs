@@ -103,6 +103,12 @@ pub struct AppState {
     pub next_serial: Mutex<u64>,
     /// Resolved `node_modules` folder.
     pub node_modules: PathBuf,
+    /// Threads of the field requests' parallel work, apart from rayon's global pool where
+    /// the eigensolver runs: a field is not queued behind a basis being computed, and its
+    /// threads never ran the solver (threads that did, or were started from one that did,
+    /// ran the field kernels 1.5-3x slower in our measurements; see BENCHMARKS.md). `None`
+    /// when the threads could not be started (the global pool is used).
+    pub fields: Option<rayon::ThreadPool>,
 }
 
 impl AppState {
@@ -115,12 +121,27 @@ impl AppState {
             .unwrap_or_else(|| {
                 PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../web/node_modules")
             });
+        let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
+        let fields = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("spectral-mesh-field-{i}"))
+            .build()
+            .ok();
         Self {
+            fields,
             cache: ByteLru::new(config.cache_bytes),
             jobs: Mutex::new(HashMap::new()),
             next_serial: Mutex::new(0),
             config,
             node_modules,
+        }
+    }
+
+    /// Runs `f` (a field request's work) on the field threads.
+    pub fn on_field_threads<T: Send>(&self, f: impl FnOnce() -> T + Send) -> T {
+        match &self.fields {
+            Some(pool) => pool.install(f),
+            None => f(),
         }
     }
 

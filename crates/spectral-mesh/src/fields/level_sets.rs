@@ -201,18 +201,36 @@ fn level_set_segments_impl(
         .collect();
     order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
     let sorted: Vec<f64> = order.iter().map(|&i| values[i]).collect();
+    // Per vertex, how many of the sorted values are <= its value (u32::MAX when not
+    // finite): a triangle crosses the values c with lo < c <= hi, which are those from
+    // the smallest of its corners' counts to the largest.
+    let count = |f: &f64| -> u32 {
+        if f.is_finite() {
+            sorted.partition_point(|&c| c <= *f) as u32
+        } else {
+            u32::MAX
+        }
+    };
+    let counts: Vec<u32> = if parallel {
+        field
+            .par_iter()
+            .with_min_len(SEGMENT_CHUNK)
+            .map(count)
+            .collect()
+    } else {
+        field.iter().map(count).collect()
+    };
     let scan = |tris: &[[usize; 3]]| -> Vec<Found> {
         let mut found = Vec::new();
         for tri in tris {
-            let fv = [field[tri[0]], field[tri[1]], field[tri[2]]];
-            if fv.iter().any(|x| !x.is_finite()) {
+            let c = [counts[tri[0]], counts[tri[1]], counts[tri[2]]];
+            let first = c[0].min(c[1]).min(c[2]);
+            let last = c[0].max(c[1]).max(c[2]);
+            if first == last || last == u32::MAX {
                 continue;
             }
-            // Crossed iff some corner is below c and some is not: lo < c <= hi.
-            let lo = fv[0].min(fv[1]).min(fv[2]);
-            let hi = fv[0].max(fv[1]).max(fv[2]);
-            let first = sorted.partition_point(|&c| c <= lo);
-            let last = sorted.partition_point(|&c| c <= hi);
+            let fv = [field[tri[0]], field[tri[1]], field[tri[2]]];
+            let (first, last) = (first as usize, last as usize);
             for (&level, &value) in order[first..last].iter().zip(&sorted[first..last]) {
                 if let Some((keys, seg)) = triangle_segment(mesh, field, tri, fv, value) {
                     found.push((level, keys, seg));
