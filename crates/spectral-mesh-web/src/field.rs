@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 use spectral_mesh::analysis::{Analysis, AnalysisError, CriticalReport, Field, FieldRequest};
-use spectral_mesh::fields::harmonic::Constraint;
+use spectral_mesh::fields::harmonic::{Constraint, FloatingComponent};
 use spectral_mesh::fields::level_sets::{level_set_segments, level_values};
 
 /// Where the server time of one field went, in milliseconds.
@@ -37,6 +37,8 @@ pub struct FieldHeader {
     pub marks: Vec<usize>,
     /// Resolved constraints of a harmonic map (empty otherwise).
     pub constraints: Vec<Constraint>,
+    /// Components a harmonic map left unconstrained (constant, left out of `critical`).
+    pub floating: Vec<FloatingComponent>,
     /// Discretization.
     pub laplacian: &'static str,
     /// True when the field is that of the shape scaled to unit area.
@@ -98,7 +100,7 @@ pub fn field_reply(
     let critical = if categorical {
         None
     } else {
-        Some(analysis.critical_points(&field.values)?)
+        Some(analysis.field_critical_points(&field)?)
     };
     let t_critical = start.elapsed();
     let isos = if categorical {
@@ -131,6 +133,7 @@ pub fn field_reply(
         source: field.request.source(),
         marks: field.marks.clone(),
         constraints: field.constraints.clone(),
+        floating: field.floating.clone(),
         laplacian: analysis.options().laplacian.name(),
         normalized: field.normalized,
         k: field.k,

@@ -52,11 +52,11 @@
 //!   `f32 values[n]`, `f32 segments[6 * total]` (level-set segments `x1 y1 z1 x2 y2 z2`,
 //!   level after level). The header ([`field::FieldHeader`]) has `n`, `kind`, `request`
 //!   (every default resolved, e.g. the source filled in), `source`, `marks`,
-//!   `constraints`, `laplacian`, `normalized`, `k`, `basis_k`, `lambda_max`,
+//!   `constraints`, `floating` (components a harmonic map left unconstrained), `laplacian`, `normalized`, `k`, `basis_k`, `lambda_max`,
 //!   `categorical` (segmentation labels), `min`, `max`, `levels`, `level_counts`,
 //!   `critical` (the library's `CriticalReport`: `points {minima, maxima, saddles,
 //!   on_boundary, non_manifold}`, counts, `chi`, `doubled`, `lhs`, `rhs`, `holds`,
-//!   `formula`; `null` for labels) and `timing_ms {field, critical, levels, total}`.
+//!   `formula`, the check per component; `null` for labels) and `timing_ms {field, critical, levels, total}`.
 //!
 //! Downloads:
 //! - `POST /api/mesh/{id}/download` with the body of a field request plus `format` (`png`,

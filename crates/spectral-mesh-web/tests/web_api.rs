@@ -423,6 +423,39 @@ async fn happy_paths() {
     assert_eq!(r.json()["n"], 4);
     assert_eq!(r.json()["source"], "tet.off");
     assert_eq!(r.json()["info"]["euler_characteristic"], 2);
+
+    // Two tetrahedra, constraints on one: the other floats and is left out of the check.
+    let two = b"OFF\n8 8 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n5 0 0\n6 0 0\n5 1 0\n5 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 4 6 5\n3 4 5 7\n3 4 7 6\n3 5 6 7\n";
+    let r = request(
+        addr,
+        "POST",
+        "/api/mesh",
+        "application/octet-stream",
+        "X-Filename: two.off\r\n",
+        two,
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", r.error());
+    let two_id = r.json()["mesh_id"].as_str().unwrap().to_string();
+    let f = post_json(
+        addr,
+        &format!("/api/mesh/{two_id}/field"),
+        json!({"kind": "harmonic", "constraints": [{"vertex": 0, "value": 0.0}, {"vertex": 1, "value": 1.0}]}),
+    )
+    .await
+    .field();
+    assert_eq!(
+        f.header["floating"].as_array().unwrap().len(),
+        1,
+        "{}",
+        f.header
+    );
+    assert_eq!(f.header["critical"]["excluded_components"], json!([1]));
+    assert_eq!(
+        f.header["critical"]["holds"], true,
+        "{}",
+        f.header["critical"]
+    );
 }
 
 /// Basis jobs: the same or a smaller request joins the running one; other parameters

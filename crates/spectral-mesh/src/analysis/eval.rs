@@ -93,6 +93,7 @@ pub(super) fn evaluate(
     let mut marks = Vec::new();
     let mut constraints: Vec<Constraint> = Vec::new();
     let mut labels = None;
+    let mut floating = Vec::new();
     let source = |key: &'static str, v: Option<usize>| -> Result<usize, AnalysisError> {
         vertex(an, key, v.unwrap_or_else(|| an.default_source()))
     };
@@ -108,6 +109,7 @@ pub(super) fn evaluate(
             vertices.dedup();
             let solver = an.harmonic_solver(*order, &vertices)?;
             let f = solver.solve_constraints(&list)?;
+            floating = solver.floating_components().to_vec();
             request = FieldRequest::Harmonic {
                 constraints: match c {
                     Constraints::Preset(_) => c.clone(),
@@ -225,6 +227,7 @@ pub(super) fn evaluate(
         request,
         marks,
         constraints,
+        floating,
         labels,
         k: if uses_basis { k } else { None },
         basis_k: if uses_basis {
