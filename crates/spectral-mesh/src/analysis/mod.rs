@@ -31,7 +31,9 @@ pub use request::{
 };
 
 use crate::cancel::CancelToken;
-use crate::fields::critical_points::{CriticalPoints, CriticalPointsError};
+use crate::fields::critical_points::{
+    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError,
+};
 use crate::fields::harmonic::{Constraint, FloatingComponent, HarmonicError, HarmonicSolver};
 use crate::fields::segmentation::SegmentationError;
 use crate::linalg::EigenProgress;
@@ -179,6 +181,8 @@ pub struct Analysis {
     input_mass: f64,
     ops: Arc<Operators>,
     topology: OnceLock<Topology>,
+    /// The link edges of every vertex, for critical points (built on first use).
+    critical: OnceLock<CriticalPointFinder>,
     solver: Mutex<EigenSolver>,
     held: RwLock<Option<Arc<Eigenbasis>>>,
     /// `B X` of the held basis, computed on first use by the wFEM distance.
@@ -239,6 +243,7 @@ impl Analysis {
             input_mass,
             ops,
             topology: OnceLock::new(),
+            critical: OnceLock::new(),
             solver: Mutex::new(solver),
             held: RwLock::new(None),
             bx: Mutex::new(None),
@@ -389,16 +394,24 @@ impl Analysis {
     /// The critical points of per-vertex values on this mesh, with the Euler check of its
     /// topology.
     pub fn critical_points(&self, values: &[f64]) -> Result<CriticalReport, AnalysisError> {
-        let cp = crate::fields::critical_points::critical_points(&self.mesh, values)?;
+        let cp = self.find_critical_points(values)?;
         Ok(CriticalReport::new(cp, self.topology(), &[]))
     }
 
     /// The critical points of a computed field: the components a harmonic map left
     /// unconstrained are left out (their constant values have no critical points).
     pub fn field_critical_points(&self, field: &Field) -> Result<CriticalReport, AnalysisError> {
-        let cp = crate::fields::critical_points::critical_points(&self.mesh, &field.values)?;
+        let cp = self.find_critical_points(&field.values)?;
         let excluded: Vec<usize> = field.floating.iter().map(|c| c.component).collect();
         Ok(CriticalReport::new(cp, self.topology(), &excluded))
+    }
+
+    /// The critical points of `values`, with the link edges built once per analysis.
+    fn find_critical_points(&self, values: &[f64]) -> Result<CriticalPoints, AnalysisError> {
+        Ok(self
+            .critical
+            .get_or_init(|| CriticalPointFinder::new(&self.mesh))
+            .find(values, BoundaryRule::default())?)
     }
 
     /// `B X` of `basis` (cached for the held basis).
