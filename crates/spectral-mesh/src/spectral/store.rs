@@ -92,7 +92,9 @@ fn io_err(path: &Path) -> impl Fn(std::io::Error) -> StoreError + '_ {
     }
 }
 
-fn npy_f64(data: &[f64], shape: &[u64], fortran: bool) -> std::io::Result<Vec<u8>> {
+/// A little-endian float64 NumPy `.npy` file of `data` with the given shape, in C order
+/// (row-major) or Fortran order (column-major); `numpy.load` reads it.
+pub fn npy_f64(data: &[f64], shape: &[u64], fortran: bool) -> std::io::Result<Vec<u8>> {
     let mut buf = Vec::new();
     {
         let mut w = npyz::WriteOptions::new()
@@ -296,8 +298,9 @@ pub fn cache_file_name(hash: &str, laplacian: Laplacian, params: &EigenParams) -
 
 /// Returns the basis stored in `cache_dir` for this mesh, discretization and parameters,
 /// or computes it (and stores it there). A stored basis is reused only when the mesh hash,
-/// the Laplacian and every parameter match; anything unreadable is recomputed and
-/// overwritten. The boolean is `true` when the basis came from the cache.
+/// the Laplacian, every parameter and the mass matrix (bit for bit: a basis of the shape
+/// scaled to unit area is not served for the shape as given) match; anything unreadable
+/// or different is recomputed and overwritten. The boolean is `true` when the basis came from the cache.
 pub fn load_or_compute(
     cache_dir: &Path,
     mesh: &Mesh,
@@ -314,6 +317,7 @@ pub fn load_or_compute(
         && meta.params == *params
         && basis.n == ops.n()
         && basis.k() == params.k
+        && basis.mass == ops.mass
     {
         return Ok((basis, true));
     }
