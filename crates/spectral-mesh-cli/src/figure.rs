@@ -74,6 +74,20 @@ pub fn write_field(
     outs: &[PathBuf],
     options: FigureOptions,
 ) -> Result<()> {
+    write_field_files(mesh, field, outs, options)?;
+    for o in outs {
+        println!("-> {}", o.display());
+    }
+    Ok(())
+}
+
+/// [`write_field`] without naming each file on stdout.
+pub fn write_field_files(
+    mesh: &Mesh,
+    field: &Field,
+    outs: &[PathBuf],
+    options: FigureOptions,
+) -> Result<()> {
     let drawn = outs.iter().any(|o| extension(o).as_deref() != Some("txt"));
     let fig = if drawn {
         Some(Figure::of_field(mesh, field, options)?)
@@ -87,7 +101,6 @@ pub fn write_field(
             (Some(fig), _, _) => fig.write(o)?,
             (None, _, _) => Figure::of_field(mesh, field, options)?.write(o)?,
         }
-        println!("-> {}", o.display());
     }
     Ok(())
 }

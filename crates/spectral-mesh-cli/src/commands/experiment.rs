@@ -19,7 +19,7 @@ use spectral_mesh::{CancelToken, Laplacian};
 use spectral_mesh_render::figure::{Figure, FigureOptions};
 
 use crate::engine::check_vertex;
-use crate::figure::FigureArgs;
+use crate::figure::{FigureArgs, write_field_files};
 use crate::input::{self, Input};
 use crate::output::{check_experiment_file, prepare_outputs, save_experiment, write_json};
 use crate::progress::EigenBar;
@@ -300,10 +300,7 @@ pub fn run_field(input: Input, setup: &FieldSetup, o: &Outputs) -> Result<()> {
     )?;
     bar.finish();
     let seconds = t0.elapsed().as_secs_f64();
-    let fig = Figure::of_field(an.mesh(), &run.field, o.figure)?;
-    for p in &paths[..3] {
-        fig.write(p)?;
-    }
+    write_field_files(an.mesh(), &run.field, &paths[..3], o.figure)?;
     write_json(&paths[3], &run.summary)?;
     let basis_note = match &run.summary.basis {
         Some(b) => format!(
