@@ -11,6 +11,7 @@ use anyhow::{Context, Result, bail};
 use spectral_mesh::analysis::request::DEFAULT_K;
 use spectral_mesh::analysis::{Analysis, AnalysisOptions, Field, FieldRequest};
 use spectral_mesh::experiments::file::ExperimentFile;
+use spectral_mesh::linalg::EigenProgress;
 use spectral_mesh::spectral::Eigenbasis;
 use spectral_mesh::spectral::eigenbasis::EigenParams;
 use spectral_mesh::spectral::store::load_or_compute;
@@ -102,11 +103,32 @@ fn cache_dir(dir: &Path, normalize: bool) -> PathBuf {
     }
 }
 
+/// A basis computed (or loaded) for a command.
+pub struct Solved {
+    /// The basis (at least the pairs asked for).
+    pub basis: Arc<Eigenbasis>,
+    /// Wall seconds it took.
+    pub seconds: f64,
+    /// `max |X^T B X - I|` as the solver reported it, when it was computed now.
+    pub orthogonality: Option<f64>,
+}
+
 /// A basis of at least `k` pairs on `an`, from the cache folder when given (computed and
-/// stored there otherwise), with a progress bar; returns it with the seconds it took.
-pub fn basis(an: &Analysis, k: usize, cache: Option<&Path>) -> Result<(Arc<Eigenbasis>, f64)> {
+/// stored there otherwise), with a progress bar.
+pub fn basis(an: &Analysis, k: usize, cache: Option<&Path>) -> Result<Solved> {
     let t0 = Instant::now();
     let bar = EigenBar::new(k);
+    let mut orthogonality = None;
+    let mut report = |p: EigenProgress| {
+        if let EigenProgress::Finished {
+            orthogonality_error,
+            ..
+        } = p
+        {
+            orthogonality = Some(orthogonality_error);
+        }
+        bar.update(p);
+    };
     if let Some(dir) = cache
         && an.held_k() < k
     {
@@ -119,7 +141,7 @@ pub fn basis(an: &Analysis, k: usize, cache: Option<&Path>) -> Result<(Arc<Eigen
             an.mesh(),
             an.operators(),
             &params,
-            &mut |p| bar.update(p),
+            &mut report,
         )
         .with_context(|| format!("--cache {}", dir.display()))?;
         an.set_basis(b)?;
@@ -133,9 +155,13 @@ pub fn basis(an: &Analysis, k: usize, cache: Option<&Path>) -> Result<(Arc<Eigen
             dir.display()
         );
     }
-    let b = an.basis(k, &mut |p| bar.update(p), &CancelToken::new())?;
+    let basis = an.basis(k, &mut report, &CancelToken::new())?;
     bar.finish();
-    Ok((b, t0.elapsed().as_secs_f64()))
+    Ok(Solved {
+        basis,
+        seconds: t0.elapsed().as_secs_f64(),
+        orthogonality,
+    })
 }
 
 /// The field of `request` on `an`, its eigenbasis first from [`basis`]; returns the field
@@ -143,7 +169,7 @@ pub fn basis(an: &Analysis, k: usize, cache: Option<&Path>) -> Result<(Arc<Eigen
 pub fn field(an: &Analysis, request: &FieldRequest, cache: Option<&Path>) -> Result<(Field, f64)> {
     request.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;
     let seconds = match request.eigenpairs() {
-        Some(k) => basis(an, k, cache)?.1,
+        Some(k) => basis(an, k, cache)?.seconds,
         None => 0.0,
     };
     Ok((an.field(request)?, seconds))

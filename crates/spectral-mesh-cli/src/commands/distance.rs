@@ -127,7 +127,7 @@ pub fn run(args: Args) -> Result<()> {
     let figure = args.figure.options();
     write_field(an.mesh(), &field, &args.out, figure)?;
     if let (Some(p), Some(f)) = (&args.all_pairs, &filter) {
-        let basis = engine::basis(&an, args.basis.k, None)?.0;
+        let basis = engine::basis(&an, args.basis.k, None)?.basis;
         let m = all_pairs(basis.view(args.basis.k), f)?;
         write(p, &npy_f64(&m, &[n as u64, n as u64], false)?)?;
         println!("all pairs ({n} x {n}) -> {}", p.display());

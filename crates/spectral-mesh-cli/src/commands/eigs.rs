@@ -94,12 +94,15 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         None
     };
-    let (b, seconds) = engine::basis(&an, args.basis.k, args.basis.cache.as_deref())?;
-    let r = BasisReport::new(
-        &b,
+    let solved = engine::basis(&an, args.basis.k, args.basis.cache.as_deref())?;
+    let (b, seconds) = (&solved.basis, solved.seconds);
+    // The solver's own orthogonality report when it computed the basis now.
+    let r = BasisReport::with_orthogonality(
+        b,
         an.topology(),
         dirichlet.as_deref(),
         args.cluster_tolerance,
+        solved.orthogonality,
     );
     let mesh = an.mesh();
     println!(
@@ -165,7 +168,7 @@ pub fn run(args: Args) -> Result<()> {
             k: args.basis.k,
             ..an.options().eigen.clone()
         };
-        save_npz(&b, p, &BasisMeta::new(&b, Some(mesh), &params))
+        save_npz(b, p, &BasisMeta::new(b, Some(mesh), &params))
             .with_context(|| format!("{}: cannot save the basis", p.display()))?;
         println!("basis -> {}", p.display());
     }

@@ -63,7 +63,7 @@ pub fn run(args: Args) -> Result<()> {
     let label = input.label();
     let k = args.basis.k;
     let an = args.basis.analysis(input.mesh, !args.no_normalize)?;
-    let (basis, seconds) = engine::basis(&an, k, args.basis.cache.as_deref())?;
+    let engine::Solved { basis, seconds, .. } = engine::basis(&an, k, args.basis.cache.as_deref())?;
     let view = basis.view(k);
     let mesh = an.mesh();
     let coords = spectral_embedding(view, &filter, args.dims)

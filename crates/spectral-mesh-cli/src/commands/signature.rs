@@ -300,7 +300,7 @@ pub fn run(args: Args) -> Result<()> {
     let info = input.info;
     let k = args.basis.k;
     let an = args.basis.analysis(input.mesh, !args.no_normalize)?;
-    let (basis, seconds) = engine::basis(&an, k, args.basis.cache.as_deref())?;
+    let engine::Solved { basis, seconds, .. } = engine::basis(&an, k, args.basis.cache.as_deref())?;
     let cols = columns(&args, plan, basis.view(k))?;
     for r in &cols.requests {
         r.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;

@@ -217,6 +217,13 @@ pub struct BasisSummary {
 impl BasisSummary {
     /// The summary of the first `k` pairs of `basis` (`k <= basis.k()`).
     pub fn of(basis: &Eigenbasis, k: usize) -> Self {
+        Self::with_orthogonality(basis, k, None)
+    }
+
+    /// [`BasisSummary::of`] with `max |X^T B X - I|` of the whole basis when already
+    /// known (the solver reports it: [`EigenProgress::Finished`]); it is used when the
+    /// summary covers every pair, and computed otherwise.
+    pub fn with_orthogonality(basis: &Eigenbasis, k: usize, whole: Option<f64>) -> Self {
         let k = k.min(basis.k());
         let view = basis.view(k);
         Self {
@@ -227,7 +234,10 @@ impl BasisSummary {
                 .residuals
                 .get(..k)
                 .map(|r| r.iter().copied().fold(0.0, f64::max)),
-            max_orthonormality_error: b_orthogonality_error(view.mass, view.vectors, k),
+            max_orthonormality_error: match whole {
+                Some(e) if k == basis.k() => e,
+                _ => b_orthogonality_error(view.mass, view.vectors, k),
+            },
         }
     }
 }
@@ -270,13 +280,24 @@ pub fn field_summary(
     mesh: MeshSummary,
     field: &Field,
 ) -> Result<FieldSummary, AnalysisError> {
+    summary_with(an, experiment, mesh, field, None)
+}
+
+/// [`field_summary`] with the orthogonality error of the held basis when known.
+fn summary_with(
+    an: &Analysis,
+    experiment: &str,
+    mesh: MeshSummary,
+    field: &Field,
+    orthogonality: Option<f64>,
+) -> Result<FieldSummary, AnalysisError> {
     let basis = match field.k {
         Some(k) => {
             let held = an.held_basis().ok_or(AnalysisError::NoBasis)?;
             if held.k() < k {
                 return Err(AnalysisError::BasisTooSmall { k, held: held.k() });
             }
-            Some(BasisSummary::of(&held, k))
+            Some(BasisSummary::with_orthogonality(&held, k, orthogonality))
         }
         None => None,
     };
@@ -330,13 +351,25 @@ pub fn run_field(
     cancel: &CancelToken,
 ) -> Result<FieldRun, AnalysisError> {
     request.validate()?;
+    // The solver reports the orthogonality error of what it computed: not measured twice.
+    let mut orthogonality = None;
+    let mut report = |p: EigenProgress| {
+        if let EigenProgress::Finished {
+            orthogonality_error,
+            ..
+        } = p
+        {
+            orthogonality = Some(orthogonality_error);
+        }
+        progress(p)
+    };
     if let (Some(k), Some(bk)) = (request.eigenpairs(), basis_k)
         && bk > k
     {
-        an.basis(bk, progress, cancel)?;
+        an.basis(bk, &mut report, cancel)?;
     }
-    let field = an.field_with(request, progress, cancel)?;
-    let summary = field_summary(an, experiment, mesh, &field)?;
+    let field = an.field_with(request, &mut report, cancel)?;
+    let summary = summary_with(an, experiment, mesh, &field, orthogonality)?;
     Ok(FieldRun { field, summary })
 }
 
@@ -558,6 +591,18 @@ impl BasisReport {
         dirichlet: Option<&[usize]>,
         cluster_tolerance: f64,
     ) -> Self {
+        Self::with_orthogonality(basis, topology, dirichlet, cluster_tolerance, None)
+    }
+
+    /// [`BasisReport::new`] with `max |X^T B X - I|` of the basis when already known (the
+    /// solver reports it: [`EigenProgress::Finished`]); computed when `None`.
+    pub fn with_orthogonality(
+        basis: &Eigenbasis,
+        topology: &Topology,
+        dirichlet: Option<&[usize]>,
+        cluster_tolerance: f64,
+        orthogonality: Option<f64>,
+    ) -> Self {
         let values = &basis.values;
         let lmax = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let near_zero = values
@@ -590,7 +635,7 @@ impl BasisReport {
             }),
             max_relative_residual: has_residuals
                 .then(|| basis.residuals.iter().copied().fold(0.0, f64::max)),
-            orthonormality_error: basis.orthogonality_error(),
+            orthonormality_error: orthogonality.unwrap_or_else(|| basis.orthogonality_error()),
             near_zero,
             components: topology.n_components(),
             expected_near_zero: pinned.iter().filter(|p| !**p).count(),
@@ -651,6 +696,34 @@ mod tests {
             "filtered-spectral-distance"
         );
         assert_eq!(output_stem("field", &req), "distance");
+    }
+
+    #[test]
+    fn the_solvers_orthogonality_error_is_the_one_measured_afterwards() {
+        // 642 vertices and k = 20: the iterative solver, which reports the error.
+        let an = Analysis::new(
+            build_str("sphere:res=3").unwrap(),
+            AnalysisOptions::default(),
+        );
+        let run = run_field(
+            &an,
+            "field",
+            summary_of(&an),
+            &FieldRequest::default_with_k(20),
+            None,
+            &mut |_| {},
+            &CancelToken::new(),
+        )
+        .unwrap();
+        let held = an.held_basis().unwrap();
+        let measured = BasisSummary::of(&held, 20).max_orthonormality_error;
+        let reported = run.summary.basis.unwrap().max_orthonormality_error;
+        assert_eq!(reported.to_bits(), measured.to_bits());
+        let r = BasisReport::with_orthogonality(&held, an.topology(), None, 1e-6, Some(reported));
+        assert_eq!(
+            r.orthonormality_error.to_bits(),
+            held.orthogonality_error().to_bits()
+        );
     }
 
     #[test]
