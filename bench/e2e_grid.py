@@ -63,15 +63,21 @@ def measure(route, label, mesh, vertices, k, run, a):
     cmd = route_command(route, mesh, k, out, a)
     before = eg.loadavg()
     started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    env_before = os.environ.get("SPECTRAL_MESH_EIG_TIMINGS")
-    os.environ["SPECTRAL_MESH_EIG_TIMINGS"] = "1"
+    # The runs inherit the environment: our solver's phase timings on, and SciPy's BLAS
+    # threads as --scipy-blas-threads says (set for every route; our binary has no BLAS).
+    env = {"SPECTRAL_MESH_EIG_TIMINGS": "1"}
+    if a.scipy_blas_threads > 0:
+        env["OPENBLAS_NUM_THREADS"] = str(a.scipy_blas_threads)
+    saved = {key: os.environ.get(key) for key in env}
+    os.environ.update(env)
     try:
         status, code, stdout, stderr, wall, maxrss = eg.run_once(cmd, a.timeout)
     finally:
-        if env_before is None:
-            del os.environ["SPECTRAL_MESH_EIG_TIMINGS"]
-        else:
-            os.environ["SPECTRAL_MESH_EIG_TIMINGS"] = env_before
+        for key, value in saved.items():
+            if value is None:
+                del os.environ[key]
+            else:
+                os.environ[key] = value
     written = sum(f.stat().st_size for f in out.rglob("*") if f.is_file())
     shutil.rmtree(out, ignore_errors=True)
     reason = None
@@ -99,7 +105,7 @@ def measure(route, label, mesh, vertices, k, run, a):
         "wait4_maxrss_mib": round(maxrss, 1) if maxrss is not None else None,
         "solve_seconds": solve, "solver_phases": phases,
         "phase_sum_seconds": round(sum(phases.values()), 3) if phases else None,
-        "bytes_written": written,
+        "bytes_written": written, "scipy_blas_threads": a.scipy_blas_threads,
         "loadavg_before": before, "loadavg_after": eg.loadavg(), "command": shlex.join(cmd),
     }
     if status != "ok":
@@ -147,7 +153,8 @@ def render_table(records, a, command):
         "",
         f"- command: `{command}`",
         f"- machine: {eg.machine_text()}",
-        f"- commit: {eg.git_text()}; Laplacian: {a.laplacian}",
+        f"- commit: {eg.git_text()}; Laplacian: {a.laplacian}; SciPy's OpenBLAS threads: "
+        + ", ".join(sorted({str(r.get("scipy_blas_threads") or "default") for r in records})),
     ]
     if times:
         lines.append(f"- runs: {min(times)} to {max(times)}, {len(records)} processes; "
@@ -180,7 +187,7 @@ def render_table(records, a, command):
         lines.append("| " + " | ".join(row) + " |")
     lines += ["", "Peak RSS (MiB, whole process, largest over the runs):", ""]
     lines.append("| " + " | ".join(["mesh", "k"] + routes) + " |")
-    lines.append("| " + " | ".join(["---"] + ["---:"] * (len(routes) + 1 - 1)) + " |")
+    lines.append("| " + " | ".join(["---", "---:"] + ["---:"] * len(routes)) + " |")
     for (mesh, k), by in cells.items():
         row = [f"`{mesh}`", str(k)]
         for r in routes:
@@ -190,7 +197,7 @@ def render_table(records, a, command):
     lines += ["", "Whole process over the eigensolve (the seconds the command prints as "
               "`eigenpairs in`), medians of the per-run ratios:", ""]
     lines.append("| " + " | ".join(["mesh", "k"] + ours) + " |")
-    lines.append("| " + " | ".join(["---"] + ["---:"] * len(ours)) + " |")
+    lines.append("| " + " | ".join(["---", "---:"] + ["---:"] * len(ours)) + " |")
     for (mesh, k), by in cells.items():
         row = [f"`{mesh}`", str(k)]
         for r in ours:
@@ -223,6 +230,11 @@ def parse_args(argv):
     ap.add_argument("--timeout", type=float, default=3600.0)
     ap.add_argument("--slow-seconds", type=float, default=300.0,
                     help="a route whose run took longer runs only once in its cell")
+    ap.add_argument("--scipy-blas-threads", type=int, default=1,
+                    help="OPENBLAS_NUM_THREADS of the runs (0: leave it unset). On this "
+                         "shared 2-core machine under load, NumPy's OpenBLAS threads "
+                         "spin-wait: eigsh at 25k, k = 50 took 17-26 s with them and 4.7 s "
+                         "with one thread in the same conditions")
     ap.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "e2e_grid.jsonl")
     ap.add_argument("--table", type=Path, default=ROOT / "bench" / "results" / "e2e_grid.md")
     ap.add_argument("--python", type=Path, help="python of the bench venv")

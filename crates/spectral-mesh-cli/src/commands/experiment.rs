@@ -194,6 +194,10 @@ pub fn run(e: Experiment) -> Result<()> {
             )
         }
         Experiment::DiffusionBasis(a) => {
+            // The experiment file's rule (a replay must accept what was run): t > 0.
+            if !(a.t.is_finite() && a.t > 0.0) {
+                bail!("--t {}: the time must be a positive number", a.t);
+            }
             let input = input::load_repaired(a.mesh.as_deref(), a.common.repair)?;
             let request = FieldRequest::Heat {
                 anchor: a.anchor,
