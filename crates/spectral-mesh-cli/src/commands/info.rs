@@ -135,9 +135,9 @@ pub fn run(args: Args) -> Result<()> {
             o.insert("source".into(), input.label().into());
             o.insert(
                 "polygons_triangulated".into(),
-                input.polygons_triangulated.into(),
+                input.info.polygons_triangulated.into(),
             );
-            o.insert("notes".into(), input.notes.clone().into());
+            o.insert("notes".into(), input.info.notes.clone().into());
             o.insert("problems".into(), r.problems().into());
             o.insert("suitable_laplacians".into(), suitable.clone().into());
             o.insert("laplacian_advice".into(), why.clone().into());
@@ -149,10 +149,10 @@ pub fn run(args: Args) -> Result<()> {
     println!("vertices           {}", r.vertices);
     println!("edges              {}", r.edges);
     println!("faces              {}", r.faces);
-    if input.polygons_triangulated > 0 {
+    if input.info.polygons_triangulated > 0 {
         println!(
             "triangulated       {} polygons were split into triangles",
-            input.polygons_triangulated
+            input.info.polygons_triangulated
         );
     }
     println!("components         {}", r.components);
@@ -212,7 +212,7 @@ pub fn run(args: Args) -> Result<()> {
             println!("(run with --repair to fix what can be fixed)");
         }
     }
-    for n in &input.notes {
+    for n in &input.info.notes {
         println!("note: {n}");
     }
     Ok(())

@@ -12,7 +12,7 @@ use spectral_mesh::operators::{
 };
 
 use crate::input;
-use crate::output::{prepare_outputs, write_atomic};
+use crate::output::{prepare_outputs, write};
 
 /// Arguments of `operators`.
 #[derive(Debug, clap::Args)]
@@ -97,14 +97,14 @@ pub fn run(args: Args) -> Result<()> {
             ..Default::default()
         },
     )?;
-    write_atomic(&paths[1], &mtx(&cotan_stiffness(mesh))?)?;
-    write_atomic(&paths[2], &mtx(&uniform_laplacian(mesh))?)?;
+    write(&paths[1], &mtx(&cotan_stiffness(mesh))?)?;
+    write(&paths[2], &mtx(&uniform_laplacian(mesh))?)?;
     for (p, kind) in
         paths[3..6]
             .iter()
             .zip([MassKind::Fem, MassKind::Barycentric, MassKind::MixedVoronoi])
     {
-        write_atomic(p, &mtx(&mass_matrix(mesh, kind))?)?;
+        write(p, &mtx(&mass_matrix(mesh, kind))?)?;
     }
     if let Some(r) = &robust {
         write_atomic(&paths[6], &mtx(&r.stiffness)?)?;

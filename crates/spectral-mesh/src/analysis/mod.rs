@@ -386,6 +386,13 @@ impl Analysis {
         eval::evaluate(self, request, basis.as_deref()).map(Some)
     }
 
+    /// The values a diffusion of `signal` starts from (`n` entries): the given values, the
+    /// ball's indicator or the impulse. Vertices and lengths are checked as by
+    /// [`Analysis::field`].
+    pub fn signal(&self, signal: &Signal) -> Result<Vec<f64>, AnalysisError> {
+        eval::signal_values(self, signal).map(|(f, _)| f)
+    }
+
     /// `1^T B f` with the analysis' mass (normalised when normalizing).
     pub fn mass_of(&self, f: &[f64]) -> f64 {
         self.ops.mass.mul_vec(f).iter().sum()
