@@ -32,8 +32,8 @@
 //!   holds `k` pairs, else 202 and `analysis.basis(k)` runs off the request thread. The
 //!   same or a smaller `k` of the same analysis joins the running job; other parameters
 //!   replace it and cancel its token (its state becomes `"cancelled"`). The eigensolver
-//!   looks at the token before it starts: a job still waiting for its analysis' solver
-//!   stops at once, a solve under way finishes and its pairs are kept.
+//!   checks the token inside its iteration: a cancelled solve stops within a fraction of
+//!   a second (the factorization itself is not interrupted).
 //! - `GET  /api/mesh/{id}/basis/status` -> the job (`state`: `idle`, `running`, `done`,
 //!   `error` or `cancelled`).
 //! - `DELETE /api/mesh/{id}/basis` cancels the running computation.

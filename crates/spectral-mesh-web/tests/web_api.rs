@@ -459,8 +459,8 @@ async fn happy_paths() {
 }
 
 /// Basis jobs: the same or a smaller request joins the running one; other parameters
-/// replace it; DELETE cancels. (The eigensolver checks its token before it starts, so a
-/// job waiting for the solver of its analysis stops at once; a running solve finishes.)
+/// replace it (its solve is cancelled: the eigensolver checks its token inside the
+/// iteration); DELETE cancels.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn basis_jobs_join_and_cancel() {
     let addr = start(1 << 20).await;
@@ -473,7 +473,7 @@ async fn basis_jobs_join_and_cancel() {
         assert_eq!(r.status, 202);
         assert_eq!(r.json()["k"], 300, "k = {k} joins the running job");
     }
-    // More pairs of the same analysis: a new job, which waits for the solver.
+    // More pairs of the same analysis: a new job replaces the running one.
     let r = post_json(addr, &path, json!({"k": 350})).await;
     assert_eq!(r.status, 202);
     assert_eq!(r.json()["k"], 350);
@@ -482,14 +482,25 @@ async fn basis_jobs_join_and_cancel() {
     let st = wait_basis(addr, &id).await;
     assert_eq!(st["state"], "cancelled", "{st}");
     assert_eq!(st["k"], 350);
-    // The first solve had started and finished: its pairs serve smaller requests.
-    let r = post_json(addr, &path, json!({"k": 100})).await;
-    assert_eq!(r.status, 200, "{}", r.text());
-    assert_eq!(r.json()["held_k"], 300);
+    // Neither solve finished: nothing is held, and a field request says what to do.
+    assert_eq!(st["held_k"], 0, "{st}");
     let r = post_json(
         addr,
         &format!("/api/mesh/{id}/field"),
-        json!({"kind": "heat", "k": 300}),
+        json!({"kind": "heat", "k": 50}),
+    )
+    .await;
+    assert_eq!(r.status, 409, "{}", r.text());
+    // A fresh request computes and then serves fields.
+    let r = post_json(addr, &path, json!({"k": 50})).await;
+    assert_eq!(r.status, 202, "{}", r.text());
+    let st = wait_basis(addr, &id).await;
+    assert_eq!(st["state"], "done", "{st}");
+    assert_eq!(st["held_k"], 50, "{st}");
+    let r = post_json(
+        addr,
+        &format!("/api/mesh/{id}/field"),
+        json!({"kind": "heat", "k": 50}),
     )
     .await;
     assert_eq!(r.status, 200);

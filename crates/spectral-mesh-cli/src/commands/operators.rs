@@ -107,8 +107,8 @@ pub fn run(args: Args) -> Result<()> {
         write(p, &mtx(&mass_matrix(mesh, kind))?)?;
     }
     if let Some(r) = &robust {
-        write_atomic(&paths[6], &mtx(&r.stiffness)?)?;
-        write_atomic(&paths[7], &mtx(&r.mass)?)?;
+        write(&paths[6], &mtx(&r.stiffness)?)?;
+        write(&paths[7], &mtx(&r.mass)?)?;
     }
     println!(
         "{}: n = {}, m = {}; wrote {} files to {}",
@@ -142,8 +142,8 @@ fn run_points(args: &Args, spec: &str, p: spectral_mesh::io::LoadedPoints) -> Re
     let r = point_cloud_laplacian(&p.cloud, &params)?;
     let names = ["S_robust.mtx", "B_robust.mtx"];
     let paths = prepare_outputs(&args.out, &names, args.force)?;
-    write_atomic(&paths[0], &mtx(&r.stiffness)?)?;
-    write_atomic(&paths[1], &mtx(&r.mass)?)?;
+    write(&paths[0], &mtx(&r.stiffness)?)?;
+    write(&paths[1], &mtx(&r.mass)?)?;
     println!(
         "{spec}: point cloud, n = {}; {} neighbours, {} local triangles ({} distinct, {} found by all three corners), {} isolated points; wrote {} files to {}",
         p.cloud.n_points(),

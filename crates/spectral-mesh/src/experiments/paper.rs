@@ -138,6 +138,13 @@ pub struct CriticalSummary {
     pub saddle_vertices: Vec<(usize, usize)>,
     /// The Euler check (doubled across the boundary on bordered surfaces).
     pub euler_check: EulerCheck,
+    /// The check on each connected component counted (meshes of several components).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub per_component: Vec<crate::analysis::ComponentCheck>,
+    /// Components left out of the counts: those of a harmonic map that hold no constraint
+    /// (they hold a constant; see `unconstrained_components`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub excluded_components: Vec<usize>,
 }
 
 impl From<&CriticalReport> for CriticalSummary {
@@ -155,6 +162,12 @@ impl From<&CriticalReport> for CriticalSummary {
                 rhs: r.rhs,
                 holds: r.holds,
             },
+            per_component: if r.components.len() > 1 {
+                r.components.clone()
+            } else {
+                Vec::new()
+            },
+            excluded_components: r.excluded_components.clone(),
         }
     }
 }
@@ -303,7 +316,7 @@ fn summary_with(
     };
     let critical_points = match &field.labels {
         Some(_) => None,
-        None => Some(CriticalSummary::from(&an.critical_points(&field.values)?)),
+        None => Some(CriticalSummary::from(&an.field_critical_points(field)?)),
     };
     Ok(FieldSummary {
         experiment: experiment.into(),
@@ -415,12 +428,59 @@ pub struct HarmonicMapSummary {
     pub chi: i64,
     /// Genus of each component.
     pub genus: Vec<Option<i64>>,
+    /// Components that hold no constraint: not solved, they hold the mean of the
+    /// constraint values and are left out of the critical points.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub unconstrained_components: Vec<UnconstrainedComponent>,
     /// Number of default constraints asked for (maps from counts only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub constraint_count: Option<usize>,
     /// Change from the previous map (maps from counts only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub locality: Option<Locality>,
+}
+
+/// A component of a harmonic map that holds no constraint, and the constant it holds.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct UnconstrainedComponent {
+    /// Component index.
+    pub component: usize,
+    /// Its lowest vertex.
+    pub first_vertex: usize,
+    /// Its vertices.
+    pub vertices: usize,
+    /// The constant it holds (the mean of the constraint values).
+    pub value: f64,
+}
+
+/// The components holding none of `constraints`, with the constant they hold.
+fn unconstrained(
+    topo: &crate::mesh::topology::Topology,
+    constraints: &[Constraint],
+) -> Vec<UnconstrainedComponent> {
+    let nc = topo.n_components();
+    let mut has = vec![false; nc];
+    for c in constraints {
+        if let Some(&k) = topo.vertex_component.get(c.vertex)
+            && k < nc
+        {
+            has[k] = true;
+        }
+    }
+    let mean = constraints.iter().map(|c| c.value).sum::<f64>() / constraints.len().max(1) as f64;
+    (0..nc)
+        .filter(|&k| !has[k])
+        .map(|k| UnconstrainedComponent {
+            component: k,
+            first_vertex: topo
+                .vertex_component
+                .iter()
+                .position(|&x| x == k)
+                .unwrap_or(usize::MAX),
+            vertices: topo.components[k].vertices,
+            value: mean,
+        })
+        .collect()
 }
 
 /// What the harmonic experiment reports (`summary.json`).
@@ -468,7 +528,9 @@ pub fn run_harmonic(
                     critical: CriticalReport,
                     count: Option<usize>,
                     locality: Option<Locality>| {
+        let unconstrained_components = unconstrained(&topo, &constraints);
         summaries.push(HarmonicMapSummary {
+            unconstrained_components,
             map: maps.len() + 1,
             constraints: constraints.clone(),
             critical_points: CriticalSummary::from(&critical),
@@ -495,7 +557,11 @@ pub fn run_harmonic(
                 ..Default::default()
             };
             for r in harmonic_experiment(mesh, &params)? {
-                let critical = CriticalReport::new(r.critical, &topo);
+                let excluded: Vec<usize> = unconstrained(&topo, &r.constraints)
+                    .iter()
+                    .map(|u| u.component)
+                    .collect();
+                let critical = CriticalReport::new(r.critical, &topo, &excluded);
                 let locality = Locality {
                     rings: params.locality_rings,
                     max_change_near_previous_constraints: r.change_near_previous,
@@ -515,7 +581,11 @@ pub fn run_harmonic(
             let c = ConstraintSpec::Explicit(list.clone()).resolve(mesh)?;
             let ops = Operators::new(mesh, laplacian);
             let field = harmonic_map_with_operators(mesh, &ops, &c, order)?;
-            let critical = CriticalReport::new(critical_points(mesh, &field)?, &topo);
+            let excluded: Vec<usize> = unconstrained(&topo, &c)
+                .iter()
+                .map(|u| u.component)
+                .collect();
+            let critical = CriticalReport::new(critical_points(mesh, &field)?, &topo, &excluded);
             push(&mut maps, c, field, critical, None, None);
         }
     }
