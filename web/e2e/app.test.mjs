@@ -139,6 +139,16 @@ test('clicking the surface moves the heat anchor and the peak follows; t spreads
   let before = await setValue('experiment', 'heat');
   let f = await waitField(before);
   assert.ok(f.header.truncation, 'heat fields carry the truncation hint');
+  // t = 1e-4 with k = 100 on the 3-torus: truncation dominates, and the page says so.
+  before = await setValue('t-num', '1e-4');
+  f = await waitField(before);
+  assert.equal(f.header.truncation.warning, true);
+  assert.match(await page.textContent('#truncation'), /truncation dominates/);
+  assert.match(await page.getAttribute('#truncation', 'class'), /warn/);
+  // t = 0.01: the first omitted pair weighs little.
+  before = await setValue('t', -2, 'input');
+  f = await waitField(before);
+  assert.equal(f.header.truncation.warning, false);
   assert.match(await page.textContent('#truncation'), /first omitted pair/);
   const pts = await surfacePoints();
   assert.ok(pts.length > 5, 'the surface is on screen');
@@ -149,10 +159,11 @@ test('clicking the surface moves the heat anchor and the peak follows; t spreads
   const src = Number(await page.inputValue('#source'));
   assert.equal(src, target.v);
   assert.equal(f.header.source, src);
-  let argmax = 0;
-  f.values.forEach((v, i) => { if (v > f.values[argmax]) argmax = i; });
-  assert.equal(argmax, src, 'the heat kernel peaks at the clicked anchor');
-  before = await setValue('t', -1.5, 'input');
+  // The heat is concentrated around the clicked anchor (on a shape of varying curvature
+  // the kernel's largest value need not be at the anchor itself).
+  assert.ok(f.values[src] >= 0.5 * f.header.max, `k_t(a, a) = ${f.values[src]}, max ${f.header.max}`);
+  assert.ok(f.values[src] > 20 * Math.max(f.header.min, 1e-300), 'the anchor is far above the coldest point');
+  before = await setValue('t', -0.5, 'input');
   const f1 = await waitField(before);
   assert.ok(f1.params.t > f.params.t);
   assert.ok(f1.header.max < f.header.max, 'a longer time lowers the peak');
