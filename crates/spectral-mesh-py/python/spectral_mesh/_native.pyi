@@ -1,0 +1,155 @@
+"""Type stubs of the private native module ``spectral_mesh._native`` (Rust, PyO3).
+
+The public API is the pure-Python layer (``spectral_mesh``), which normalizes input to the
+layouts taken here: ``V`` C-contiguous ``(n, 3)`` float64, ``F`` C-contiguous ``(m, 3)``
+int64, per-vertex values ``(n,)`` float64, ``n x k`` matrices given as their C-contiguous
+``(k, n)`` transpose, sparse matrices as CSC arrays ``(data float64, indices int64,
+indptr int64)`` (for the symmetric operators these are also their CSR arrays). Returned
+``(n, k)`` matrices are Fortran-ordered. Every function releases the GIL, runs on a
+worker thread, raises ``KeyboardInterrupt`` on Ctrl-C and never lets a Rust panic through
+(``InternalError``).
+"""
+
+from os import PathLike
+
+import numpy as np
+from numpy.typing import NDArray
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+Csc = tuple[F64, I64, I64]
+
+__version__: str
+
+def read_mesh(path: str | PathLike[str]) -> tuple[F64, I64, str]:
+    """``(V (n, 3), F (m, 3), info_json)``; info: format, polygons triangulated, warnings."""
+
+def write_mesh(path: str | PathLike[str], v: F64, f: I64) -> None: ...
+def shape(spec: str) -> tuple[F64, I64]: ...
+def shape_names() -> str:
+    """JSON list of the built-in shapes."""
+
+def laplacian(v: F64, f: I64, kind: str, normalize: bool) -> tuple[Csc, Csc, float]:
+    """``(S, B, A)``: S positive semi-definite, B the mass (``/ A`` when normalizing), A =
+    ``1^T B 1`` as assembled."""
+
+def eigenbasis(
+    v: F64,
+    f: I64,
+    k: int,
+    kind: str,
+    normalize: bool,
+    tol: float,
+    seed: int,
+    dirichlet: list[int] | None,
+    method: str,
+) -> tuple[F64, F64]:
+    """``(evals (k,), evecs (n, k) Fortran order)``, ``evecs.T @ B @ evecs = I``."""
+
+def eigsh(
+    n: int, a: Csc, m: Csc | None, k: int, tol: float, seed: int, method: str
+) -> tuple[F64, F64]:
+    """The ``k`` smallest pairs of ``A x = w M x`` (A PSD, M SPD or the identity)."""
+
+def save_basis(
+    path: str | PathLike[str],
+    evals: F64,
+    evecs_t: F64,
+    mass: Csc,
+    kind: str,
+    v: F64 | None = None,
+    f: I64 | None = None,
+) -> None: ...
+def load_basis(path: str | PathLike[str]) -> tuple[F64, F64, Csc, str]:
+    """``(evals, evecs (n, k), mass CSC arrays, meta_json)``."""
+
+def render(
+    v: F64,
+    f: I64,
+    values: F64,
+    marks: list[int],
+    labels: list[int] | None,
+    levels: int,
+    colormap: str,
+    view: str,
+    size: int,
+    transparent: bool,
+    critical_points: bool,
+    colorbar: bool,
+    path: str | PathLike[str] | None,
+) -> NDArray[np.uint8] | None:
+    """Writes ``path`` (format from its extension) and returns None, or returns the
+    ``(size, size, 4)`` RGBA picture."""
+
+def defaults() -> str:
+    """JSON: the library's defaults (requests, analysis, figure, names)."""
+
+def num_threads() -> int: ...
+def _panic_for_tests(message: str) -> None: ...
+def _work_for_tests(seconds: float, checks: bool) -> float: ...
+
+class Analysis:
+    """The library's ``Analysis``: one mesh, its operators, the factorization and a basis
+    that grows with ``k``."""
+
+    def __new__(
+        cls,
+        v: F64,
+        f: I64,
+        kind: str,
+        normalize: bool,
+        tol: float,
+        seed: int,
+        dirichlet: list[int] | None,
+        method: str,
+    ) -> Analysis: ...
+    @property
+    def n(self) -> int: ...
+    @property
+    def held_k(self) -> int: ...
+    @property
+    def normalized(self) -> bool: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def input_total_mass(self) -> float: ...
+    @property
+    def factorizations(self) -> int: ...
+    @property
+    def default_source(self) -> int: ...
+    def mesh(self) -> tuple[F64, I64]: ...
+    def operators(self) -> tuple[Csc, Csc]: ...
+    def basis(self, k: int) -> tuple[F64, F64]: ...
+    def residuals(self) -> F64: ...
+    def field(self, request: str, values: F64 | None = None) -> tuple[F64, I64 | None, str]:
+        """A ``FieldRequest`` in its serde JSON form: ``(values (n,), labels (n,) or
+        None, info_json)``."""
+    def critical_points(self, values: F64) -> str: ...
+    def level_sets(
+        self, values: F64, levels: list[float], count: int | None = None
+    ) -> list[tuple[float, F64]]: ...
+    def hks_many(self, times: list[float], scaled: bool, k: int) -> F64: ...
+    def hks_auto_times(self, count: int, k: int) -> list[float]: ...
+    def wks_many(self, energies: list[float], sigma: float, scaled: bool, k: int) -> F64: ...
+    def wks_auto_energies(self, count: int, k: int) -> tuple[list[float], float]: ...
+    def embedding_matrix(self, filter: str, k: int) -> F64: ...
+    def distances_many(self, sources: list[int], filter: str, k: int) -> F64: ...
+    def set_basis(self, evals: F64, evecs_t: F64) -> None: ...
+    def save_basis(self, path: str | PathLike[str]) -> None: ...
+    def load_basis(self, path: str | PathLike[str]) -> int: ...
+    def render(
+        self,
+        values: F64,
+        marks: list[int],
+        labels: list[int] | None,
+        levels: int,
+        colormap: str,
+        view: str,
+        size: int,
+        transparent: bool,
+        critical_points: bool,
+        colorbar: bool,
+        path: str | PathLike[str] | None,
+    ) -> NDArray[np.uint8] | None: ...
+    def options_json(self) -> str: ...
+    def __repr__(self) -> str: ...
