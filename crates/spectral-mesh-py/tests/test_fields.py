@@ -95,6 +95,14 @@ def test_distances(full):
         assert np.abs(got - want).max() <= 1e-9 * want.max(), text
         assert np.abs(an.spectral_function(text, k=k) - np.sum(Et**2, axis=1)).max() <= 1e-9 * np.sum(Et**2, axis=1).max(), text
         assert np.abs(an.green(src, filter=text, k=k) - Et @ Et[src]).max() <= 1e-9 * np.abs(Et @ Et[src]).max(), text
+    # A Python weight function is the same filter as its text form.
+    assert np.abs(an.distance(src, distance=lambda s: np.exp(-0.1 * s) / s, k=k) - an.distance(src, distance="custom-w:exp(-s*t)/s;t=0.1", k=k)).max() <= 1e-12
+    assert np.abs(an.distance([src, 7], distance=lambda s: s**-2.0, k=k) - many).max() <= 1e-12 * many.max()
+    assert np.abs(an.spectral_function(lambda s: 1 / s, k=k) - an.spectral_function("commute", k=k)).max() <= 1e-12
+    assert np.abs(an.green(src, filter=lambda s: 1 / s, k=k) - an.green(src, filter="commute", k=k)).max() <= 1e-12
+    assert np.abs(an.embedding(lambda s: 1 / s, k=k) - an.embedding("commute", k=k)).max() <= 1e-12
+    with pytest.raises(ValueError, match="not strictly positive and finite on the spectrum"):
+        an.distance(src, distance=lambda s: s - s[3], k=k)
     # wFEM diffusion distance (eq. 15) over the full spectrum.
     t = 0.02
     St = B @ X @ np.diag(np.exp(-w * t)) @ X.T @ B

@@ -47,3 +47,10 @@ def test_public_api():
     assert list(inspect.signature(sm.eigsh).parameters)[:6] == ["A", "k", "M", "sigma", "which", "v0"]
     for name in ["heat", "diffuse", "distance", "hks", "wks", "adf", "segmentation", "harmonic", "embedding"]:
         assert getattr(sm.Analysis, name).__doc__, name
+
+
+def test_the_module_docstring_example_runs():
+    import doctest
+
+    r = doctest.testmod(sm, verbose=False)
+    assert r.attempted >= 7 and r.failed == 0

@@ -109,6 +109,32 @@ def _constraints(c: Any) -> Any:
     return out
 
 
+#: Eigenvalues with ``|lambda| <= ZERO_EIGENVALUE_EPS * lambda_max`` count as zero and are
+#: skipped by the filters (the library's rule, also pyFM's WKS cut-off).
+ZERO_EIGENVALUE_EPS = 1e-8
+
+
+def _callable_weights(w: Any, evals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(indices of the pairs used, their weights) of a Python weight function ``w(s)``,
+    applied to the non-zero eigenvalues; refused unless strictly positive and finite."""
+    lmax = float(np.abs(evals).max()) if evals.size else 0.0
+    used = np.flatnonzero(np.abs(evals) > ZERO_EIGENVALUE_EPS * lmax)
+    if used.size == 0:
+        raise ValueError("the spectrum has no non-zero eigenvalue to filter")
+    s = evals[used]
+    weights = np.asarray(w(s.copy()), dtype=np.float64)
+    if weights.shape != s.shape:
+        weights = np.broadcast_to(weights, s.shape).astype(np.float64)
+    bad = np.flatnonzero(~(np.isfinite(weights) & (weights > 0)))
+    if bad.size:
+        j = int(bad[0])
+        raise ValueError(
+            f"the filter is not strictly positive and finite on the spectrum: w({s[j]}) = "
+            f"{weights[j]} at eigenpair index {int(used[j])}"
+        )
+    return used, weights
+
+
 class Analysis:
     """One mesh analysed: its operators ``(S, B)``, the factorization, an eigenbasis that
     grows with ``k``, and every field of the paper computed from them.
@@ -310,6 +336,13 @@ class Analysis:
         self._last = out
         return (out, info) if return_info else out
 
+    def _weights(self, w: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
+        return _callable_weights(w, self.eigenvalues(k))
+
+    def _embedding_of(self, used: np.ndarray, weights: np.ndarray, k: int) -> np.ndarray:
+        _, X = self.basis(k)
+        return X[:, used] * np.sqrt(weights)
+
     def heat(
         self,
         anchor: int | None = None,
@@ -366,9 +399,23 @@ class Analysis:
         - ``"wfem-diffusion:t=0.5"``: the wFEM diffusion distance of eq. 15,
           ``d_t(i, j)^2 = (e_i - e_j)^T B X D_t X^T B (e_i - e_j)``.
 
-        ``source`` defaults to the vertex of largest x.
+        ``source`` defaults to the vertex of largest x. A Python function of the
+        eigenvalues (``distance=lambda s: 1 / s**3``, vectorized over a NumPy array) is a
+        custom weight ``w(s)`` too, evaluated here with NumPy on the basis.
         """
         k = self._k(k)
+        if callable(distance):
+            used, weights = self._weights(distance, k)
+            E = self._embedding_of(used, weights, k)
+            one = source is None or isinstance(source, (int, np.integer))
+            srcs = [self.default_source if source is None else _arrays.count(source, "source")] if one else [
+                _arrays.count(x, "source") for x in source
+            ]
+            for x in srcs:
+                if x >= self.n:
+                    raise ValueError(f"source {x} is out of range: the mesh has {self.n} vertices")
+            d = np.column_stack([np.linalg.norm(E - E[x], axis=1) for x in srcs]) if srcs else np.zeros((self.n, 0))
+            return d[:, 0] if one else d
         if source is not None and not isinstance(source, (int, np.integer)):
             sources = [_arrays.count(s, "source") for s in source]
             if str(distance).strip().startswith("wfem-diffusion"):
@@ -382,7 +429,10 @@ class Analysis:
         self, filter: str = _R["spectral-function"]["filter"], *, k: int = _R["spectral-function"]["k"]
     ) -> np.ndarray:
         """The generalized spectral function ``G(p, p) = sum_{lambda > 0} w(lambda) x(p)^2``
-        of a filter (see :meth:`distance` for filters): ``(n,)``."""
+        of a filter (see :meth:`distance` for filters, text or a Python function): ``(n,)``."""
+        if callable(filter):
+            used, weights = self._weights(filter, self._k(k))
+            return np.sum(self._embedding_of(used, weights, self._k(k)) ** 2, axis=1)
         return self.field("spectral-function", filter=filter, k=self._k(k))
 
     def green(
@@ -393,7 +443,15 @@ class Analysis:
         k: int = _R["green"]["k"],
     ) -> np.ndarray:
         """A row ``G(source, .)`` of the generalized Green kernel ``X diag(w) X^T``
-        (zero eigenvalues skipped): ``(n,)``."""
+        (zero eigenvalues skipped): ``(n,)``. ``filter``: text or a Python function
+        (see :meth:`distance`)."""
+        if callable(filter):
+            used, weights = self._weights(filter, self._k(k))
+            E = self._embedding_of(used, weights, self._k(k))
+            s = self.default_source if source is None else _arrays.count(source, "source")
+            if s >= self.n:
+                raise ValueError(f"source {s} is out of range: the mesh has {self.n} vertices")
+            return E @ E[s]
         return self.field("green", source=source, filter=filter, k=self._k(k))
 
     def hks(
@@ -478,8 +536,18 @@ class Analysis:
         Euclidean distances are the filtered distances of :meth:`distance`: ``(n, d)``
         with one column per pair of non-zero weight (zero eigenvalues skipped). With
         ``component=j``, only the coordinate of pair ``j`` (0-based, in basis order):
-        ``(n,)``."""
+        ``(n,)``. ``filter``: text or a Python function (see :meth:`distance`)."""
         k = self._k(k)
+        if callable(filter):
+            used, weights = self._weights(filter, k)
+            E = self._embedding_of(used, weights, k)
+            if component is None:
+                return E
+            c = _arrays.count(component, "component")
+            if c >= k:
+                raise ValueError(f"component: {c}: out of range for k = {k} pairs (0-based)")
+            hit = np.flatnonzero(used == c)
+            return E[:, hit[0]] if hit.size else np.zeros(self.n)
         if component is None:
             return self._a.embedding_matrix(str(filter), k)
         return self.field("embedding", filter=filter, component=component, k=k)
