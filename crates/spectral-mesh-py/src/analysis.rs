@@ -22,10 +22,11 @@ use crate::arrays::{
     to_vector,
 };
 use crate::errors::Failure;
+use crate::pyjson;
 use crate::run::run;
 use crate::{draw, eigen_params, figure_options, laplacian_of, with_values};
 
-/// A `ValueError` from a serde message, without serde_json's "at line 1 column 12".
+/// A `ValueError` from a serde message.
 fn request_error(e: serde_json::Error) -> Failure {
     let s = e.to_string();
     let s = s.split(" at line ").next().unwrap_or(&s).to_string();
@@ -165,17 +166,18 @@ impl PyAnalysis {
         to_vector(py, r)
     }
 
-    /// Evaluates a field request (the library's serde form, as JSON); `values` replaces a
-    /// diffusion's signal or a segmentation's field. Returns `(values, labels, info_json)`.
+    /// Evaluates a field request (the library's serde form, as a dict); `values` replaces
+    /// a diffusion's signal or a segmentation's field. Returns `(values, labels, info)`.
     #[pyo3(signature = (request, values=None))]
     fn field<'py>(
         &self,
         py: Python<'py>,
-        request: &str,
+        request: &Bound<'py, PyAny>,
         values: Option<PyReadonlyArray1<'_, f64>>,
     ) -> PyResult<FieldOut<'py>> {
         let prepare = || -> Result<FieldRequest, Failure> {
-            let mut req: FieldRequest = serde_json::from_str(request).map_err(request_error)?;
+            let value = pyjson::from_py(request, "request")?;
+            let mut req: FieldRequest = serde_json::from_value(value).map_err(request_error)?;
             if let Some(v) = &values {
                 with_values(&mut req, arrays::values(v, "values")?)?;
             }
@@ -200,25 +202,26 @@ impl PyAnalysis {
                 _ => {}
             }
             let info =
-                serde_json::to_string(&field).map_err(|e| Failure::Internal(e.to_string()))?;
+                serde_json::to_value(&field).map_err(|e| Failure::Internal(e.to_string()))?;
             Ok((values, labels, info))
         })?;
         let labels = labels.map(|l| to_vector(py, l.into_iter().map(|x| x as i64).collect()));
-        Ok((to_vector(py, values), labels, info))
+        Ok((to_vector(py, values), labels, pyjson::to_py(py, &info)?))
     }
 
-    /// Critical points of a field with the Euler check, as JSON.
-    fn critical_points(
+    /// Critical points of a field with the Euler check, as a dict.
+    fn critical_points<'py>(
         &self,
-        py: Python<'_>,
+        py: Python<'py>,
         values: PyReadonlyArray1<'_, f64>,
-    ) -> PyResult<String> {
+    ) -> PyResult<Bound<'py, PyAny>> {
         let values = arrays::values(&values, "values").map_err(|e| e.into_pyerr(py))?;
         let an = self.inner.clone();
-        run(py, move |_| {
+        let report = run(py, move |_| {
             let report = an.critical_points(&values)?;
-            serde_json::to_string(&report).map_err(|e| Failure::Internal(e.to_string()))
-        })
+            serde_json::to_value(&report).map_err(|e| Failure::Internal(e.to_string()))
+        })?;
+        pyjson::to_py(py, &report)
     }
 
     /// Level sets of a field at `levels`, or at `count` evenly spaced values inside its
@@ -536,16 +539,16 @@ impl PyAnalysis {
         )
     }
 
-    /// The analysis' options as JSON (for the Python layer's repr and docs).
-    fn options_json(&self) -> String {
+    /// The analysis' options as a dict.
+    fn options<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let o = self.inner.options();
-        json!({
+        let v = json!({
             "kind": o.laplacian.name(),
             "normalize": o.normalize,
             "tol": o.eigen.tolerance,
             "seed": o.eigen.seed,
             "dirichlet": o.eigen.dirichlet,
-        })
-        .to_string()
+        });
+        pyjson::to_py(py, &v)
     }
 }

@@ -203,16 +203,16 @@ pub fn csc_from(
 pub type Pairs<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>);
 /// `(V (n, 3), F (m, 3))` as NumPy arrays.
 pub type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
-/// A field's `(values, labels, info_json)`.
+/// A field's `(values, labels, info)`.
 pub type FieldOut<'py> = (
     Bound<'py, PyArray1<f64>>,
     Option<Bound<'py, PyArray1<i64>>>,
-    String,
+    Bound<'py, PyAny>,
 );
-/// A basis archive's `(evals, evecs, mass CSC arrays, meta_json)`.
+/// A basis archive's `(evals, evecs, mass CSC arrays, meta)`.
 pub type Archive<'py> = (
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray2<f64>>,
     Bound<'py, pyo3::types::PyTuple>,
-    String,
+    Bound<'py, PyAny>,
 );

@@ -27,6 +27,7 @@ use spectral_mesh_render::{Colormap, Figure, FigureOptions, View};
 mod analysis;
 mod arrays;
 mod errors;
+mod pyjson;
 mod run;
 
 use arrays::{
@@ -39,8 +40,12 @@ use run::run;
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-/// `(V, F, info_json)` of a mesh file.
-type MeshFile<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>, String);
+/// `(V, F, info)` of a mesh file.
+type MeshFile<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<i64>>,
+    Bound<'py, PyAny>,
+);
 
 fn mesh_to_py<'py>(py: Python<'py>, v: Vec<f64>, f: Vec<i64>) -> PyResult<MeshArrays<'py>> {
     let (n, m) = (v.len() / 3, f.len() / 3);
@@ -88,7 +93,7 @@ pub(crate) fn eigen_params(
     })
 }
 
-/// Reads a mesh file (OFF, OBJ, PLY, STL): `(V, F, info_json)`.
+/// Reads a mesh file (OFF, OBJ, PLY, STL): `(V, F, info)`.
 #[pyfunction]
 fn read_mesh<'py>(py: Python<'py>, path: PathBuf) -> PyResult<MeshFile<'py>> {
     let (v, f, info) = run(py, move |_| {
@@ -99,10 +104,10 @@ fn read_mesh<'py>(py: Python<'py>, path: PathBuf) -> PyResult<MeshFile<'py>> {
             "polygons_triangulated": loaded.polygons_triangulated,
             "warnings": loaded.warnings,
         });
-        Ok((v, f, info.to_string()))
+        Ok((v, f, info))
     })?;
     let (v, f) = mesh_to_py(py, v, f)?;
-    Ok((v, f, info))
+    Ok((v, f, pyjson::to_py(py, &info)?))
 }
 
 /// Writes a mesh file; the format comes from the extension.
@@ -131,9 +136,9 @@ fn shape<'py>(py: Python<'py>, spec: String) -> PyResult<MeshArrays<'py>> {
     mesh_to_py(py, v, f)
 }
 
-/// The built-in shapes as JSON: name, description, parameters, default vertex count.
+/// The built-in shapes: name, description, parameters, default vertex count.
 #[pyfunction]
-fn shape_names() -> String {
+fn shape_names(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
     let list: Vec<Value> = spectral_mesh::shapes::shape_names()
         .into_iter()
         .map(|s| {
@@ -148,7 +153,7 @@ fn shape_names() -> String {
             })
         })
         .collect();
-    Value::Array(list).to_string()
+    pyjson::to_py(py, &Value::Array(list))
 }
 
 /// The operators `(S, B)` of a mesh as CSC arrays, and the total mass `1^T B 1` as
@@ -336,12 +341,12 @@ fn save_basis(
     })
 }
 
-/// Reads an eigenbasis archive: `(evals, evecs (n, k), mass CSC arrays, meta_json)`.
+/// Reads an eigenbasis archive: `(evals, evecs (n, k), mass CSC arrays, meta)`.
 #[pyfunction]
 fn load_basis<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Archive<'py>> {
     let (basis, meta) = run(py, move |_| {
         let (basis, meta) = load_npz(&path)?;
-        let meta = serde_json::to_string(&meta).map_err(|e| Failure::Internal(e.to_string()))?;
+        let meta = serde_json::to_value(&meta).map_err(|e| Failure::Internal(e.to_string()))?;
         Ok((basis, meta))
     })?;
     let mass = csc_to_py(py, csc_parts(&basis.mass))?;
@@ -350,7 +355,7 @@ fn load_basis<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Archive<'py>> {
         to_vector(py, basis.values),
         to_columns(py, n, k, basis.vectors)?,
         mass,
-        meta,
+        pyjson::to_py(py, &meta)?,
     ))
 }
 
@@ -473,10 +478,10 @@ fn render(
     draw(py, Arc::new(mesh), values, marks, labels, options, path)
 }
 
-/// The library's defaults as JSON: every request kind's keys (from [`FieldRequest`]'s
+/// The library's defaults as a dict: every request kind's keys (from [`FieldRequest`]'s
 /// serde form), the analysis and eigensolver options and the figure options.
 #[pyfunction]
-fn defaults(py: Python<'_>) -> PyResult<String> {
+fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
     let mut kinds = serde_json::Map::new();
     for kind in KINDS {
         let mut j = json!({ "kind": kind });
@@ -499,7 +504,7 @@ fn defaults(py: Python<'_>) -> PyResult<String> {
     }
     let a = AnalysisOptions::default();
     let fig = FigureOptions::default();
-    Ok(json!({
+    let all = json!({
         "requests": kinds,
         "analysis": {
             "kind": a.laplacian.name(),
@@ -521,8 +526,8 @@ fn defaults(py: Python<'_>) -> PyResult<String> {
         "shape": spectral_mesh::shapes::DEFAULT_SHAPE,
         "laplacians": Laplacian::ALL.iter().map(|l| l.name()).collect::<Vec<_>>(),
         "colormaps": Colormap::ALL.iter().map(|c| c.name()).collect::<Vec<_>>(),
-    })
-    .to_string())
+    });
+    pyjson::to_py(py, &all)
 }
 
 /// Threads the computations use (the library's rayon pool).

@@ -3,7 +3,6 @@ with ``k``, answering every field of the paper."""
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass, field
 from typing import Any, Sequence
@@ -191,8 +190,11 @@ class Analysis:
             d,
             str(method),
         )
-        self._V = V
-        self._F = F
+        # Own read-only copies: the analysis does not change when the caller's arrays do.
+        self._V = V.copy()
+        self._F = F.copy()
+        self._V.setflags(write=False)
+        self._F.setflags(write=False)
         self._info: dict = {}
         self._last: Any = None
 
@@ -214,12 +216,12 @@ class Analysis:
 
     @property
     def V(self) -> np.ndarray:
-        """``(n, 3)`` float64 vertex positions (as given, not scaled)."""
+        """``(n, 3)`` float64 vertex positions as given (not scaled; a read-only copy)."""
         return self._V
 
     @property
     def F(self) -> np.ndarray:
-        """``(m, 3)`` int64 triangles."""
+        """``(m, 3)`` int64 triangles (a read-only copy)."""
         return self._F
 
     @property
@@ -327,8 +329,7 @@ class Analysis:
         for key, v in params.items():
             if v is not None:
                 req[key] = _arrays.plain(v, key)
-        vals, labels, info = self._a.field(json.dumps(req), values)
-        info = json.loads(info)
+        vals, labels, info = self._a.field(req, values)
         info.pop("values", None)
         info.pop("labels", None)
         self._info = info
@@ -584,7 +585,7 @@ class Analysis:
 
     def critical_points(self, values: Any) -> CriticalPoints:
         """The minima, maxima and saddles of a field ``(n,)``, with the Euler check."""
-        r = json.loads(self._a.critical_points(_arrays.per_vertex(values, self.n)))
+        r = self._a.critical_points(_arrays.per_vertex(values, self.n))
         p = r["points"]
         sad = np.asarray(p["saddles"], dtype=np.int64).reshape(-1, 2)
         ints = lambda x: np.asarray(x, dtype=np.int64)  # noqa: E731

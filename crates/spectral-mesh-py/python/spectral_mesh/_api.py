@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import os
 from typing import Any, Sequence
 
@@ -52,7 +51,7 @@ def shape(spec: str = SHAPE) -> tuple[np.ndarray, np.ndarray]:
 def shape_names() -> list[dict]:
     """The built-in shapes: a list of ``{"name", "description", "params",
     "default_vertices", "vertex_formula"}``."""
-    return json.loads(_native.shape_names())
+    return _native.shape_names()
 
 
 # -------------------------------------------------------------------------- operators
@@ -305,7 +304,7 @@ def load_basis(path: str | os.PathLike[str], *, with_mass: bool = False):
     evals, evecs, mass, meta = _native.load_basis(os.fspath(path))
     if not with_mass:
         return evals, evecs
-    return evals, evecs, _arrays.csr_from_parts(mass, evecs.shape[0]), json.loads(meta)
+    return evals, evecs, _arrays.csr_from_parts(mass, evecs.shape[0]), meta
 
 
 # -------------------------------------------------------------------------- pictures

@@ -8,11 +8,9 @@ files use the same numbers.
 
 from __future__ import annotations
 
-import json
-
 from . import _native
 
-DEFAULTS: dict = json.loads(_native.defaults())
+DEFAULTS: dict = _native.defaults()
 
 #: Every request kind's parameters and their defaults (``REQUESTS["heat"]["t"]`` = 0.5).
 REQUESTS: dict = DEFAULTS["requests"]

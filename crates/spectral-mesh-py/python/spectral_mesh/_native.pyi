@@ -3,7 +3,7 @@
 The public API is the pure-Python layer (``spectral_mesh``), which normalizes input to the
 layouts taken here: ``V`` C-contiguous ``(n, 3)`` float64, ``F`` C-contiguous ``(m, 3)``
 int64, per-vertex values ``(n,)`` float64, ``n x k`` matrices given as their C-contiguous
-``(k, n)`` transpose, sparse matrices as CSC arrays ``(data float64, indices int64,
+``(k, n)`` transpose, requests and reports as dicts (the library's serde forms), sparse matrices as CSC arrays ``(data float64, indices int64,
 indptr int64)`` (for the symmetric operators these are also their CSR arrays). Returned
 ``(n, k)`` matrices are Fortran-ordered. Every function releases the GIL, runs on a
 worker thread, raises ``KeyboardInterrupt`` on Ctrl-C and never lets a Rust panic through
@@ -21,13 +21,13 @@ Csc = tuple[F64, I64, I64]
 
 __version__: str
 
-def read_mesh(path: str | PathLike[str]) -> tuple[F64, I64, str]:
-    """``(V (n, 3), F (m, 3), info_json)``; info: format, polygons triangulated, warnings."""
+def read_mesh(path: str | PathLike[str]) -> tuple[F64, I64, dict]:
+    """``(V (n, 3), F (m, 3), info)``; info: format, polygons triangulated, warnings."""
 
 def write_mesh(path: str | PathLike[str], v: F64, f: I64) -> None: ...
 def shape(spec: str) -> tuple[F64, I64]: ...
-def shape_names() -> str:
-    """JSON list of the built-in shapes."""
+def shape_names() -> list[dict]:
+    """The built-in shapes."""
 
 def laplacian(v: F64, f: I64, kind: str, normalize: bool) -> tuple[Csc, Csc, float]:
     """``(S, B, A)``: S positive semi-definite, B the mass (``/ A`` when normalizing), A =
@@ -60,8 +60,8 @@ def save_basis(
     v: F64 | None = None,
     f: I64 | None = None,
 ) -> None: ...
-def load_basis(path: str | PathLike[str]) -> tuple[F64, F64, Csc, str]:
-    """``(evals, evecs (n, k), mass CSC arrays, meta_json)``."""
+def load_basis(path: str | PathLike[str]) -> tuple[F64, F64, Csc, dict]:
+    """``(evals, evecs (n, k), mass CSC arrays, meta)``."""
 
 def render(
     v: F64,
@@ -81,8 +81,8 @@ def render(
     """Writes ``path`` (format from its extension) and returns None, or returns the
     ``(size, size, 4)`` RGBA picture."""
 
-def defaults() -> str:
-    """JSON: the library's defaults (requests, analysis, figure, names)."""
+def defaults() -> dict:
+    """The library's defaults (requests, analysis, figure, names)."""
 
 def num_threads() -> int: ...
 def _panic_for_tests(message: str) -> None: ...
@@ -121,10 +121,10 @@ class Analysis:
     def operators(self) -> tuple[Csc, Csc]: ...
     def basis(self, k: int) -> tuple[F64, F64]: ...
     def residuals(self) -> F64: ...
-    def field(self, request: str, values: F64 | None = None) -> tuple[F64, I64 | None, str]:
-        """A ``FieldRequest`` in its serde JSON form: ``(values (n,), labels (n,) or
-        None, info_json)``."""
-    def critical_points(self, values: F64) -> str: ...
+    def field(self, request: dict, values: F64 | None = None) -> tuple[F64, I64 | None, dict]:
+        """A ``FieldRequest`` in its serde form (a dict tagged by ``kind``): ``(values
+        (n,), labels (n,) or None, info)``."""
+    def critical_points(self, values: F64) -> dict: ...
     def level_sets(
         self, values: F64, levels: list[float], count: int | None = None
     ) -> list[tuple[float, F64]]: ...
@@ -151,5 +151,5 @@ class Analysis:
         colorbar: bool,
         path: str | PathLike[str] | None,
     ) -> NDArray[np.uint8] | None: ...
-    def options_json(self) -> str: ...
+    def options(self) -> dict: ...
     def __repr__(self) -> str: ...
