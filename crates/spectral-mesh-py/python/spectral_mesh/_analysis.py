@@ -409,9 +409,12 @@ class Analysis:
             used, weights = self._weights(distance, k)
             E = self._embedding_of(used, weights, k)
             one = source is None or isinstance(source, (int, np.integer))
-            srcs = [self.default_source if source is None else _arrays.count(source, "source")] if one else [
-                _arrays.count(x, "source") for x in source
-            ]
+            if source is None:
+                srcs = [self.default_source]
+            elif isinstance(source, (int, np.integer)):
+                srcs = [_arrays.count(source, "source")]
+            else:
+                srcs = [_arrays.count(x, "source") for x in source]
             for x in srcs:
                 if x >= self.n:
                     raise ValueError(f"source {x} is out of range: the mesh has {self.n} vertices")
