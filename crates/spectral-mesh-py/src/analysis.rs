@@ -23,7 +23,7 @@ use crate::arrays::{
 };
 use crate::errors::Failure;
 use crate::pyjson;
-use crate::run::run;
+use crate::run::{Progress, run};
 use crate::{draw, eigen_params, figure_options, laplacian_of, with_values};
 
 /// A `ValueError` from a serde message.
@@ -46,9 +46,25 @@ impl PyAnalysis {
         T: Send + 'static,
         F: FnOnce(BasisView<'_>) -> Result<T, Failure> + Send + 'static,
     {
+        self.with_basis_progress(py, k, Progress::default(), f)
+    }
+
+    /// [`PyAnalysis::with_basis`] reporting the eigensolve to a Python callback.
+    fn with_basis_progress<T, F>(
+        &self,
+        py: Python<'_>,
+        k: usize,
+        progress: Progress,
+        f: F,
+    ) -> PyResult<T>
+    where
+        T: Send + 'static,
+        F: FnOnce(BasisView<'_>) -> Result<T, Failure> + Send + 'static,
+    {
         let an = self.inner.clone();
         run(py, move |token: &CancelToken| {
-            let b = an.basis(k, &mut |_| {}, token)?;
+            let b = an.basis(k, &mut |p| progress.report(&p, token), token);
+            let b = progress.finish(b.map_err(Failure::from))?;
             f(b.view(k))
         })
     }
@@ -148,9 +164,16 @@ impl PyAnalysis {
     }
 
     /// The first `k` pairs `(evals (k,), evecs (n, k))` (copies; the basis is computed or
-    /// grown when it holds fewer).
-    fn basis<'py>(&self, py: Python<'py>, k: usize) -> PyResult<Pairs<'py>> {
-        let (n, values, vectors) = self.with_basis(py, k, move |b| {
+    /// grown when it holds fewer), the solve reported to `progress` when given.
+    #[pyo3(signature = (k, progress=None))]
+    fn basis<'py>(
+        &self,
+        py: Python<'py>,
+        k: usize,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Pairs<'py>> {
+        let progress = Progress::new(progress);
+        let (n, values, vectors) = self.with_basis_progress(py, k, progress, move |b| {
             Ok((b.n, b.values.to_vec(), b.vectors.to_vec()))
         })?;
         Ok((to_vector(py, values), to_columns(py, n, k, vectors)?))

@@ -25,7 +25,7 @@ use spectral_mesh::spectral::eigenbasis::EigenError;
 use spectral_mesh::spectral::store::StoreError;
 
 /// A failure, converted to a Python exception by [`Failure::into_pyerr`].
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug)]
 pub enum Failure {
     /// Bad input: `ValueError`.
     Value(String),
@@ -56,6 +56,8 @@ pub enum Failure {
     Cancelled,
     /// A bug: `InternalError`.
     Internal(String),
+    /// An exception raised by Python code the computation called (a progress callback).
+    Python(PyErr),
 }
 
 impl Failure {
@@ -86,6 +88,7 @@ impl Failure {
             Failure::NoConvergence(m) => own(py, "NoConvergenceError", (m,)),
             Failure::Solver(m) => own(py, "SolverError", (m,)),
             Failure::Cancelled => PyKeyboardInterrupt::new_err("the computation was cancelled"),
+            Failure::Python(e) => e,
             Failure::Internal(m) => own(
                 py,
                 "InternalError",

@@ -183,7 +183,7 @@ fn laplacian<'py>(
 /// moved into NumPy without a copy.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v, f, k, kind, normalize, tol, seed, dirichlet, method))]
+#[pyo3(signature = (v, f, k, kind, normalize, tol, seed, dirichlet, method, progress=None))]
 fn eigenbasis<'py>(
     py: Python<'py>,
     v: PyReadonlyArray2<'_, f64>,
@@ -195,7 +195,9 @@ fn eigenbasis<'py>(
     seed: u64,
     dirichlet: Option<Vec<usize>>,
     method: &str,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<Pairs<'py>> {
+    let progress = run::Progress::new(progress);
     let mesh = mesh_from(&v, &f).map_err(|e| e.into_pyerr(py))?;
     let options = AnalysisOptions {
         laplacian: laplacian_of(kind).map_err(|e| e.into_pyerr(py))?,
@@ -204,7 +206,8 @@ fn eigenbasis<'py>(
     };
     let (n, values, vectors) = run(py, move |token| {
         let an = Analysis::new(mesh, options);
-        let basis = an.basis(k, &mut |_| {}, token)?;
+        let basis = an.basis(k, &mut |p| progress.report(&p, token), token);
+        let basis = progress.finish(basis.map_err(Failure::from))?;
         drop(an);
         Ok(take_pairs(basis, k))
     })?;
@@ -229,7 +232,7 @@ pub(crate) fn take_pairs(basis: Arc<Eigenbasis>, k: usize) -> (usize, Vec<f64>, 
 /// given as CSC arrays of an `n x n` matrix.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (n, a, m, k, tol, seed, method))]
+#[pyo3(signature = (n, a, m, k, tol, seed, method, progress=None))]
 fn eigsh<'py>(
     py: Python<'py>,
     n: usize,
@@ -247,7 +250,9 @@ fn eigsh<'py>(
     tol: f64,
     seed: u64,
     method: &str,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<Pairs<'py>> {
+    let progress = run::Progress::new(progress);
     let build = || -> Result<(SparseMatrix, SparseMatrix, EigenParams), Failure> {
         let s = csc_from("A", n, &a.0, &a.1, &a.2)?;
         let b = match &m {
@@ -269,7 +274,8 @@ fn eigsh<'py>(
             mass: b,
         };
         let mut solver = EigenSolver::new(Arc::new(ops), params);
-        let basis = solver.solve(k, &mut |_| {}, token)?;
+        let basis = solver.solve(k, &mut |p| progress.report(&p, token), token);
+        let basis = progress.finish(basis.map_err(Failure::from))?;
         drop(solver);
         Ok(take_pairs(basis, k))
     })?;

@@ -17,10 +17,13 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::mpsc::{RecvTimeoutError, channel};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use spectral_mesh::CancelToken;
+use spectral_mesh::linalg::EigenProgress;
 
 use crate::errors::Failure;
 
@@ -78,5 +81,86 @@ pub fn panic_message(payload: &Box<dyn std::any::Any + Send>) -> String {
         s.clone()
     } else {
         "a panic without a message".to_string()
+    }
+}
+
+/// A Python progress callback of an eigensolve, called on the worker thread (which takes
+/// the GIL for the call). An exception it raises cancels the computation and is raised
+/// in its place.
+#[derive(Clone, Default)]
+pub struct Progress {
+    callback: Option<Arc<Py<PyAny>>>,
+    error: Arc<Mutex<Option<PyErr>>>,
+}
+
+impl Progress {
+    /// Calls `callback` (when given) with a dict per progress event.
+    pub fn new(callback: Option<Py<PyAny>>) -> Self {
+        Self {
+            callback: callback.map(Arc::new),
+            error: Arc::default(),
+        }
+    }
+
+    /// Reports one event; cancels `token` when the callback raises.
+    pub fn report(&self, event: &EigenProgress, token: &CancelToken) {
+        let Some(cb) = &self.callback else { return };
+        let mut error = self.error.lock().unwrap_or_else(|p| p.into_inner());
+        if error.is_some() {
+            return;
+        }
+        let outcome = Python::attach(|py| -> PyResult<()> {
+            let d = PyDict::new(py);
+            match event {
+                EigenProgress::Dense { n } => {
+                    d.set_item("stage", "dense")?;
+                    d.set_item("n", n)?;
+                }
+                EigenProgress::Factorization { n, shift } => {
+                    d.set_item("stage", "factorization")?;
+                    d.set_item("n", n)?;
+                    d.set_item("shift", shift)?;
+                }
+                EigenProgress::Iteration {
+                    iteration,
+                    converged,
+                    wanted,
+                    basis,
+                } => {
+                    d.set_item("stage", "iteration")?;
+                    d.set_item("iteration", iteration)?;
+                    d.set_item("converged", converged)?;
+                    d.set_item("wanted", wanted)?;
+                    d.set_item("basis", basis)?;
+                }
+                EigenProgress::Finished {
+                    iterations,
+                    solves,
+                    max_residual,
+                    orthogonality_error,
+                } => {
+                    d.set_item("stage", "finished")?;
+                    d.set_item("iterations", iterations)?;
+                    d.set_item("solves", solves)?;
+                    d.set_item("max_residual", max_residual)?;
+                    d.set_item("orthogonality_error", orthogonality_error)?;
+                }
+            }
+            cb.call1(py, (d,))?;
+            Ok(())
+        });
+        if let Err(e) = outcome {
+            *error = Some(e);
+            token.cancel();
+        }
+    }
+
+    /// `result`, or the exception the callback raised.
+    pub fn finish<T>(&self, result: Result<T, Failure>) -> Result<T, Failure> {
+        let raised = self.error.lock().unwrap_or_else(|p| p.into_inner()).take();
+        match raised {
+            Some(e) => Err(Failure::Python(e)),
+            None => result,
+        }
     }
 }

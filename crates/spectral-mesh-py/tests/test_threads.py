@@ -142,3 +142,34 @@ def test_a_panic_becomes_an_exception():
 
 def test_cancellable_work_is_not_interrupted_without_a_signal():
     assert sm._native._work_for_tests(0.2, True) >= 0.2
+
+
+def test_progress_callbacks(torus):
+    V, F = torus
+    events = []
+    w, X = sm.eigenbasis(V, F, 30, method="shift-invert", progress=events.append)
+    stages = [e["stage"] for e in events]
+    assert stages[0] == "factorization" and stages[-1] == "finished" and "iteration" in stages
+    assert events[-1]["max_residual"] <= 1e-10
+    it = [e for e in events if e["stage"] == "iteration"]
+    assert it[-1]["wanted"] == 30 and all(e["converged"] <= 30 for e in it)
+    # Same pairs as without a callback.
+    assert np.array_equal(w, sm.eigenbasis(V, F, 30, method="shift-invert")[0])
+    an = sm.Analysis(V, F)
+    seen = []
+    an.basis(20, progress=seen.append)
+    assert seen and seen[-1]["stage"] == "finished"
+    # An exception in the callback is raised by the call (the solve stops, or its result
+    # is dropped when the solver does not check in time).
+    class Stop(Exception):
+        pass
+
+    def stop(event):
+        if event["stage"] == "iteration":
+            raise Stop("enough")
+
+    with pytest.raises(Stop, match="enough"):
+        sm.eigenbasis(V, F, 40, method="shift-invert", progress=stop)
+    with pytest.raises(Stop):
+        sm.eigsh(*sm.laplacian(V, F)[:1], 10, sm.laplacian(V, F)[1], sigma=-0.01, method="shift-invert", progress=stop)
+    assert sm.eigenbasis(V, F, 5)[0].shape == (5,)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -277,11 +277,12 @@ class Analysis:
         s, b = self._a.operators()
         return _arrays.csr_from_parts(s, self.n), _arrays.csr_from_parts(b, self.n)
 
-    def basis(self, k: int = K) -> tuple[np.ndarray, np.ndarray]:
+    def basis(self, k: int = K, *, progress: Callable[[dict], Any] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The first ``k`` eigenpairs ``(evals (k,), evecs (n, k))`` of the operators in
         use (copies): ascending, B-orthonormal, signs as :func:`spectral_mesh.eigenbasis`.
-        Computed, or grown, when fewer than ``k`` are held."""
-        return self._a.basis(self._k(k))
+        Computed, or grown, when fewer than ``k`` are held; ``progress`` as in
+        :func:`spectral_mesh.eigenbasis`."""
+        return self._a.basis(self._k(k), progress)
 
     def eigenvalues(self, k: int = K) -> np.ndarray:
         """The first ``k`` eigenvalues ``(k,)``."""

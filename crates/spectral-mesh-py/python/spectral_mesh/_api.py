@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -110,6 +110,7 @@ def eigenbasis(
     seed: int = SEED,
     dirichlet: Sequence[int] | None = None,
     method: str = "auto",
+    progress: Callable[[dict], Any] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The ``k`` smallest eigenpairs of ``S x = lambda B x`` for the mesh ``(V, F)``.
 
@@ -139,6 +140,12 @@ def eigenbasis(
         are zero there. Default: natural (Neumann) boundary conditions.
     method : ``"auto"`` (dense for small meshes, else the sparse solver), ``"dense"`` or
         ``"shift-invert"``.
+    progress : called with a dict per solver event, on the solver's thread:
+        ``{"stage": "factorization", "n", "shift"}``, ``{"stage": "iteration",
+        "iteration", "converged", "wanted", "basis"}``, ``{"stage": "finished",
+        "iterations", "solves", "max_residual", "orthogonality_error"}`` or
+        ``{"stage": "dense", "n"}``. An exception it raises stops the solve and is raised
+        by this call.
 
     Raises ``ValueError`` for bad arrays or parameters (``k > n`` among them),
     :class:`NoConvergenceError` and :class:`SolverError` for numerical failures.
@@ -161,6 +168,7 @@ def eigenbasis(
         _arrays.count(seed, "seed"),
         d,
         str(method),
+        progress,
     )
 
 
@@ -181,6 +189,7 @@ def eigsh(
     *,
     seed: int = SEED,
     method: str = "auto",
+    progress: Callable[[dict], Any] | None = None,
 ):
     """The ``k`` smallest eigenpairs of ``A x = lambda M x``, a drop-in for
     ``scipy.sparse.linalg.eigsh`` in the case it is most used for.
@@ -206,6 +215,8 @@ def eigsh(
       of every pair; ``0`` (SciPy's "machine precision") means 1e-10.
     - ``v0``, ``ncv`` and ``maxiter`` are accepted and ignored (the start block comes
       from ``seed``); ``Minv``, ``OPinv`` and ``mode`` other than ``"normal"`` are refused.
+    - ``method`` (``"auto"``, ``"dense"``, ``"shift-invert"``) and ``progress`` (see
+      :func:`eigenbasis`) are keyword-only additions.
 
     Raises ``ValueError`` for non-square, mismatched, non-symmetric or non-finite input,
     a negative diagonal in ``A`` or a non-positive one in ``M`` (they cannot be
@@ -253,7 +264,14 @@ def eigsh(
     if t < 0:
         raise ValueError(f"tol = {t}: must be >= 0")
     w, v = _native.eigsh(
-        n, a_parts, m_parts, k, t if t > 0 else TOL, _arrays.count(seed, "seed"), str(method)
+        n,
+        a_parts,
+        m_parts,
+        k,
+        t if t > 0 else TOL,
+        _arrays.count(seed, "seed"),
+        str(method),
+        progress,
     )
     return (w, v) if return_eigenvectors else w
 

@@ -11,6 +11,7 @@ worker thread, raises ``KeyboardInterrupt`` on Ctrl-C and never lets a Rust pani
 """
 
 from os import PathLike
+from typing import Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -43,11 +44,20 @@ def eigenbasis(
     seed: int,
     dirichlet: list[int] | None,
     method: str,
+    progress: Callable[[dict], object] | None = None,
 ) -> tuple[F64, F64]:
-    """``(evals (k,), evecs (n, k) Fortran order)``, ``evecs.T @ B @ evecs = I``."""
+    """``(evals (k,), evecs (n, k) Fortran order)``, ``evecs.T @ B @ evecs = I``;
+    ``progress`` is called with a dict per solver event."""
 
 def eigsh(
-    n: int, a: Csc, m: Csc | None, k: int, tol: float, seed: int, method: str
+    n: int,
+    a: Csc,
+    m: Csc | None,
+    k: int,
+    tol: float,
+    seed: int,
+    method: str,
+    progress: Callable[[dict], object] | None = None,
 ) -> tuple[F64, F64]:
     """The ``k`` smallest pairs of ``A x = w M x`` (A PSD, M SPD or the identity)."""
 
@@ -119,7 +129,7 @@ class Analysis:
     def default_source(self) -> int: ...
     def mesh(self) -> tuple[F64, I64]: ...
     def operators(self) -> tuple[Csc, Csc]: ...
-    def basis(self, k: int) -> tuple[F64, F64]: ...
+    def basis(self, k: int, progress: Callable[[dict], object] | None = None) -> tuple[F64, F64]: ...
     def residuals(self) -> F64: ...
     def field(self, request: dict, values: F64 | None = None) -> tuple[F64, I64 | None, dict]:
         """A ``FieldRequest`` in its serde form (a dict tagged by ``kind``): ``(values
