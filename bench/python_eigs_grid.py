@@ -128,7 +128,12 @@ def render(records: list[dict], routes: list[str], header: str) -> str:
         cells.setdefault(key, {}).setdefault(r["route"], []).append(r)
     lines = [header, ""]
     cols = ["mesh", "n", "k"] + [f"{TITLES[r]} (s)" for r in routes]
-    cols += ["fastest peer / ours", "peak RSS MiB (" + ", ".join(routes) + ")", "residual ours / worst peer", "lambda_k agrees"]
+    cols += [
+        "fastest peer / ours",
+        "peak RSS MiB (" + ", ".join(routes) + ")",
+        "residual ours / worst peer",
+        "lambda_k agrees",
+    ]
     lines.append("| " + " | ".join(cols) + " |")
     lines.append("| " + " | ".join(["---"] + ["---:"] * (len(cols) - 1)) + " |")
     for (mesh, k), by_route in cells.items():
@@ -146,9 +151,15 @@ def render(records: list[dict], routes: list[str], header: str) -> str:
                 row.append(bad[0].get("error", "failed") if bad else "")
         peers = [med[r] for r in routes if r != "ours" and r in med]
         row.append(f"**{min(peers) / med['ours']:.2f}x**" if "ours" in med and peers else "")
-        row.append(", ".join(f"{max(x['peak_rss_mib'] for x in ok[r]):.0f}" if ok[r] else "-" for r in routes))
+        row.append(
+            ", ".join(
+                f"{max(x['peak_rss_mib'] for x in ok[r]):.0f}" if ok[r] else "-" for r in routes
+            )
+        )
         res_ours = max((x["max_residual"] for x in ok["ours"]), default=float("nan"))
-        res_peer = max((x["max_residual"] for r in routes if r != "ours" for x in ok[r]), default=float("nan"))
+        res_peer = max(
+            (x["max_residual"] for r in routes if r != "ours" for x in ok[r]), default=float("nan")
+        )
         row.append(f"{res_ours:.1e} / {res_peer:.1e}")
         lk = [x["lambda_k"] for r in SAME_PENCIL if r in routes for x in ok[r]]
         if len(lk) > 1:
@@ -161,14 +172,25 @@ def render(records: list[dict], routes: list[str], header: str) -> str:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--python", default=sys.executable, help="the venv's python (peers and spectral_mesh)")
-    ap.add_argument("--sizes", default="25k,100k", help="25k, 100k, 400k, shape specs or mesh files")
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    ap.add_argument(
+        "--python", default=sys.executable, help="the venv's python (peers and spectral_mesh)"
+    )
+    ap.add_argument(
+        "--sizes", default="25k,100k", help="25k, 100k, 400k, shape specs or mesh files"
+    )
     ap.add_argument("--ks", default="50,200,500")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--routes", default=",".join(ROUTES))
     ap.add_argument("--timeout", type=float, default=3600, help="seconds per run")
-    ap.add_argument("--slow-seconds", type=float, default=300, help="a route slower than this runs once per cell")
+    ap.add_argument(
+        "--slow-seconds",
+        type=float,
+        default=300,
+        help="a route slower than this runs once per cell",
+    )
     ap.add_argument(
         "--peer-blas-threads",
         type=int,
@@ -187,7 +209,9 @@ def main() -> None:
             raise SystemExit(f"unknown route {r!r}: expected some of {', '.join(ROUTES)}")
     out, table = Path(a.out), Path(a.table)
     out.parent.mkdir(parents=True, exist_ok=True)
-    commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    commit = subprocess.run(
+        ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+    ).stdout.strip()
     header = (
         f"Command: `{' '.join(sys.argv)}`; machine: {platform.machine()}, {os.cpu_count()} cores; "
         f"commit {commit}; total seconds from (V, F) to (evals, evecs), median [min, max] (runs); "
@@ -220,7 +244,11 @@ def main() -> None:
                     t = rec.get("total_s")
                     print(
                         f"{mesh.stem} k={k} {route}: "
-                        + (f"{t:.2f} s, {rec['peak_rss_mib']:.0f} MiB, residual {rec['max_residual']:.1e}" if status == 0 else str(rec.get("error")))
+                        + (
+                            f"{t:.2f} s, {rec['peak_rss_mib']:.0f} MiB, residual {rec['max_residual']:.1e}"
+                            if status == 0
+                            else str(rec.get("error"))
+                        )
                         + f" (load {rec['load_before']:.1f})",
                         flush=True,
                     )

@@ -45,7 +45,9 @@ def draw(ax, V, F, d, sets, source, title):
     n /= np.linalg.norm(n, axis=1, keepdims=True) + 1e-300
     light = np.array([0.4, 0.3, 1.0]) / np.linalg.norm([0.4, 0.3, 1.0])
     shade = 0.45 + 0.55 * np.abs(n @ light)
-    ax.add_collection3d(Poly3DCollection(V[F], facecolors=colors * shade[:, None], edgecolors="none"))
+    ax.add_collection3d(
+        Poly3DCollection(V[F], facecolors=colors * shade[:, None], edgecolors="none")
+    )
     segs = np.concatenate([s.segments for s in sets]) if sets else np.zeros((0, 2, 3))
     ax.add_collection3d(Line3DCollection(segs, colors="black", linewidths=0.6))
     ax.scatter(*V[source], color="black", s=30, depthshade=False)
@@ -61,11 +63,22 @@ def draw(ax, V, F, d, sets, source, title):
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--shape", default="3torus", help="built-in shape spec (default: the paper's 3-torus)")
+    p = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    p.add_argument(
+        "--shape", default="3torus", help="built-in shape spec (default: the paper's 3-torus)"
+    )
     p.add_argument("--mesh", help="a mesh file instead of a built-in shape")
-    p.add_argument("--kinds", nargs="+", default=["fem", "voronoi-cot", "cot"], help="discretizations (columns)")
-    p.add_argument("--k", nargs="+", type=int, default=[100, 20], help="numbers of eigenpairs (rows)")
+    p.add_argument(
+        "--kinds",
+        nargs="+",
+        default=["fem", "voronoi-cot", "cot"],
+        help="discretizations (columns)",
+    )
+    p.add_argument(
+        "--k", nargs="+", type=int, default=[100, 20], help="numbers of eigenpairs (rows)"
+    )
     p.add_argument("--levels", type=int, default=20, help="level sets drawn")
     p.add_argument("--out", default="biharmonic-distance.png")
     a = p.parse_args()
@@ -83,7 +96,9 @@ def main() -> None:
             ax = fig.add_subplot(rows, cols, i * cols + j + 1, projection="3d")
             draw(ax, V, F, d, sets, source, f"{kind}, k = {k}")
         print(f"{kind}: {time.perf_counter() - t0:.2f} s for k = {a.k}")
-    fig.suptitle(f"Bi-harmonic distance from the vertex of largest x ({len(V)} vertices)", fontsize=11)
+    fig.suptitle(
+        f"Bi-harmonic distance from the vertex of largest x ({len(V)} vertices)", fontsize=11
+    )
     fig.tight_layout()
     fig.savefig(a.out, dpi=120)
     print(f"wrote {a.out}")

@@ -220,7 +220,10 @@ def test_hks_and_wks_equal_pyfm(pretzel, scaled):
     # Automatic times and energies.
     assert np.allclose(an.hks_times(8, k=k), pyfm_auto_times(w, 8), rtol=1e-12)
     auto = an.auto_hks(8, scaled=scaled, k=k)
-    assert np.abs(auto - pyfm_hks(w, X, pyfm_auto_times(w, 8), scaled)).max() <= 1e-12 * np.abs(auto).max()
+    assert (
+        np.abs(auto - pyfm_hks(w, X, pyfm_auto_times(w, 8), scaled)).max()
+        <= 1e-12 * np.abs(auto).max()
+    )
     energies, sigma = pyfm_auto_energies(w, 10)
     e, s = an.wks_energies(10, k=k)
     assert np.allclose(e, energies, rtol=1e-12) and abs(s - sigma) <= 1e-12 * sigma
@@ -262,7 +265,11 @@ def test_eigsh_generalized_pencil_and_formats():
     n = A.shape[0]
     rng = np.random.default_rng(1)
     d = rng.uniform(0.5, 2.0, n)
-    M = (sp.diags(d) + 0.1 * sp.diags(np.sqrt(d[:-1] * d[1:]), 1) + 0.1 * sp.diags(np.sqrt(d[:-1] * d[1:]), -1)).tocsr()
+    M = (
+        sp.diags(d)
+        + 0.1 * sp.diags(np.sqrt(d[:-1] * d[1:]), 1)
+        + 0.1 * sp.diags(np.sqrt(d[:-1] * d[1:]), -1)
+    ).tocsr()
     w, X = sm.eigsh(A, 12, M, sigma=-0.01)
     w2, X2 = sla.eigsh(A.tocsc(), 12, M.tocsc(), sigma=-0.01)
     order = np.argsort(w2)
@@ -284,7 +291,9 @@ def test_eigsh_generalized_pencil_and_formats():
 def test_eigsh_on_a_singular_psd_matrix():
     # A graph Laplacian of a path: semi-definite, one zero eigenvalue.
     n = 400
-    Lp = sp.diags([-np.ones(n - 1), np.r_[1, 2 * np.ones(n - 2), 1], -np.ones(n - 1)], [-1, 0, 1]).tocsr()
+    Lp = sp.diags(
+        [-np.ones(n - 1), np.r_[1, 2 * np.ones(n - 2), 1], -np.ones(n - 1)], [-1, 0, 1]
+    ).tocsr()
     w, X = sm.eigsh(Lp, 8, sigma=-1e-6)
     exact = 2 - 2 * np.cos(np.pi * np.arange(8) / n)
     assert abs(w[0]) < 1e-10

@@ -76,7 +76,10 @@ def test_distances(full):
     want = np.linalg.norm(E - E[src], axis=1)
     d = an.distance(src, k=k)
     assert d[src] == 0 and np.abs(d - want).max() <= 1e-9 * want.max()
-    assert np.abs(np.linalg.norm(an.embedding(k=k) - an.embedding(k=k)[src], axis=1) - d).max() <= 1e-9 * d.max()
+    assert (
+        np.abs(np.linalg.norm(an.embedding(k=k) - an.embedding(k=k)[src], axis=1) - d).max()
+        <= 1e-9 * d.max()
+    )
     # Several sources: one column each, and every filter of the text syntax.
     many = an.distance([src, 7], k=k)
     assert many.shape == (n, 2) and np.array_equal(many[:, 0], d)
@@ -93,13 +96,38 @@ def test_distances(full):
         want = np.linalg.norm(Et - Et[src], axis=1)
         got = an.distance(src, distance=text, k=k)
         assert np.abs(got - want).max() <= 1e-9 * want.max(), text
-        assert np.abs(an.spectral_function(text, k=k) - np.sum(Et**2, axis=1)).max() <= 1e-9 * np.sum(Et**2, axis=1).max(), text
-        assert np.abs(an.green(src, filter=text, k=k) - Et @ Et[src]).max() <= 1e-9 * np.abs(Et @ Et[src]).max(), text
+        assert (
+            np.abs(an.spectral_function(text, k=k) - np.sum(Et**2, axis=1)).max()
+            <= 1e-9 * np.sum(Et**2, axis=1).max()
+        ), text
+        assert (
+            np.abs(an.green(src, filter=text, k=k) - Et @ Et[src]).max()
+            <= 1e-9 * np.abs(Et @ Et[src]).max()
+        ), text
     # A Python weight function is the same filter as its text form.
-    assert np.abs(an.distance(src, distance=lambda s: np.exp(-0.1 * s) / s, k=k) - an.distance(src, distance="custom-w:exp(-s*t)/s;t=0.1", k=k)).max() <= 1e-12
-    assert np.abs(an.distance([src, 7], distance=lambda s: s**-2.0, k=k) - many).max() <= 1e-12 * many.max()
-    assert np.abs(an.spectral_function(lambda s: 1 / s, k=k) - an.spectral_function("commute", k=k)).max() <= 1e-12
-    assert np.abs(an.green(src, filter=lambda s: 1 / s, k=k) - an.green(src, filter="commute", k=k)).max() <= 1e-12
+    assert (
+        np.abs(
+            an.distance(src, distance=lambda s: np.exp(-0.1 * s) / s, k=k)
+            - an.distance(src, distance="custom-w:exp(-s*t)/s;t=0.1", k=k)
+        ).max()
+        <= 1e-12
+    )
+    assert (
+        np.abs(an.distance([src, 7], distance=lambda s: s**-2.0, k=k) - many).max()
+        <= 1e-12 * many.max()
+    )
+    assert (
+        np.abs(
+            an.spectral_function(lambda s: 1 / s, k=k) - an.spectral_function("commute", k=k)
+        ).max()
+        <= 1e-12
+    )
+    assert (
+        np.abs(
+            an.green(src, filter=lambda s: 1 / s, k=k) - an.green(src, filter="commute", k=k)
+        ).max()
+        <= 1e-12
+    )
     assert np.abs(an.embedding(lambda s: 1 / s, k=k) - an.embedding("commute", k=k)).max() <= 1e-12
     with pytest.raises(ValueError, match="not strictly positive and finite on the spectrum"):
         an.distance(src, distance=lambda s: s - s[3], k=k)
@@ -124,7 +152,9 @@ def test_signatures_eigenfunctions_embedding(full):
     assert np.abs(an.adf(0.1, k=k) - adf).max() <= 1e-9 * adf.max()
     emb = an.embedding("commute", k=k)
     assert emb.shape == (an.n, pos.sum())
-    assert np.abs(an.embedding("commute", component=2, k=k) - Xs[:, 2] / np.sqrt(w[2])).max() <= 1e-8
+    assert (
+        np.abs(an.embedding("commute", component=2, k=k) - Xs[:, 2] / np.sqrt(w[2])).max() <= 1e-8
+    )
 
 
 def test_harmonic_maps_and_critical_points(full):
@@ -170,7 +200,9 @@ def test_segmentation_and_level_sets(pretzel):
         # The end points lie on the surface where f = value: check against the linear
         # interpolation along x through the nearest vertices is too loose; instead every
         # end point lies within the mesh's bounding box.
-        assert np.all(s.segments >= V.min(axis=0) - 1e-12) and np.all(s.segments <= V.max(axis=0) + 1e-12)
+        assert np.all(s.segments >= V.min(axis=0) - 1e-12) and np.all(
+            s.segments <= V.max(axis=0) + 1e-12
+        )
     assert [s.value for s in an.level_sets(f, [0.5])] == [0.5]
 
 
@@ -279,7 +311,9 @@ def test_stubs_match_the_native_module():
     declared = {n.name for n in tree.body if isinstance(n, ast.FunctionDef)}
     cls = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "Analysis")
     methods = {n.name for n in cls.body if isinstance(n, ast.FunctionDef)}
-    native = {x for x in dir(sm._native) if not x.startswith("__") and callable(getattr(sm._native, x))}
+    native = {
+        x for x in dir(sm._native) if not x.startswith("__") and callable(getattr(sm._native, x))
+    }
     assert declared | {"Analysis"} == native
     have = {x for x in dir(sm._native.Analysis) if not x.startswith("__")}
     assert methods - {"__new__", "__repr__"} == have
@@ -290,7 +324,16 @@ def test_example_script(tmp_path):
     out = tmp_path / "fig.png"
     env = dict(os.environ, MPLBACKEND="Agg")
     r = subprocess.run(
-        [sys.executable, str(HERE.parent / "examples" / "biharmonic_distance.py"), "--shape", "3torus", "--k", "40", "--out", str(out)],
+        [
+            sys.executable,
+            str(HERE.parent / "examples" / "biharmonic_distance.py"),
+            "--shape",
+            "3torus",
+            "--k",
+            "40",
+            "--out",
+            str(out),
+        ],
         capture_output=True,
         text=True,
         env=env,

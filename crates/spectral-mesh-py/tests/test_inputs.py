@@ -69,10 +69,22 @@ BAD = [
     (lambda V, F: (V.astype(complex), F), "V must hold real numbers"),
     (lambda V, F: (V.astype(str), F), "V must hold real numbers"),
     (lambda V, F: (V.astype(object), F), "V must hold real numbers"),
-    (lambda V, F: (np.where(np.arange(len(V))[:, None] == 7, np.nan, V), F), "V[7] has a non-finite coordinate"),
-    (lambda V, F: (np.where(np.arange(len(V))[:, None] == 3, np.inf, V), F), "V[3] has a non-finite coordinate"),
-    (lambda V, F: (V, np.where(np.arange(len(F))[:, None] == 5, 10_000, F)), "F[5] refers to vertex 10000, but V has 162 vertices"),
-    (lambda V, F: (V, np.where(np.arange(len(F))[:, None] == 9, -1, F)), "F[9] refers to vertex -1"),
+    (
+        lambda V, F: (np.where(np.arange(len(V))[:, None] == 7, np.nan, V), F),
+        "V[7] has a non-finite coordinate",
+    ),
+    (
+        lambda V, F: (np.where(np.arange(len(V))[:, None] == 3, np.inf, V), F),
+        "V[3] has a non-finite coordinate",
+    ),
+    (
+        lambda V, F: (V, np.where(np.arange(len(F))[:, None] == 5, 10_000, F)),
+        "F[5] refers to vertex 10000, but V has 162 vertices",
+    ),
+    (
+        lambda V, F: (V, np.where(np.arange(len(F))[:, None] == 9, -1, F)),
+        "F[9] refers to vertex -1",
+    ),
     (lambda V, F: (V, np.where(np.arange(len(F))[:, None] == 2, F[2, 0], F)), "F[2] uses vertex"),
 ]
 
@@ -95,7 +107,10 @@ def test_bad_parameters(mesh):
     V, F = mesh
     n = len(V)
     cases = [
-        (lambda: sm.eigenbasis(V, F, n + 1), f"k = {n + 1} eigenpairs asked for, but the mesh has only {n} vertices"),
+        (
+            lambda: sm.eigenbasis(V, F, n + 1),
+            f"k = {n + 1} eigenpairs asked for, but the mesh has only {n} vertices",
+        ),
         (lambda: sm.eigenbasis(V, F, 0), "k = 0: must be >= 1"),
         (lambda: sm.eigenbasis(V, F, 2.5), "k must be an integer"),
         (lambda: sm.eigenbasis(V, F, 5, "cotan-ish"), "unknown Laplacian 'cotan-ish'"),
@@ -106,7 +121,10 @@ def test_bad_parameters(mesh):
         (lambda: sm.laplacian(V, F, "nope"), "unknown Laplacian 'nope'"),
         (lambda: sm.shape("klein-bottle"), "unknown shape `klein-bottle`"),
         (lambda: sm.shape("sphere:res=x"), "bad value `x` for parameter `res`"),
-        (lambda: sm.render(V, F, np.zeros(n - 1)), f"values has {n - 1} values but the mesh has {n} vertices"),
+        (
+            lambda: sm.render(V, F, np.zeros(n - 1)),
+            f"values has {n - 1} values but the mesh has {n} vertices",
+        ),
         (lambda: sm.render(V, F, np.zeros(n), colormap="jet"), "unknown colour map 'jet'"),
         (lambda: sm.render(V, F, np.zeros(n), view="diagonal"), "unknown view 'diagonal'"),
         (lambda: sm.render(V, F, np.zeros(n), size=0), "size = 0: must be >= 1"),
@@ -131,26 +149,50 @@ def test_bad_field_requests(mesh):
         (lambda: an.heat(k=n + 1), f"k = {n + 1} eigenpairs asked for"),
         (lambda: an.heat(kernel="gauss"), "unknown variant `gauss`"),
         (lambda: an.distance(distance="biharmonik"), "biharmonik"),
-        (lambda: an.distance(distance="custom-w:exp(-s*t;t=1"), "expression error at character 8 of 'exp(-s*t': expected ')'"),
+        (
+            lambda: an.distance(distance="custom-w:exp(-s*t;t=1"),
+            "expression error at character 8 of 'exp(-s*t': expected ')'",
+        ),
         (lambda: an.distance(distance="diffusion:t=-1"), "diffusion"),
-        (lambda: an.distance(3, distance="band:200", k=20), "band-suppression index 200 is out of range"),
-        (lambda: an.diffuse(np.ones(n - 1)), f"signal has {n - 1} values but the mesh has {n} vertices"),
+        (
+            lambda: an.distance(3, distance="band:200", k=20),
+            "band-suppression index 200 is out of range",
+        ),
+        (
+            lambda: an.diffuse(np.ones(n - 1)),
+            f"signal has {n - 1} values but the mesh has {n} vertices",
+        ),
         (lambda: an.diffuse(np.r_[np.nan, np.ones(n - 1)]), "signal[0] = nan is not finite"),
         (lambda: an.diffuse({"vertex": 0}), "a ball signal is"),
         (lambda: an.harmonic(3), "3: the presets are 2, 4 or 6"),
-        (lambda: an.harmonic({0: 1.0}, order=3), "order: 3: must be 1 (harmonic) or 2 (bi-harmonic)"),
+        (
+            lambda: an.harmonic({0: 1.0}, order=3),
+            "order: 3: must be 1 (harmonic) or 2 (bi-harmonic)",
+        ),
         (lambda: an.harmonic({n: 1.0}), f"constraint on vertex {n}, but the mesh has {n} vertices"),
         (lambda: an.harmonic([(0, np.nan)]), "constraint value = nan"),
         (lambda: an.eigenfunction(20, k=20), "index: 20: out of range for k = 20 pairs"),
         (lambda: an.wks(1.0, sigma=0.0), "sigma: 0: must be a finite number > 0"),
         (lambda: an.segmentation("nonsense"), "unknown signature 'nonsense'"),
-        (lambda: an.segmentation(persistence=-1.0), "persistence: -1: must be a finite number >= 0"),
+        (
+            lambda: an.segmentation(persistence=-1.0),
+            "persistence: -1: must be a finite number >= 0",
+        ),
         (lambda: an.field("geodesic"), "unknown variant `geodesic`"),
         (lambda: an.field("distance", filter="biharmonic"), "unknown field `filter`"),
-        (lambda: an.critical_points(np.zeros(3)), f"values has 3 values but the mesh has {n} vertices"),
+        (
+            lambda: an.critical_points(np.zeros(3)),
+            f"values has 3 values but the mesh has {n} vertices",
+        ),
         (lambda: an.level_sets(np.zeros(n), [np.inf]), "level = inf: must be a finite number"),
-        (lambda: an.set_basis(np.ones(3), np.ones((n, 2))), "evecs has 2 columns but evals has 3 values"),
-        (lambda: an.set_basis(np.ones(3), np.ones((n + 1, 3))), f"basis has {n + 1} values but the mesh has {n} vertices"),
+        (
+            lambda: an.set_basis(np.ones(3), np.ones((n, 2))),
+            "evecs has 2 columns but evals has 3 values",
+        ),
+        (
+            lambda: an.set_basis(np.ones(3), np.ones((n + 1, 3))),
+            f"basis has {n + 1} values but the mesh has {n} vertices",
+        ),
     ]
     for call, message in cases:
         with pytest.raises(ValueError) as e:
@@ -206,7 +248,10 @@ def test_eigsh_input_errors():
         (lambda: sm.eigsh(A, 2, sigma=1.0), "sigma = 1.0 > 0"),
         (lambda: sm.eigsh(A, 2, sigma=-1, which="SA"), "only 'LM'"),
         (lambda: sm.eigsh(A, 5, sigma=-1), "k = 5: must be between 1 and n = 4"),
-        (lambda: sm.eigsh(sp.random(4, 4, density=0.8, random_state=1) + sp.eye(4), 2, sigma=-1), "A is not symmetric"),
+        (
+            lambda: sm.eigsh(sp.random(4, 4, density=0.8, random_state=1) + sp.eye(4), 2, sigma=-1),
+            "A is not symmetric",
+        ),
         (lambda: sm.eigsh(sp.random(4, 3, density=1.0), 2, sigma=-1), "A must be square"),
         (lambda: sm.eigsh(A, 2, sp.eye(5), sigma=-1), "M has shape (5, 5) but A has shape (4, 4)"),
         (lambda: sm.eigsh(A, 2, sigma=-1, mode="cayley"), "only 'normal'"),
@@ -242,4 +287,6 @@ def test_native_module_checks_its_own_input():
     with pytest.raises(TypeError):
         nat.laplacian(V.astype(np.float32), F, "fem", False)
     with pytest.raises(ValueError, match="inconsistent"):
-        nat.eigsh(3, (np.ones(2), np.array([0, 0]), np.array([0, 2, 2, 2])), None, 1, 1e-10, 1, "auto")
+        nat.eigsh(
+            3, (np.ones(2), np.array([0, 0]), np.array([0, 2, 2, 2])), None, 1, 1e-10, 1, "auto"
+        )

@@ -27,7 +27,16 @@ def test_the_extension_needs_no_system_library():
         pytest.skip("ldd is not available")
     out = subprocess.run(["ldd", str(ext)], capture_output=True, text=True, check=True).stdout
     libs = {line.split()[0] for line in out.splitlines() if line.strip()}
-    allowed = ("linux-vdso", "libc.so", "libm.so", "libgcc_s.so", "libpthread.so", "libdl.so", "librt.so", "ld-linux")
+    allowed = (
+        "linux-vdso",
+        "libc.so",
+        "libm.so",
+        "libgcc_s.so",
+        "libpthread.so",
+        "libdl.so",
+        "librt.so",
+        "ld-linux",
+    )
     extra = sorted(lib for lib in libs if not lib.startswith(allowed) and "ld-linux" not in lib)
     assert extra == [], out  # no libpython, BLAS, SuiteSparse, ...
 
@@ -42,10 +51,30 @@ def test_public_api():
     # Keyword arguments everywhere past the data, with the paper's defaults.
     sig = inspect.signature(sm.eigenbasis)
     assert list(sig.parameters)[:4] == ["V", "F", "k", "kind"]
-    assert all(sig.parameters[p].kind is inspect.Parameter.KEYWORD_ONLY for p in ["normalize", "tol", "seed", "dirichlet", "method"])
+    assert all(
+        sig.parameters[p].kind is inspect.Parameter.KEYWORD_ONLY
+        for p in ["normalize", "tol", "seed", "dirichlet", "method"]
+    )
     # SciPy's positional order for eigsh.
-    assert list(inspect.signature(sm.eigsh).parameters)[:6] == ["A", "k", "M", "sigma", "which", "v0"]
-    for name in ["heat", "diffuse", "distance", "hks", "wks", "adf", "segmentation", "harmonic", "embedding"]:
+    assert list(inspect.signature(sm.eigsh).parameters)[:6] == [
+        "A",
+        "k",
+        "M",
+        "sigma",
+        "which",
+        "v0",
+    ]
+    for name in [
+        "heat",
+        "diffuse",
+        "distance",
+        "hks",
+        "wks",
+        "adf",
+        "segmentation",
+        "harmonic",
+        "embedding",
+    ]:
         assert getattr(sm.Analysis, name).__doc__, name
 
 

@@ -42,7 +42,7 @@ def test_two_threads_give_the_results_of_one_after_the_other(torus, pretzel):
     V2, F2 = pretzel
     seq = [sm.eigenbasis(V1, F1, 40), sm.eigenbasis(V2, F2, 40)]
     par = run_in_threads([lambda: sm.eigenbasis(V1, F1, 40), lambda: sm.eigenbasis(V2, F2, 40)])
-    for (w, X), (w2, X2) in zip(seq, par):
+    for (w, X), (w2, X2) in zip(seq, par, strict=True):
         assert np.array_equal(w, w2) and np.array_equal(X, X2)
 
 
@@ -59,7 +59,7 @@ def test_two_threads_on_one_analysis(pretzel):
             lambda: an.heat(9, k=60),
         ]
     )
-    for a, b in zip(want, got):
+    for a, b in zip(want, got, strict=True):
         assert np.array_equal(a, b)
     # One basis served every spectral request: the threads waited for the one solve.
     # (Requests with a smaller k than the basis held use its first k pairs, which agree
@@ -159,6 +159,7 @@ def test_progress_callbacks(torus):
     seen = []
     an.basis(20, progress=seen.append)
     assert seen and seen[-1]["stage"] == "finished"
+
     # An exception in the callback is raised by the call (the solve stops, or its result
     # is dropped when the solver does not check in time).
     class Stop(Exception):
@@ -171,5 +172,12 @@ def test_progress_callbacks(torus):
     with pytest.raises(Stop, match="enough"):
         sm.eigenbasis(V, F, 40, method="shift-invert", progress=stop)
     with pytest.raises(Stop):
-        sm.eigsh(*sm.laplacian(V, F)[:1], 10, sm.laplacian(V, F)[1], sigma=-0.01, method="shift-invert", progress=stop)
+        sm.eigsh(
+            *sm.laplacian(V, F)[:1],
+            10,
+            sm.laplacian(V, F)[1],
+            sigma=-0.01,
+            method="shift-invert",
+            progress=stop,
+        )
     assert sm.eigenbasis(V, F, 5)[0].shape == (5,)

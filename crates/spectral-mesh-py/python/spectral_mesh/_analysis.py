@@ -95,7 +95,7 @@ def _constraints(c: Any) -> Any:
                 raise ValueError(
                     f"constraints: {verts.shape[0]} vertices but {vals.shape[0]} values"
                 )
-            items = list(zip(verts.tolist(), vals.tolist()))
+            items = list(zip(verts.tolist(), vals.tolist(), strict=True))
     out = []
     for item in items:
         try:
@@ -103,7 +103,10 @@ def _constraints(c: Any) -> Any:
         except (TypeError, ValueError):
             raise ValueError(f"constraint {item!r}: expected (vertex, value)") from None
         out.append(
-            {"vertex": _arrays.count(v, "constraint vertex"), "value": _arrays.real(x, "constraint value")}
+            {
+                "vertex": _arrays.count(v, "constraint vertex"),
+                "value": _arrays.real(x, "constraint value"),
+            }
         )
     return out
 
@@ -199,7 +202,9 @@ class Analysis:
         self._last: Any = None
 
     @classmethod
-    def from_file(cls, path: str | os.PathLike[str], kind: str = ANALYSIS["kind"], **options: Any) -> Analysis:
+    def from_file(
+        cls, path: str | os.PathLike[str], kind: str = ANALYSIS["kind"], **options: Any
+    ) -> Analysis:
         """The analysis of a mesh file (see :func:`spectral_mesh.read_mesh`)."""
         from ._api import read_mesh
 
@@ -277,7 +282,9 @@ class Analysis:
         s, b = self._a.operators()
         return _arrays.csr_from_parts(s, self.n), _arrays.csr_from_parts(b, self.n)
 
-    def basis(self, k: int = K, *, progress: Callable[[dict], Any] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def basis(
+        self, k: int = K, *, progress: Callable[[dict], Any] | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The first ``k`` eigenpairs ``(evals (k,), evecs (n, k))`` of the operators in
         use (copies): ascending, B-orthonormal, signs as :func:`spectral_mesh.eigenbasis`.
         Computed, or grown, when fewer than ``k`` are held; ``progress`` as in
@@ -314,7 +321,9 @@ class Analysis:
     def _k(self, k: Any) -> int:
         k = _arrays.count(k, "k", 1)
         if k > self.n:
-            raise ValueError(f"k = {k} eigenpairs asked for, but the mesh has only {self.n} vertices")
+            raise ValueError(
+                f"k = {k} eigenpairs asked for, but the mesh has only {self.n} vertices"
+            )
         return k
 
     def field(self, kind: str, *, return_info: bool = False, **params: Any):
@@ -419,19 +428,30 @@ class Analysis:
             for x in srcs:
                 if x >= self.n:
                     raise ValueError(f"source {x} is out of range: the mesh has {self.n} vertices")
-            d = np.column_stack([np.linalg.norm(E - E[x], axis=1) for x in srcs]) if srcs else np.zeros((self.n, 0))
+            d = (
+                np.column_stack([np.linalg.norm(E - E[x], axis=1) for x in srcs])
+                if srcs
+                else np.zeros((self.n, 0))
+            )
             return d[:, 0] if one else d
         if source is not None and not isinstance(source, (int, np.integer)):
             sources = [_arrays.count(s, "source") for s in source]
             if str(distance).strip().startswith("wfem-diffusion"):
-                return np.column_stack(
-                    [self.field("distance", source=s, distance=distance, k=k) for s in sources]
-                ) if sources else np.zeros((self.n, 0))
+                return (
+                    np.column_stack(
+                        [self.field("distance", source=s, distance=distance, k=k) for s in sources]
+                    )
+                    if sources
+                    else np.zeros((self.n, 0))
+                )
             return self._a.distances_many(sources, str(distance), k)
         return self.field("distance", source=source, distance=distance, k=k)
 
     def spectral_function(
-        self, filter: str = _R["spectral-function"]["filter"], *, k: int = _R["spectral-function"]["k"]
+        self,
+        filter: str = _R["spectral-function"]["filter"],
+        *,
+        k: int = _R["spectral-function"]["k"],
     ) -> np.ndarray:
         """The generalized spectral function ``G(p, p) = sum_{lambda > 0} w(lambda) x(p)^2``
         of a filter (see :meth:`distance` for filters, text or a Python function): ``(n,)``."""
@@ -512,7 +532,9 @@ class Analysis:
         e, s = self._a.wks_auto_energies(_arrays.count(n_energies, "n_energies", 1), self._k(k))
         return np.asarray(e), s
 
-    def auto_wks(self, n_energies: int, *, scaled: bool = True, k: int = _R["wks"]["k"]) -> np.ndarray:
+    def auto_wks(
+        self, n_energies: int, *, scaled: bool = True, k: int = _R["wks"]["k"]
+    ) -> np.ndarray:
         """pyFM's ``auto_WKS``: the WKS at :meth:`wks_energies`, ``(n, n_energies)``
         (scaled by default, as pyFM)."""
         e, s = self.wks_energies(n_energies, k=k)
@@ -570,13 +592,20 @@ class Analysis:
         ``"wks:e=E,sigma=0.5"``, ``"biharmonic-function"``, ``"commute-function"``,
         ``"spectral-function:FILTER"``, or ``(n,)`` values of any field."""
         if isinstance(signature, str):
-            return self.field("segmentation", signature=signature, persistence=persistence, k=self._k(k))
+            return self.field(
+                "segmentation", signature=signature, persistence=persistence, k=self._k(k)
+            )
         values = _arrays.per_vertex(signature, self.n, "signature")
         return self.field(
             "segmentation", signature=[], persistence=persistence, k=self._k(k), _values=values
         )
 
-    def harmonic(self, constraints: Any = _R["harmonic"]["constraints"], *, order: int = _R["harmonic"]["order"]) -> np.ndarray:
+    def harmonic(
+        self,
+        constraints: Any = _R["harmonic"]["constraints"],
+        *,
+        order: int = _R["harmonic"]["order"],
+    ) -> np.ndarray:
         """The harmonic (``order=1``: ``S f = 0``) or bi-harmonic (``order=2``:
         ``S B^-1 S f = 0``, lumped B) map with Dirichlet constraints: ``(n,)``. No
         eigenbasis is needed; the factorization is kept for the same constrained vertices.
@@ -607,7 +636,9 @@ class Analysis:
             formula=r["formula"],
         )
 
-    def level_sets(self, values: Any, levels: int | Sequence[float] = FIGURE["levels"]) -> list[LevelSet]:
+    def level_sets(
+        self, values: Any, levels: int | Sequence[float] = FIGURE["levels"]
+    ) -> list[LevelSet]:
         """Level sets of a field ``(n,)``: at ``levels`` evenly spaced values inside its
         range (the centres of ``levels`` equal bins, as the figures draw them), or at the
         given values. Each
@@ -616,7 +647,9 @@ class Analysis:
         if np.ndim(levels) == 0:
             sets = self._a.level_sets(vals, [], _arrays.count(levels, "levels"))
         else:
-            sets = self._a.level_sets(vals, [_arrays.real(x, "level") for x in np.asarray(levels).ravel()])
+            sets = self._a.level_sets(
+                vals, [_arrays.real(x, "level") for x in np.asarray(levels).ravel()]
+            )
         return [LevelSet(v, seg.reshape(-1, 2, 3)) for v, seg in sets]
 
     # ------------------------------------------------------------------ pictures

@@ -11,7 +11,6 @@ from . import _arrays, _native
 from ._defaults import FIGURE, K, KIND, SEED, SHAPE, TOL
 
 
-
 # ----------------------------------------------------------------------------- meshes
 
 
@@ -156,7 +155,9 @@ def eigenbasis(
     V, F = _arrays.mesh(V, F)
     k = _arrays.count(k, "k", 1)
     if k > V.shape[0]:
-        raise ValueError(f"k = {k} eigenpairs asked for, but the mesh has only {V.shape[0]} vertices")
+        raise ValueError(
+            f"k = {k} eigenpairs asked for, but the mesh has only {V.shape[0]} vertices"
+        )
     d = None if dirichlet is None else [_arrays.count(i, "dirichlet vertex") for i in dirichlet]
     return _native.eigenbasis(
         V,
@@ -298,7 +299,9 @@ def save_basis(
     evecs_t = _arrays.columns_t(evecs, "evecs")
     _B, b_parts = _arrays.sparse_csc(B, "B")
     if _B.shape[0] != evecs_t.shape[1]:
-        raise ValueError(f"B is {_B.shape[0]} x {_B.shape[1]} but evecs has {evecs_t.shape[1]} rows")
+        raise ValueError(
+            f"B is {_B.shape[0]} x {_B.shape[1]} but evecs has {evecs_t.shape[1]} rows"
+        )
     v = f = None
     if V is not None or F is not None:
         if V is None or F is None:

@@ -19,9 +19,7 @@ import numpy as np
 def vertices(V: Any, name: str = "V") -> np.ndarray:
     a = np.asarray(V)
     if a.dtype.kind not in "fiu":
-        raise ValueError(
-            f"{name} must hold real numbers (float32 or float64), got dtype {a.dtype}"
-        )
+        raise ValueError(f"{name} must hold real numbers (float32 or float64), got dtype {a.dtype}")
     if a.ndim != 2 or a.shape[1] != 3:
         raise ValueError(f"{name} must have shape (n, 3), got {a.shape}")
     if a.shape[0] == 0:
@@ -114,13 +112,19 @@ def plain(value: Any, name: str) -> Any:
         value = value.item()
     if isinstance(value, float) and not math.isfinite(value):
         raise ValueError(f"{name} = {value}: must be a finite number")
-    if isinstance(value, int) and not isinstance(value, bool) and value < 0 and name in (
-        "k",
-        "source",
-        "anchor",
-        "index",
-        "component",
-        "vertex",
+    if (
+        isinstance(value, int)
+        and not isinstance(value, bool)
+        and value < 0
+        and name
+        in (
+            "k",
+            "source",
+            "anchor",
+            "index",
+            "component",
+            "vertex",
+        )
     ):
         raise ValueError(f"{name} = {value}: must be >= 0")
     if isinstance(value, (list, tuple)):
@@ -169,9 +173,7 @@ def sparse_csc(A: Any, name: str, diagonal: str | None = None):
         if bad.size:
             i = int(bad[0])
             what = "semi-definite" if diagonal == "nonnegative" else "definite"
-            raise ValueError(
-                f"{name} is not positive {what}: {name}[{i}, {i}] = {d[i]:.6g}"
-            )
+            raise ValueError(f"{name} is not positive {what}: {name}[{i}, {i}] = {d[i]:.6g}")
     parts = (
         np.ascontiguousarray(A.data, dtype=np.float64),
         np.ascontiguousarray(A.indices, dtype=np.int64),
