@@ -22,6 +22,6 @@ pub mod spectral;
 pub use analysis::{Analysis, AnalysisOptions, Field, FieldRequest};
 pub use cancel::CancelToken;
 pub use linalg::SparseMatrix;
-pub use mesh::Mesh;
+pub use mesh::{Mesh, PointCloud};
 pub use operators::{Laplacian, Operators};
 pub use spectral::{BasisView, Eigenbasis};

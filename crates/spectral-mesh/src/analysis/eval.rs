@@ -48,6 +48,31 @@ fn ball(an: &Analysis, center: usize, radius: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The values of a diffusion's signal (`n` entries) and the vertex it is centred on, if any.
+pub(super) fn signal_values(
+    an: &Analysis,
+    signal: &Signal,
+) -> Result<(Vec<f64>, Option<usize>), AnalysisError> {
+    Ok(match signal {
+        Signal::Values(v) => {
+            per_vertex(an, "signal", v)?;
+            (v.clone(), None)
+        }
+        Signal::Ball {
+            vertex: c, radius, ..
+        } => {
+            let c = vertex(an, "signal vertex", *c)?;
+            (ball(an, c, *radius), Some(c))
+        }
+        Signal::Impulse(v) => {
+            let v = vertex(an, "signal vertex", *v)?;
+            let mut e = vec![0.0; an.n()];
+            e[v] = 1.0;
+            (e, Some(v))
+        }
+    })
+}
+
 /// The values of a signature on the first `k` pairs of `basis` (`None` for given values).
 fn signature_values(
     an: &Analysis,
@@ -93,6 +118,7 @@ pub(super) fn evaluate(
     let mut marks = Vec::new();
     let mut constraints: Vec<Constraint> = Vec::new();
     let mut labels = None;
+    let mut floating = Vec::new();
     let source = |key: &'static str, v: Option<usize>| -> Result<usize, AnalysisError> {
         vertex(an, key, v.unwrap_or_else(|| an.default_source()))
     };
@@ -108,6 +134,7 @@ pub(super) fn evaluate(
             vertices.dedup();
             let solver = an.harmonic_solver(*order, &vertices)?;
             let f = solver.solve_constraints(&list)?;
+            floating = solver.floating_components().to_vec();
             request = FieldRequest::Harmonic {
                 constraints: match c {
                     Constraints::Preset(_) => c.clone(),
@@ -129,26 +156,8 @@ pub(super) fn evaluate(
         FieldRequest::Diffusion {
             signal, t, kernel, ..
         } => {
-            let f = match signal {
-                Signal::Values(v) => {
-                    per_vertex(an, "signal", v)?;
-                    v.clone()
-                }
-                Signal::Ball {
-                    vertex: c, radius, ..
-                } => {
-                    let c = vertex(an, "signal vertex", *c)?;
-                    marks.push(c);
-                    ball(an, c, *radius)
-                }
-                Signal::Impulse(v) => {
-                    let v = vertex(an, "signal vertex", *v)?;
-                    marks.push(v);
-                    let mut e = vec![0.0; an.n()];
-                    e[v] = 1.0;
-                    e
-                }
-            };
+            let (f, mark) = signal_values(an, signal)?;
+            marks.extend(mark);
             diffuse(need()?, &f, *t, (*kernel).into())?
         }
         FieldRequest::Distance {
@@ -225,6 +234,7 @@ pub(super) fn evaluate(
         request,
         marks,
         constraints,
+        floating,
         labels,
         k: if uses_basis { k } else { None },
         basis_k: if uses_basis {

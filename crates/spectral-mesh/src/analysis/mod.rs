@@ -31,8 +31,10 @@ pub use request::{
 };
 
 use crate::cancel::CancelToken;
-use crate::fields::critical_points::{CriticalPoints, CriticalPointsError};
-use crate::fields::harmonic::{Constraint, HarmonicError, HarmonicSolver};
+use crate::fields::critical_points::{
+    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError,
+};
+use crate::fields::harmonic::{Constraint, FloatingComponent, HarmonicError, HarmonicSolver};
 use crate::fields::segmentation::SegmentationError;
 use crate::linalg::EigenProgress;
 use crate::mesh::Mesh;
@@ -158,6 +160,9 @@ pub struct Field {
     pub marks: Vec<usize>,
     /// The resolved constraints of a harmonic map (empty otherwise).
     pub constraints: Vec<Constraint>,
+    /// Components of a harmonic map that hold no constraint (they hold the mean of the
+    /// constraint values; see [`FloatingComponent`]).
+    pub floating: Vec<FloatingComponent>,
     /// Patch labels of a segmentation (`n` entries), `None` otherwise.
     pub labels: Option<Vec<usize>>,
     /// Eigenpairs used (`None` when no basis was used).
@@ -176,6 +181,8 @@ pub struct Analysis {
     input_mass: f64,
     ops: Arc<Operators>,
     topology: OnceLock<Topology>,
+    /// The link edges of every vertex, for critical points (built on first use).
+    critical: OnceLock<CriticalPointFinder>,
     solver: Mutex<EigenSolver>,
     held: RwLock<Option<Arc<Eigenbasis>>>,
     /// `B X` of the held basis, computed on first use by the wFEM distance.
@@ -236,6 +243,7 @@ impl Analysis {
             input_mass,
             ops,
             topology: OnceLock::new(),
+            critical: OnceLock::new(),
             solver: Mutex::new(solver),
             held: RwLock::new(None),
             bx: Mutex::new(None),
@@ -378,15 +386,39 @@ impl Analysis {
         eval::evaluate(self, request, basis.as_deref()).map(Some)
     }
 
+    /// The values a diffusion of `signal` starts from (`n` entries): the given values, the
+    /// ball's indicator or the impulse. Vertices and lengths are checked as by
+    /// [`Analysis::field`].
+    pub fn signal(&self, signal: &Signal) -> Result<Vec<f64>, AnalysisError> {
+        eval::signal_values(self, signal).map(|(f, _)| f)
+    }
+
     /// `1^T B f` with the analysis' mass (normalised when normalizing).
     pub fn mass_of(&self, f: &[f64]) -> f64 {
         self.ops.mass.mul_vec(f).iter().sum()
     }
 
-    /// The critical points of a field on this mesh, with the Euler check of its topology.
+    /// The critical points of per-vertex values on this mesh, with the Euler check of its
+    /// topology.
     pub fn critical_points(&self, values: &[f64]) -> Result<CriticalReport, AnalysisError> {
-        let cp = crate::fields::critical_points::critical_points(&self.mesh, values)?;
-        Ok(CriticalReport::new(cp, self.topology()))
+        let cp = self.find_critical_points(values)?;
+        Ok(CriticalReport::new(cp, self.topology(), &[]))
+    }
+
+    /// The critical points of a computed field: the components a harmonic map left
+    /// unconstrained are left out (their constant values have no critical points).
+    pub fn field_critical_points(&self, field: &Field) -> Result<CriticalReport, AnalysisError> {
+        let cp = self.find_critical_points(&field.values)?;
+        let excluded: Vec<usize> = field.floating.iter().map(|c| c.component).collect();
+        Ok(CriticalReport::new(cp, self.topology(), &excluded))
+    }
+
+    /// The critical points of `values`, with the link edges built once per analysis.
+    fn find_critical_points(&self, values: &[f64]) -> Result<CriticalPoints, AnalysisError> {
+        Ok(self
+            .critical
+            .get_or_init(|| CriticalPointFinder::new(&self.mesh))
+            .find(values, BoundaryRule::default())?)
     }
 
     /// `B X` of `basis` (cached for the held basis).
@@ -435,9 +467,13 @@ impl Analysis {
 }
 
 /// Critical points with the Euler characteristic check, as every face reports them.
+///
+/// Components left out (those of a harmonic map that hold no constraint, see
+/// [`crate::fields::harmonic::FloatingComponent`]) contribute neither critical points nor
+/// Euler characteristic; every other component is checked on its own as well.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CriticalReport {
-    /// The critical points.
+    /// The critical points (those of left-out components removed).
     pub points: CriticalPoints,
     /// Minima.
     pub minima: usize,
@@ -445,7 +481,7 @@ pub struct CriticalReport {
     pub maxima: usize,
     /// Saddles counted with multiplicity.
     pub saddles: usize,
-    /// Euler characteristic of the mesh.
+    /// Euler characteristic of the components counted.
     pub chi: i64,
     /// True when the check is doubled across the boundary (bordered surfaces).
     pub doubled: bool,
@@ -453,22 +489,80 @@ pub struct CriticalReport {
     pub lhs: i64,
     /// Right side (`chi` or `2 chi`).
     pub rhs: i64,
-    /// `lhs == rhs`.
+    /// `lhs == rhs`, and the check holds on every component counted.
     pub holds: bool,
     /// The check in words.
     pub formula: &'static str,
+    /// The check on each component counted.
+    pub components: Vec<ComponentCheck>,
+    /// Components left out of the counts.
+    pub excluded_components: Vec<usize>,
+}
+
+/// The Euler check on one connected component.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ComponentCheck {
+    /// Component index (as in `Topology::components`).
+    pub component: usize,
+    /// Its Euler characteristic.
+    pub chi: i64,
+    /// Left side of the check.
+    pub lhs: i64,
+    /// Right side.
+    pub rhs: i64,
+    /// `lhs == rhs`.
+    pub holds: bool,
 }
 
 impl CriticalReport {
-    /// The report of `cp` on a mesh of topology `topo`.
-    pub fn new(cp: CriticalPoints, topo: &Topology) -> Self {
-        let chi = topo.euler_characteristic();
-        let doubled = !topo.boundary_loops.is_empty();
-        let (lhs, rhs) = if doubled {
-            cp.euler_check_doubled(chi)
-        } else {
-            cp.euler_check(chi)
+    /// The report of `cp` on a mesh of topology `topo`, leaving out the components
+    /// `excluded`.
+    pub fn new(cp: CriticalPoints, topo: &Topology, excluded: &[usize]) -> Self {
+        let nc = topo.n_components();
+        let counted = |v: usize| {
+            let c = topo.vertex_component.get(v).copied().unwrap_or(usize::MAX);
+            c < nc && !excluded.contains(&c)
         };
+        let mut cp = cp;
+        cp.minima.retain(|&v| counted(v));
+        cp.maxima.retain(|&v| counted(v));
+        cp.saddles.retain(|&(v, _)| counted(v));
+        cp.on_boundary.retain(|&v| counted(v));
+        cp.non_manifold.retain(|&v| counted(v));
+        let included: Vec<usize> = (0..nc).filter(|c| !excluded.contains(c)).collect();
+        let doubled = included.iter().any(|&c| !topo.components[c].closed);
+        // Doubled across the boundary: interior points count twice, boundary ones once.
+        let weight = |v: usize| -> i64 {
+            if doubled && cp.on_boundary.binary_search(&v).is_err() {
+                2
+            } else {
+                1
+            }
+        };
+        let mut lhs_c = vec![0i64; nc];
+        for &v in cp.minima.iter().chain(&cp.maxima) {
+            lhs_c[topo.vertex_component[v]] += weight(v);
+        }
+        for &(v, m) in &cp.saddles {
+            lhs_c[topo.vertex_component[v]] -= weight(v) * m as i64;
+        }
+        let factor = if doubled { 2 } else { 1 };
+        let components: Vec<ComponentCheck> = included
+            .iter()
+            .map(|&c| {
+                let chi = topo.components[c].euler_characteristic;
+                ComponentCheck {
+                    component: c,
+                    chi,
+                    lhs: lhs_c[c],
+                    rhs: factor * chi,
+                    holds: lhs_c[c] == factor * chi,
+                }
+            })
+            .collect();
+        let chi: i64 = components.iter().map(|c| c.chi).sum();
+        let lhs: i64 = components.iter().map(|c| c.lhs).sum();
+        let rhs = factor * chi;
         Self {
             minima: cp.minima.len(),
             maxima: cp.maxima.len(),
@@ -478,12 +572,14 @@ impl CriticalReport {
             doubled,
             lhs,
             rhs,
-            holds: lhs == rhs,
+            holds: lhs == rhs && components.iter().all(|c| c.holds),
             formula: if doubled {
                 "doubled across the boundary: 2(m_i - s_i + M_i) + (m_b - s_b + M_b) = 2 chi"
             } else {
                 "m - s + M = chi"
             },
+            components,
+            excluded_components: excluded.to_vec(),
         }
     }
 }

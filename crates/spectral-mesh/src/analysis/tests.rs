@@ -78,16 +78,19 @@ fn unit_area_fields_equal_the_normalised_basis_path() {
 
 #[test]
 fn a_larger_k_gives_the_pairs_of_a_direct_solve() {
-    let grown = analysis("torus:res=3", true);
+    // Large enough for the sparse path (a factorization), small enough to be quick.
+    let grown = analysis("sphere:res=4", true);
     let c = CancelToken::new();
     let b100 = grown.basis(40, &mut |_| {}, &c).unwrap();
     assert_eq!(b100.k(), 40);
     let b200 = grown.basis(80, &mut |_| {}, &c).unwrap();
-    let direct = analysis("torus:res=3", true)
+    let direct = analysis("sphere:res=4", true)
         .basis(80, &mut |_| {}, &c)
         .unwrap();
     assert_eq!(b200.values, direct.values);
     assert_eq!(b200.vectors, direct.vectors);
+    // The factorization of the first solve served the second (a counter, not a timer).
+    assert_eq!(grown.factorizations(), 1);
     // Fewer pairs reuse the held basis: no new solve.
     let again = grown.basis(10, &mut |_| {}, &c).unwrap();
     assert!(Arc::ptr_eq(&again, &b200));
@@ -218,4 +221,45 @@ fn errors_name_what_is_wrong() {
         })
         .unwrap_err();
     assert!(e.to_string().contains("signal has 3 values"), "{e}");
+}
+
+#[test]
+fn a_component_without_constraints_floats_and_is_left_out_of_the_critical_points() {
+    // Two disjoint tori; the preset constraints (min x, max x) both fall on the first.
+    let t = build_str("torus:res=2").unwrap();
+    let (p, f) = (t.positions().to_vec(), t.triangles().to_vec());
+    let n0 = p.len();
+    let mut pos = p.clone();
+    pos.extend(p.iter().map(|q| [q[0] - 10.0, q[1], q[2]]));
+    let mut tris = f.clone();
+    tris.extend(f.iter().map(|t| [t[0] + n0, t[1] + n0, t[2] + n0]));
+    let an = Analysis::new(Mesh::new(pos, tris).unwrap(), AnalysisOptions::default());
+    let field = an.field(&FieldRequest::Harmonic {
+        constraints: Constraints::List(vec![
+            Constraint {
+                vertex: 0,
+                value: 0.0,
+            },
+            Constraint {
+                vertex: 7,
+                value: 1.0,
+            },
+        ]),
+        order: 1,
+    });
+    let field = field.unwrap();
+    assert_eq!(field.floating.len(), 1);
+    assert_eq!(field.floating[0].first_vertex, n0);
+    assert!(field.values[n0..].iter().all(|&v| v == 0.5));
+    let all = an.critical_points(&field.values).unwrap();
+    let rep = an.field_critical_points(&field).unwrap();
+    assert_eq!(rep.excluded_components, vec![field.floating[0].component]);
+    assert!(rep.points.minima.iter().all(|&v| v < n0));
+    assert!(rep.points.maxima.iter().all(|&v| v < n0));
+    assert!(rep.points.saddles.iter().all(|&(v, _)| v < n0));
+    // The constrained torus alone: m - s + M = 0.
+    assert_eq!(rep.components.len(), 1);
+    assert!(rep.holds && rep.chi == 0, "{rep:?}");
+    // Counting the constant torus too would add its symbolic-perturbation extrema.
+    assert!(all.minima + all.maxima > rep.minima + rep.maxima);
 }

@@ -3,6 +3,7 @@
 
 pub mod file;
 pub mod harmonic;
+pub mod paper;
 pub mod replay;
 pub mod study;
 pub mod truncation;

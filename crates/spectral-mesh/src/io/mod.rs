@@ -1,4 +1,8 @@
-//! Reading and writing meshes: OFF, OBJ, PLY, STL. Errors name file, line and problem.
+//! Reading and writing meshes: OFF, OBJ, PLY, STL; reading point clouds: text `x y z
+//! [nx ny nz]` files and PLY files without faces. Errors name file, line and problem.
+//!
+//! [`read_input`] reads either (a mesh or a point cloud, by extension and content); see
+//! [`points`](read_points) for the point formats. [`read_mesh`] reads meshes only.
 //!
 //! # Reading
 //! [`read_mesh`] reads a file, [`read_mesh_from_bytes`] a buffer (an upload). The format is
@@ -43,6 +47,7 @@ mod lexer;
 mod obj;
 mod off;
 mod ply;
+mod points;
 mod polygon;
 mod stl;
 
@@ -54,6 +59,10 @@ use std::str::FromStr;
 use crate::mesh::Mesh;
 
 pub use atomic::{AtomicWriteError, write_atomic, write_atomic_with};
+pub use points::{
+    Input, LoadedPoints, PointFormat, read_input, read_input_from_bytes, read_points,
+    read_points_from_bytes,
+};
 pub use polygon::triangulate_polygon;
 
 /// An error while reading or writing a mesh file. Its `Display` is

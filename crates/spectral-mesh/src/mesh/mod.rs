@@ -2,10 +2,14 @@
 //!
 //! A [`Mesh`] is the one input type of every operation in this crate. It holds
 //! `n` vertex positions and `m` triangles given as vertex-index triples; connectivity
-//! queries live in [`topology`], checks and repairs in [`validate`].
+//! queries live in [`topology`], checks and repairs in [`validate`]. A [`PointCloud`]
+//! (positions and optional normals, no triangles) is the other input type.
 
+pub mod point_cloud;
 pub mod topology;
 pub mod validate;
+
+pub use point_cloud::{PointCloud, PointCloudError};
 
 use thiserror::Error;
 

@@ -1,9 +1,9 @@
 //! Spectral embeddings `p -> (sqrt(w(lambda_k)) x_k(p))_k` (Sect. 5 of the paper): the
 //! Euclidean distance between embedded points is the filtered spectral distance.
 
+use super::BasisView;
 use super::distances::DistanceError;
 use super::filters::Filter;
-use super::{BasisView, Eigenbasis};
 use crate::mesh::{Mesh, MeshError};
 
 /// Errors of the embeddings.
@@ -48,11 +48,12 @@ pub fn spectral_embedding<'a>(
 
 /// The mesh with the same triangles whose positions are the first three coordinates of
 /// the spectral embedding (missing coordinates are 0).
-pub fn embedding_mesh(
+pub fn embedding_mesh<'a>(
     mesh: &Mesh,
-    basis: &Eigenbasis,
+    basis: impl Into<BasisView<'a>>,
     filter: &Filter,
 ) -> Result<Mesh, EmbeddingError> {
+    let basis: BasisView<'a> = basis.into();
     if mesh.n_vertices() != basis.n {
         return Err(EmbeddingError::SizeMismatch {
             basis: basis.n,
