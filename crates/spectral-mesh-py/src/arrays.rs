@@ -10,7 +10,8 @@
 use numpy::ndarray::{Array2, ShapeBuilder};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use spectral_mesh::{Mesh, SparseMatrix};
+use spectral_mesh::mesh::PointCloudError;
+use spectral_mesh::{Mesh, PointCloud, SparseMatrix};
 
 use crate::errors::Failure;
 
@@ -70,6 +71,42 @@ pub fn mesh_from(
             format!("F[{triangle}] uses vertex {index} twice (a degenerate triangle)"),
         ),
         other => other.into(),
+    })
+}
+
+/// Copies a point cloud's `P` (`(n, 3)` float64) and optional normals (`(n, 3)` float64,
+/// zero rows meaning "unknown") into a [`PointCloud`], checking shapes and finiteness
+/// (errors name the row).
+pub fn cloud_from(
+    p: &PyReadonlyArray2<'_, f64>,
+    normals: Option<&PyReadonlyArray2<'_, f64>>,
+) -> Result<PointCloud, Failure> {
+    let rows = |a: &PyReadonlyArray2<'_, f64>, name: &str| -> Result<Vec<[f64; 3]>, Failure> {
+        let s = a.shape();
+        if s[1] != 3 {
+            return Err(Failure::value(format!(
+                "{name} must have shape (n, 3), got ({}, {})",
+                s[0], s[1]
+            )));
+        }
+        Ok(slice(a, name)?
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect())
+    };
+    let positions = rows(p, "P")?;
+    let normals = normals.map(|nr| rows(nr, "normals")).transpose()?;
+    PointCloud::new(positions, normals).map_err(|e| match e {
+        PointCloudError::NonFinite { point } => Failure::value(format!(
+            "P[{point}] has a non-finite coordinate (NaN or inf)"
+        )),
+        PointCloudError::NonFiniteNormal { point } => Failure::value(format!(
+            "normals[{point}] has a non-finite component (NaN or inf)"
+        )),
+        PointCloudError::NormalCount { normals, points } => Failure::value(format!(
+            "normals has {normals} rows but P has {points} points"
+        )),
+        PointCloudError::Empty => Failure::value("P is empty: the cloud needs at least one point"),
     })
 }
 

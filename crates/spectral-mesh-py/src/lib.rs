@@ -18,7 +18,7 @@ use pyo3::types::PyTuple;
 use serde_json::{Value, json};
 use spectral_mesh::analysis::request::KINDS;
 use spectral_mesh::analysis::{AnalysisOptions, Signal, SignatureSpec};
-use spectral_mesh::operators::{Laplacian, Operators};
+use spectral_mesh::operators::{Laplacian, Operators, PointCloudParams};
 use spectral_mesh::spectral::eigenbasis::{EigenMethod, EigenParams, EigenSolver};
 use spectral_mesh::spectral::store::{BasisMeta, load_npz, save_npz};
 use spectral_mesh::{Analysis, Eigenbasis, FieldRequest, Mesh, SparseMatrix};
@@ -170,6 +170,65 @@ fn laplacian<'py>(
     let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
     let (s, b, total) = run(py, move |_| {
         let mut ops = Operators::new(&mesh, lap);
+        let total: f64 = ops.mass.values().iter().sum();
+        if normalize && total > 0.0 && total.is_finite() {
+            ops.mass = ops.mass.add_scaled(1.0 / total, &ops.mass, 0.0);
+        }
+        Ok((csc_parts(&ops.stiffness), csc_parts(&ops.mass), total))
+    })?;
+    Ok((csc_to_py(py, s)?, csc_to_py(py, b)?, total))
+}
+
+/// `(P, normals or None, info)` of a point-cloud file.
+type PointsFile<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Option<Bound<'py, PyArray2<f64>>>,
+    Bound<'py, PyAny>,
+);
+
+/// Reads a point-cloud file (`.xyz`, `.pts`, `.txt`, PLY with or without faces):
+/// `(P (n, 3), normals (n, 3) or None, info)`.
+#[pyfunction]
+fn read_points<'py>(py: Python<'py>, path: PathBuf) -> PyResult<PointsFile<'py>> {
+    let (p, normals, info) = run(py, move |_| {
+        let loaded = spectral_mesh::io::read_points(&path)?;
+        let info = json!({
+            "format": format!("{:?}", loaded.format).to_ascii_lowercase(),
+            "warnings": loaded.warnings,
+        });
+        let (positions, normals) = loaded.cloud.into_parts();
+        let flat = |rows: Vec<[f64; 3]>| rows.into_iter().flatten().collect::<Vec<f64>>();
+        Ok((flat(positions), normals.map(flat), info))
+    })?;
+    let n = p.len() / 3;
+    let normals = match normals {
+        Some(nr) => Some(to_rows(py, n, 3, nr)?),
+        None => None,
+    };
+    Ok((to_rows(py, n, 3, p)?, normals, pyjson::to_py(py, &info)?))
+}
+
+/// The point-cloud Laplacian `(S, B)` of `P` (`n x n` each, as CSC arrays) and the total
+/// mass `1^T B 1` as assembled ([`Operators::from_points`]).
+#[pyfunction]
+#[pyo3(signature = (p, normals, neighbors, mollify_factor, normalize))]
+fn point_laplacian<'py>(
+    py: Python<'py>,
+    p: PyReadonlyArray2<'_, f64>,
+    normals: Option<PyReadonlyArray2<'_, f64>>,
+    neighbors: usize,
+    mollify_factor: f64,
+    normalize: bool,
+) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyTuple>, f64)> {
+    let cloud = arrays::cloud_from(&p, normals.as_ref()).map_err(|e| e.into_pyerr(py))?;
+    let (s, b, total) = run(py, move |_| {
+        let params = PointCloudParams {
+            neighbors,
+            mollify_factor,
+            ..PointCloudParams::default()
+        };
+        let mut ops =
+            Operators::from_points(&cloud, &params).map_err(|e| Failure::value(e.to_string()))?;
         let total: f64 = ops.mass.values().iter().sum();
         if normalize && total > 0.0 && total.is_finite() {
             ops.mass = ops.mass.add_scaled(1.0 / total, &ops.mass, 0.0);
@@ -510,6 +569,7 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
     }
     let a = AnalysisOptions::default();
     let fig = FigureOptions::default();
+    let pc = PointCloudParams::default();
     let all = json!({
         "requests": kinds,
         "analysis": {
@@ -528,6 +588,10 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
             "transparent": fig.transparent,
             "critical_points": fig.critical_points,
             "colorbar": fig.colorbar,
+        },
+        "point_cloud": {
+            "n_neighbors": pc.neighbors,
+            "mollify_factor": pc.mollify_factor,
         },
         "shape": spectral_mesh::shapes::DEFAULT_SHAPE,
         "laplacians": Laplacian::ALL.iter().map(|l| l.name()).collect::<Vec<_>>(),
@@ -589,6 +653,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(shape, m)?)?;
     m.add_function(wrap_pyfunction!(shape_names, m)?)?;
     m.add_function(wrap_pyfunction!(laplacian, m)?)?;
+    m.add_function(wrap_pyfunction!(read_points, m)?)?;
+    m.add_function(wrap_pyfunction!(point_laplacian, m)?)?;
     m.add_function(wrap_pyfunction!(eigenbasis, m)?)?;
     m.add_function(wrap_pyfunction!(eigsh, m)?)?;
     m.add_function(wrap_pyfunction!(save_basis, m)?)?;

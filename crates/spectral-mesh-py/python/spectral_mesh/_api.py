@@ -8,7 +8,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from . import _arrays, _native
-from ._defaults import FIGURE, K, KIND, SEED, SHAPE, TOL
+from ._defaults import FIGURE, K, KIND, POINT_CLOUD, SEED, SHAPE, TOL
 
 
 # ----------------------------------------------------------------------------- meshes
@@ -76,10 +76,15 @@ def laplacian(V: Any, F: Any, kind: str = KIND, *, normalize: bool = False):
       voronoi-cot    diagonal, ``sum |t| / 3`` at each vertex   ``massmatrix(BARYCENTRIC)``
       mixed-voronoi  diagonal, Meyer's mixed Voronoi areas      ``massmatrix(VORONOI)``
       cot, uniform   the identity
+      robust         diagonal, on the intrinsic Delaunay        ``mesh_laplacian(V, F)``
+                     tufted cover (Sharp and Crane 2020)
       ============== ========================================== ==========================
 
       robust-laplacian's ``M`` is lumped (diagonal) like ``voronoi-cot`` but on its
-      intrinsic Delaunay (tufted) triangulation, so its numbers differ on poor meshes.
+      intrinsic Delaunay (tufted) triangulation, so its numbers differ on poor meshes;
+      ``kind="robust"`` computes that pair (``S`` included: the intrinsic Delaunay
+      cotangent weights), and works on any triangle soup (non-manifold edges, duplicate
+      or degenerate triangles).
 
     The generalized eigenproblem is ``S x = lambda B x`` with ``lambda >= 0`` (one zero
     per connected component).
@@ -92,6 +97,65 @@ def laplacian(V: Any, F: Any, kind: str = KIND, *, normalize: bool = False):
     V, F = _arrays.mesh(V, F)
     s, b, _total = _native.laplacian(V, F, str(kind), bool(normalize))
     n = V.shape[0]
+    return _arrays.csr_from_parts(s, n), _arrays.csr_from_parts(b, n)
+
+
+# ------------------------------------------------------------------------ point clouds
+
+
+def read_points(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray | None]:
+    """Read a point-cloud file: text points (``.xyz``, ``.pts``, ``.txt``: ``x y z`` or
+    ``x y z nx ny nz`` per line) or a PLY file's vertices (its faces, if any, are ignored).
+
+    Returns ``(P, normals)``: ``P`` is ``(n, 3)`` float64; ``normals`` is ``(n, 3)``
+    float64 when the file has them (a zero row means unknown), else ``None``.
+
+    Raises ``FileNotFoundError`` / ``OSError`` when the file cannot be read and
+    :class:`MeshFileError` when its content is invalid (the message names the line).
+    """
+    P, normals, _info = _native.read_points(os.fspath(path))
+    return P, normals
+
+
+def point_cloud_laplacian(
+    P: Any,
+    n_neighbors: int = POINT_CLOUD["n_neighbors"],
+    *,
+    normals: Any = None,
+    mollify_factor: float = POINT_CLOUD["mollify_factor"],
+    normalize: bool = False,
+):
+    """The Laplacian ``(S, B)`` of a point cloud ``P`` (``(n, 3)``, any real dtype).
+
+    Both are ``n x n`` ``scipy.sparse.csr_matrix`` of float64: ``S`` positive
+    semi-definite with ``S @ ones = 0`` (the sign of :func:`laplacian` and of
+    robust-laplacian's ``L``), ``B`` diagonal and positive (lumped areas). Built the way
+    ``robust_laplacian.point_cloud_laplacian(P, n_neighbors=30)`` builds it (each point's
+    ``n_neighbors`` nearest neighbours triangulated in its tangent plane, the local
+    triangles combined, then the robust pipeline: mollification, intrinsic Delaunay),
+    except how the local triangles are combined: triangles the neighbourhoods agree on
+    first, holes filled, so the operator is not biased by the union rule.
+
+    ``normals``: optional ``(n, 3)`` normals giving the tangent planes (zero rows:
+    estimated from the neighbours, as without normals). ``normalize=True`` returns
+    ``(S, B / A)`` with ``A = 1^T B 1`` (the cloud scaled to unit area).
+
+    For the eigenpairs use :func:`eigsh`: ``evals, evecs = sm.eigsh(S, k, B, sigma=-0.01)``.
+
+    Raises ``ValueError`` for a bad array (wrong shape, NaN) or ``n_neighbors < 2``.
+    """
+    P = _arrays.vertices(P, "P")
+    nr = None if normals is None else _arrays.vertices(normals, "normals")
+    if nr is not None and nr.shape[0] != P.shape[0]:
+        raise ValueError(f"normals has {nr.shape[0]} rows but P has {P.shape[0]} points")
+    s, b, _total = _native.point_laplacian(
+        P,
+        nr,
+        _arrays.count(n_neighbors, "n_neighbors", 2),
+        _arrays.real(mollify_factor, "mollify_factor"),
+        bool(normalize),
+    )
+    n = P.shape[0]
     return _arrays.csr_from_parts(s, n), _arrays.csr_from_parts(b, n)
 
 
@@ -141,7 +205,9 @@ def eigenbasis(
         ``"shift-invert"``.
     progress : called with a dict per solver event, on the solver's thread:
         ``{"stage": "factorization", "n", "shift"}``, ``{"stage": "iteration",
-        "iteration", "converged", "wanted", "basis"}``, ``{"stage": "finished",
+        "iteration", "converged", "wanted", "basis"}`` (``wanted`` is ``k`` minus the
+        connected components, whose constant vectors are deflated exactly and returned
+        first with eigenvalue 0), ``{"stage": "finished",
         "iterations", "solves", "max_residual", "orthogonality_error"}`` or
         ``{"stage": "dense", "n"}``. An exception it raises stops the solve and is raised
         by this call.

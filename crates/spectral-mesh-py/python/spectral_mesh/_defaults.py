@@ -29,3 +29,5 @@ K: int = ANALYSIS["k"]
 TOL: float = ANALYSIS["tol"]
 SEED: int = ANALYSIS["seed"]
 KIND: str = ANALYSIS["kind"]
+#: The point-cloud Laplacian's defaults (``n_neighbors``, ``mollify_factor``).
+POINT_CLOUD: dict = DEFAULTS["point_cloud"]

@@ -34,6 +34,14 @@ def laplacian(v: F64, f: I64, kind: str, normalize: bool) -> tuple[Csc, Csc, flo
     """``(S, B, A)``: S positive semi-definite, B the mass (``/ A`` when normalizing), A =
     ``1^T B 1`` as assembled."""
 
+def read_points(path: str | PathLike[str]) -> tuple[F64, F64 | None, dict]:
+    """``(P (n, 3), normals (n, 3) or None, info)``; info: format, warnings."""
+
+def point_laplacian(
+    p: F64, normals: F64 | None, neighbors: int, mollify_factor: float, normalize: bool
+) -> tuple[Csc, Csc, float]:
+    """``(S, B, A)`` of a point cloud (B diagonal), A = ``1^T B 1`` as assembled."""
+
 def eigenbasis(
     v: F64,
     f: I64,
