@@ -133,6 +133,7 @@ def render(records: list[dict], routes: list[str], header: str) -> str:
         "peak RSS MiB (" + ", ".join(routes) + ")",
         "residual ours / worst peer",
         "lambda_k agrees",
+        "load (uptime 1-min)",
     ]
     lines.append("| " + " | ".join(cols) + " |")
     lines.append("| " + " | ".join(["---"] + ["---:"] * (len(cols) - 1)) + " |")
@@ -167,6 +168,14 @@ def render(records: list[dict], routes: list[str], header: str) -> str:
             row.append(f"{rel:.1e} {'yes' if rel < 1e-8 else 'NO'}")
         else:
             row.append("")
+        loads = [
+            x[key]
+            for xs in by_route.values()
+            for x in xs
+            for key in ("load_before", "load_after")
+            if key in x
+        ]
+        row.append(f"{min(loads):.1f}-{max(loads):.1f}" if loads else "")
         lines.append("| " + " | ".join(row) + " |")
     return "\n".join(lines) + "\n"
 
