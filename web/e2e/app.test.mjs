@@ -25,15 +25,19 @@ before(async () => {
 
 after(async () => { await browser?.close(); });
 
-const count = () => page.evaluate(() => window.__fieldCount || 0);
+// Fields drawn so far; also notes the errors shown so far, so that waitField sees only
+// the new ones.
+let errorsBefore = 0;
+const count = () => page.evaluate(() => [window.__fieldCount || 0, window.__errorCount || 0])
+  .then(([f, e]) => { errorsBefore = e; return f; });
 const lastError = () => page.evaluate(() => window.__lastError);
 const lastField = () => page.evaluate(() => window.__lastFieldPlain());
 
 async function waitField(before, timeout = 180000) {
-  await page.waitForFunction((b) => (window.__fieldCount || 0) > b || window.__lastError,
-    before, { timeout });
-  const err = await lastError();
-  assert.equal(err, null, `page shows an error: ${err}`);
+  await page.waitForFunction(([b, e]) => (window.__fieldCount || 0) > b || (window.__errorCount || 0) > e,
+    [before, errorsBefore], { timeout });
+  const [errors, err] = await page.evaluate(() => [window.__errorCount || 0, window.__lastError]);
+  assert.ok(errors === errorsBefore, `page shows an error: ${err}`);
   return lastField();
 }
 

@@ -429,7 +429,7 @@ fn quantized(field: &[f64]) -> Vec<f64> {
         scale = scale.max(x.abs());
     }
     let tol = FLAT_RELATIVE_TOLERANCE * scale;
-    if !(tol > 0.0) {
+    if tol <= 0.0 || !tol.is_finite() {
         return field.to_vec();
     }
     field.iter().map(|&x| ((x - lo) / tol).round()).collect()
