@@ -22,17 +22,19 @@
 //! is being computed.
 
 mod eval;
+pub mod hint;
 pub mod request;
 
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock, RwLock};
 
+pub use hint::{TRUNCATION_RATIO_WARNING, TruncationHint};
 pub use request::{
     Constraints, DistanceSpec, FieldRequest, Kernel, RequestError, Signal, SignatureSpec,
 };
 
 use crate::cancel::CancelToken;
 use crate::fields::critical_points::{
-    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError,
+    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError, FLAT_RELATIVE_TOLERANCE,
 };
 use crate::fields::harmonic::{Constraint, FloatingComponent, HarmonicError, HarmonicSolver};
 use crate::fields::segmentation::SegmentationError;
@@ -413,6 +415,16 @@ impl Analysis {
         Ok(CriticalReport::new(cp, self.topology(), &excluded))
     }
 
+    /// How much the truncation of a heat or diffusion field weighs (the time of the
+    /// request against the held eigenvalues; see [`TruncationHint`]); `None` for fields
+    /// without a time or a basis.
+    pub fn truncation_hint(&self, field: &Field) -> Option<TruncationHint> {
+        let t = field.request.time()?;
+        let k = field.k?;
+        let basis = self.held_basis()?;
+        TruncationHint::new(&basis.values, k, t, self.n())
+    }
+
     /// The critical points of `values`, with the link edges built once per analysis.
     fn find_critical_points(&self, values: &[f64]) -> Result<CriticalPoints, AnalysisError> {
         Ok(self
@@ -469,8 +481,11 @@ impl Analysis {
 /// Critical points with the Euler characteristic check, as every face reports them.
 ///
 /// Components left out (those of a harmonic map that hold no constraint, see
-/// [`crate::fields::harmonic::FloatingComponent`]) contribute neither critical points nor
-/// Euler characteristic; every other component is checked on its own as well.
+/// [`crate::fields::harmonic::FloatingComponent`], and plateaus: components on which the
+/// field is constant within [`FLAT_RELATIVE_TOLERANCE`] of its largest magnitude, see
+/// [`crate::fields::critical_points`]) contribute neither critical points nor Euler
+/// characteristic; every other component is checked on its own as well. A field that is
+/// flat on every component reports no critical points and `flat = true`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CriticalReport {
     /// The critical points (those of left-out components removed).
@@ -495,8 +510,18 @@ pub struct CriticalReport {
     pub formula: &'static str,
     /// The check on each component counted.
     pub components: Vec<ComponentCheck>,
-    /// Components left out of the counts.
+    /// Components left out of the counts because the caller excluded them (a harmonic
+    /// map's unconstrained components).
     pub excluded_components: Vec<usize>,
+    /// Components left out because the field is constant on them within
+    /// `flat_tolerance` (plateaus, no critical points).
+    pub plateau_components: Vec<usize>,
+    /// The relative tolerance of plateaus: values within `flat_tolerance * max |f|` of
+    /// each other on a component are one plateau ([`FLAT_RELATIVE_TOLERANCE`]).
+    pub flat_tolerance: f64,
+    /// True when every component is a plateau or left out, and at least one is a
+    /// plateau: the field is constant (up to rounding), with no critical points.
+    pub flat: bool,
 }
 
 /// The Euler check on one connected component.
@@ -519,9 +544,18 @@ impl CriticalReport {
     /// `excluded`.
     pub fn new(cp: CriticalPoints, topo: &Topology, excluded: &[usize]) -> Self {
         let nc = topo.n_components();
+        let mut plateau_components: Vec<usize> = cp
+            .plateaus
+            .iter()
+            .filter_map(|p| topo.vertex_component.get(p.first_vertex).copied())
+            .filter(|&c| c < nc && !excluded.contains(&c))
+            .collect();
+        plateau_components.sort_unstable();
+        plateau_components.dedup();
+        let left_out = |c: usize| excluded.contains(&c) || plateau_components.contains(&c);
         let counted = |v: usize| {
             let c = topo.vertex_component.get(v).copied().unwrap_or(usize::MAX);
-            c < nc && !excluded.contains(&c)
+            c < nc && !left_out(c)
         };
         let mut cp = cp;
         cp.minima.retain(|&v| counted(v));
@@ -529,7 +563,7 @@ impl CriticalReport {
         cp.saddles.retain(|&(v, _)| counted(v));
         cp.on_boundary.retain(|&v| counted(v));
         cp.non_manifold.retain(|&v| counted(v));
-        let included: Vec<usize> = (0..nc).filter(|c| !excluded.contains(c)).collect();
+        let included: Vec<usize> = (0..nc).filter(|&c| !left_out(c)).collect();
         let doubled = included.iter().any(|&c| !topo.components[c].closed);
         // Doubled across the boundary: interior points count twice, boundary ones once.
         let weight = |v: usize| -> i64 {
@@ -578,8 +612,11 @@ impl CriticalReport {
             } else {
                 "m - s + M = chi"
             },
+            flat: included.is_empty() && !plateau_components.is_empty(),
             components,
             excluded_components: excluded.to_vec(),
+            plateau_components,
+            flat_tolerance: FLAT_RELATIVE_TOLERANCE,
         }
     }
 }
