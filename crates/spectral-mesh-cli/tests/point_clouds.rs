@@ -105,6 +105,14 @@ fn a_point_file_gives_one_zero_eigenvalue_per_piece_and_finite_fields() {
         assert!((v - 2.0).abs() < 0.04, "{ev:?}");
     }
 
+    // Fewer pairs than pieces: every pair is a zero one, as expected (no mismatch), and a
+    // distance is refused with the reason.
+    let out = ok(&["eigs", f, "-k", "2"]);
+    assert!(out.contains("): 2; expected 2 (3 components)"), "{out}");
+    assert!(!out.contains("MISMATCH"), "{out}");
+    let e = err(&["distance", f, "-k", "3", "-o", "x.txt"]);
+    assert!(e.contains("separate pieces"), "{e}");
+
     let d = dir.path().join("d.txt");
     ok(&["distance", f, "-k", "20", "-o", d.to_str().unwrap()]);
     let dv = values(&d);
