@@ -15,6 +15,14 @@
 //! shape. The cotangent stiffness is scale-invariant, so nothing else changes. Without it
 //! the shape is used as given (what `eigs` saves, comparable to SciPy on the raw operators).
 //!
+//! # Point clouds
+//!
+//! [`Analysis::from_input`] takes a mesh or a point cloud ([`AnalysisInput`]). A cloud is
+//! analysed with the point-cloud Laplacian ([`crate::operators::point_cloud`], the
+//! discretization [`Laplacian::Robust`]); its [`Analysis::mesh`] is the triangle union of
+//! that Laplacian (see [`points`] for why, and for what critical points mean on a cloud),
+//! and [`Analysis::point_cloud`] gives the points back. Every field request works on both.
+//!
 //! # Threads
 //!
 //! An `Analysis` is `Send + Sync`: fields are computed from a snapshot of the held basis
@@ -23,11 +31,13 @@
 
 mod eval;
 pub mod hint;
+pub mod points;
 pub mod request;
 
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock, RwLock};
 
 pub use hint::{TRUNCATION_RATIO_WARNING, TruncationHint};
+pub use points::AnalysisInput;
 pub use request::{
     Constraints, DistanceSpec, FieldRequest, Kernel, RequestError, Signal, SignatureSpec,
 };
@@ -39,9 +49,10 @@ use crate::fields::critical_points::{
 use crate::fields::harmonic::{Constraint, FloatingComponent, HarmonicError, HarmonicSolver};
 use crate::fields::segmentation::SegmentationError;
 use crate::linalg::EigenProgress;
-use crate::mesh::Mesh;
 use crate::mesh::topology::Topology;
-use crate::operators::{Laplacian, Operators};
+use crate::mesh::{Mesh, PointCloud};
+use crate::operators::robust::RobustError;
+use crate::operators::{Laplacian, Operators, PointCloudParams, point_cloud_laplacian};
 use crate::spectral::Eigenbasis;
 use crate::spectral::distances::DistanceError;
 use crate::spectral::eigenbasis::{EigenError, EigenParams, EigenSolver};
@@ -138,6 +149,25 @@ pub enum AnalysisError {
     /// A spectral request reached evaluation without a basis (an internal error).
     #[error("internal error: a spectral field was evaluated without an eigenbasis")]
     NoBasis,
+    /// A discretization that needs triangles was asked for on a point cloud.
+    #[error(
+        "the {laplacian} Laplacian needs triangles and does not apply to a point cloud: use robust (the point-cloud Laplacian)"
+    )]
+    NotForPoints {
+        /// The discretization asked for.
+        laplacian: Laplacian,
+    },
+    /// The point-cloud Laplacian's parameters are out of range.
+    #[error("point-cloud Laplacian: {0}")]
+    PointCloud(#[from] RobustError),
+    /// The local triangulations of a point cloud found no triangle.
+    #[error(
+        "the point cloud ({n} points) has no triangle in its local triangulations: its points are collinear or coincident"
+    )]
+    NoTriangles {
+        /// Points.
+        n: usize,
+    },
     /// The field came out with non-finite values.
     #[error(
         "the {kind} field has non-finite values (at vertex {vertex}): try a larger t, fewer pairs or another filter"
@@ -177,7 +207,10 @@ pub struct Field {
 
 /// An analysis (see the module documentation).
 pub struct Analysis {
+    /// The mesh, or the triangle union of a point cloud's Laplacian.
     mesh: Arc<Mesh>,
+    /// The point cloud, when the input was one.
+    cloud: Option<Arc<PointCloud>>,
     options: AnalysisOptions,
     /// `1^T B 1` of the operators as assembled (before normalisation).
     input_mass: f64,
@@ -241,6 +274,7 @@ impl Analysis {
         let solver = EigenSolver::new(ops.clone(), options.eigen.clone());
         Self {
             mesh,
+            cloud: None,
             options,
             input_mass,
             ops,
@@ -253,7 +287,67 @@ impl Analysis {
         }
     }
 
-    /// The shape.
+    /// An analysis of a mesh or a point cloud: [`Analysis::new`] for a mesh,
+    /// [`Analysis::from_points`] for a cloud. The one constructor every face can use for
+    /// whatever the user gave (`Analysis::from_input(io::read_input(path)?, options)`).
+    pub fn from_input(
+        input: impl Into<AnalysisInput>,
+        options: AnalysisOptions,
+    ) -> Result<Self, AnalysisError> {
+        match input.into() {
+            AnalysisInput::Mesh(m) => Ok(Self::new(m, options)),
+            AnalysisInput::Points { cloud, params } => Self::from_points(cloud, &params, options),
+        }
+    }
+
+    /// An analysis of a point cloud with its point-cloud Laplacian (built now: O(n k log n)
+    /// for `k` neighbours). `options.laplacian` must be [`Laplacian::Robust`]
+    /// ([`AnalysisError::NotForPoints`] otherwise). The connectivity ([`Analysis::mesh`]) is
+    /// the Laplacian's triangle union, oriented consistently (see [`points`]).
+    pub fn from_points(
+        cloud: impl Into<Arc<PointCloud>>,
+        params: &PointCloudParams,
+        options: AnalysisOptions,
+    ) -> Result<Self, AnalysisError> {
+        if options.laplacian != Laplacian::Robust {
+            return Err(AnalysisError::NotForPoints {
+                laplacian: options.laplacian,
+            });
+        }
+        let cloud: Arc<PointCloud> = cloud.into();
+        let r = point_cloud_laplacian(&cloud, params)?;
+        let mesh =
+            points::connectivity_mesh(&cloud, r.triangles).ok_or(AnalysisError::NoTriangles {
+                n: cloud.n_points(),
+            })?;
+        let ops = Operators {
+            laplacian: Laplacian::Robust,
+            stiffness: r.stiffness,
+            mass: r.mass,
+        };
+        let mut an = Self::with_operators(mesh, ops, options);
+        an.cloud = Some(cloud);
+        Ok(an)
+    }
+
+    /// The point cloud, when the analysis is of one.
+    pub fn point_cloud(&self) -> Option<&PointCloud> {
+        self.cloud.as_deref()
+    }
+
+    /// True when the analysis is of a point cloud.
+    pub fn is_point_cloud(&self) -> bool {
+        self.cloud.is_some()
+    }
+
+    /// The mean neighbour spacing of a point cloud (the mean edge length of its triangle
+    /// union; pictures size their discs from it), `None` for a mesh.
+    pub fn point_spacing(&self) -> Option<f64> {
+        self.cloud.as_ref().map(|_| self.mesh.mean_edge_length())
+    }
+
+    /// The shape: the mesh, or for a point cloud the triangle union of its Laplacian (the
+    /// points are its vertices, in the same order).
     pub fn mesh(&self) -> &Mesh {
         &self.mesh
     }

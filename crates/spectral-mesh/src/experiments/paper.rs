@@ -656,7 +656,8 @@ pub struct BasisReport {
     pub near_zero: usize,
     /// Connected components of the mesh.
     pub components: usize,
-    /// Near-zero eigenvalues expected: components touching no Dirichlet vertex.
+    /// Near-zero eigenvalues expected: components touching no Dirichlet vertex, at most
+    /// `k` (the pairs computed).
     pub expected_near_zero: usize,
     /// The relative gap of [`eigenvalue_clusters`].
     pub cluster_tolerance: f64,
@@ -722,7 +723,7 @@ impl BasisReport {
             orthonormality_error: orthogonality.unwrap_or_else(|| basis.orthogonality_error()),
             near_zero,
             components: topology.n_components(),
-            expected_near_zero: pinned.iter().filter(|p| !**p).count(),
+            expected_near_zero: pinned.iter().filter(|p| !**p).count().min(basis.k()),
             cluster_tolerance,
             last_cluster_reaches_k: clusters.last().is_some_and(|&(i, c)| i + c == basis.k()),
             clusters,
