@@ -37,7 +37,12 @@
 //! a failed write never leaves a half-written file (it does overwrite an existing file: the
 //! caller decides that policy). OFF, OBJ and PLY store positions bit-exactly (shortest
 //! round-trip decimal text, or binary doubles); STL stores `f32` and is lossy.
+//!
+//! # Per-vertex fields
+//! [`read_field_text`] / [`write_field_text`] (module `field`) read and write one value per
+//! line, bit-exactly, as `numpy.loadtxt` / `numpy.savetxt` do.
 
+mod field;
 mod lexer;
 mod obj;
 mod off;
@@ -52,6 +57,7 @@ use std::str::FromStr;
 
 use crate::mesh::Mesh;
 
+pub use field::{field_to_text, read_field, read_field_text, write_field, write_field_text};
 pub use polygon::triangulate_polygon;
 
 /// An error while reading or writing a mesh file. Its `Display` is
