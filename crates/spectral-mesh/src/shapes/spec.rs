@@ -56,6 +56,19 @@ pub enum ShapeError {
         /// What is wrong with it.
         reason: String,
     },
+    /// The mesh would have more vertices than the caller's budget
+    /// ([`super::build_limited`]).
+    #[error(
+        "shape `{spec}` would have {vertices} vertices, more than the limit of {limit}; lower res"
+    )]
+    TooLarge {
+        /// The spec, in canonical form.
+        spec: String,
+        /// Its vertex count (an upper bound for the irregular variants).
+        vertices: usize,
+        /// The budget it exceeds.
+        limit: usize,
+    },
     /// The generated arrays were rejected by [`crate::Mesh::new`] (a bug: please report).
     #[error("internal error while building a shape: {0}")]
     Mesh(#[from] MeshError),
