@@ -267,7 +267,7 @@ fn stl_errors() {
     let src = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0\n";
     check(
         &err(src.as_bytes(), "x.stl"),
-        "x.stl: ",
+        "x.stl:5: ",
         "ASCII STL, facet 0",
     );
     // Non-finite binary coordinate.

@@ -62,6 +62,15 @@ fn color_component(p: &Property) -> Option<f32> {
     c.is_finite().then_some(c.clamp(0.0, 1.0) as f32)
 }
 
+/// The first token of 1-based line `line` that Rust reads as NaN or an infinity.
+fn non_finite_token(bytes: &[u8], line: usize) -> Option<String> {
+    let text = bytes.split(|&b| b == b'\n').nth(line.checked_sub(1)?)?;
+    String::from_utf8_lossy(text)
+        .split_whitespace()
+        .find(|t| t.parse::<f64>().is_ok_and(|x| !x.is_finite()))
+        .map(|t| super::lexer::show(t.as_bytes()))
+}
+
 pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     let (header_lines, binary) = header_info(bytes);
     let parser = Parser::<DefaultElement>::new();
@@ -96,6 +105,18 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
         } else {
             "PLY: "
         };
+        // ply-rs's number grammar has no NaN or infinity: name the value instead of the
+        // grammar.
+        if !binary
+            && let (Some(l), Some(h)) = (line, header_lines)
+            && l > h
+            && let Some(tok) = non_finite_token(bytes, l)
+        {
+            return ctx.invalid(
+                line,
+                format!("{prefix}non-finite value '{tok}' (NaN and infinities are refused)"),
+            );
+        }
         ctx.invalid(line, format!("{prefix}{msg}"))
     })?;
     let mut warnings = Vec::new();
