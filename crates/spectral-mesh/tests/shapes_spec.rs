@@ -174,3 +174,46 @@ fn name_list_covers_every_shape_and_its_irregular_variant() {
     assert_eq!(dv("cylinder"), Some(6384));
     assert_eq!(dv("irregular-3torus"), None);
 }
+
+#[test]
+fn build_limited_refuses_specs_over_the_budget_before_building() {
+    use spectral_mesh::shapes::{build_limited, parse_shape};
+    // Regular: the formula decides, nothing is built (6.4 million vertices, about 4 GB).
+    let big = parse_shape("torus:res=8").unwrap();
+    match build_limited(&big, 100_000) {
+        Err(ShapeError::TooLarge {
+            vertices, limit, ..
+        }) => {
+            assert_eq!(vertices, 6_422_528);
+            assert_eq!(limit, 100_000);
+        }
+        other => panic!("{other:?}"),
+    }
+    let e = build_limited(&big, 100_000).unwrap_err().to_string();
+    assert!(e.contains("torus:res=8") && e.contains("100000"), "{e}");
+    // Exactly at the budget is fine.
+    let s = parse_shape("sphere:res=2").unwrap();
+    assert_eq!(build_limited(&s, 162).unwrap().n_vertices(), 162);
+    assert!(matches!(
+        build_limited(&s, 161),
+        Err(ShapeError::TooLarge { vertices: 162, .. })
+    ));
+    // Irregular: the bound (vertices + edges before each level) holds the built size.
+    let irr = parse_shape("irregular-torus:res=3").unwrap();
+    let full = build(&irr).unwrap().n_vertices();
+    let m = build_limited(&irr, 4 * full).unwrap();
+    assert_eq!(m.n_vertices(), full);
+    assert!(matches!(
+        build_limited(&irr, full / 2),
+        Err(ShapeError::TooLarge { .. })
+    ));
+    // The coarse base alone can be over the budget.
+    let huge = parse_shape("irregular-sphere:res=9").unwrap();
+    assert!(matches!(
+        build_limited(&huge, 50_000),
+        Err(ShapeError::TooLarge {
+            vertices: 163_842,
+            ..
+        })
+    ));
+}
