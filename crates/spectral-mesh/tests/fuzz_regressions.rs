@@ -137,7 +137,13 @@ fn feed(target: &str, bytes: &[u8]) {
             if let Ok(spec) = parse_shape(&text(bytes)) {
                 assert_eq!(parse_shape(&spec.to_string()).unwrap(), spec);
                 match build_limited(&spec, 20_000) {
-                    Ok(m) => assert!(m.n_vertices() <= 20_000),
+                    Ok(m) => {
+                        assert!(m.n_vertices() <= 20_000);
+                        let r = report(&m);
+                        let want = spec.kind.expected_topology();
+                        assert_eq!(r.euler_characteristic, want.euler_characteristic);
+                        assert!(r.is_clean(), "{spec}: {:?}", r.problems());
+                    }
                     Err(ShapeError::TooLarge { .. }) => {}
                     Err(e) => panic!("{spec}: {e}"),
                 }

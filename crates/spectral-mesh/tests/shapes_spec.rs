@@ -217,3 +217,26 @@ fn build_limited_refuses_specs_over_the_budget_before_building() {
         })
     ));
 }
+
+#[test]
+fn parameters_that_would_give_zero_area_triangles_are_refused() {
+    for (spec, words) in [
+        ("torus:R=1e300,r=1e-300", "between 1e-100 and 1e100"),
+        ("torus:R=1,r=1e-7", "at least R / 1e6"),
+        ("cylinder:r=1,h=1e-40", "between r / 1e6 and r * 1e6"),
+        ("cylinder:r=1e-3,h=1e4", "between r / 1e6 and r * 1e6"),
+    ] {
+        let e = parse_shape(spec).unwrap_err().to_string();
+        assert!(e.contains(words), "{spec}: {e}");
+    }
+    // The limits themselves build clean meshes.
+    for spec in [
+        "torus:res=2,R=1,r=1e-6",
+        "cylinder:res=2,r=1,h=1e-6",
+        "cylinder:res=1,r=1,h=1e6",
+    ] {
+        let m = build_str(spec).unwrap();
+        let r = spectral_mesh::mesh::validate::report(&m);
+        assert!(r.degenerate_faces.is_empty(), "{spec}: {:?}", r.problems());
+    }
+}

@@ -55,7 +55,10 @@ mod pretzel;
 mod refine;
 mod spec;
 
-pub use spec::{ExpectedTopology, ParamInfo, ShapeError, ShapeKind, ShapeSpec, parse_shape};
+pub use spec::{
+    ExpectedTopology, MAX_ASPECT, PARAM_RANGE, ParamInfo, ShapeError, ShapeKind, ShapeSpec,
+    parse_shape,
+};
 
 use crate::mesh::Mesh;
 use refine::{Refiner, Surface};
