@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# The long fuzz run of RELIABILITY.md: builds every target once (no sanitizer, or
+# FUZZ_SANITIZER=address with RUSTC_BOOTSTRAP=1), copies the binaries aside (so a rebuild
+# while it runs changes nothing), then runs each target for SECONDS under `nice -n 19`,
+# one after the other, with the limits of fuzz/run.sh (2 s per input, 2048 MB) and a
+# corpus kept in fuzz/corpus/TARGET across runs. Findings go to fuzz/artifacts/TARGET/;
+# libFuzzer's fork mode (`-fork=1`) records a hang or an out-of-memory and goes on, a
+# crash stops that target. At the end each target's corpus is replayed once to print the
+# coverage reached (`cov`, `ft`, corpus size) into fuzz/logs/long-summary.txt.
+#
+#   bash fuzz/long-run.sh SECONDS [TARGET ...]        # default: every target
+set -uo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+cd "$here"
+seconds="${1:?usage: fuzz/long-run.sh SECONDS [TARGET ...]}"
+shift
+san="${FUZZ_SANITIZER:-none}"
+nice -n 19 cargo fuzz build -s "$san" || exit 1
+if [ "$#" -gt 0 ]; then targets=("$@"); else mapfile -t targets < <(cargo fuzz list); fi
+bin="$here/target/long-run-bin-$san"
+rm -rf "$bin" && mkdir -p "$bin" logs
+for t in "${targets[@]}"; do
+  cp "$here/target/x86_64-unknown-linux-gnu/release/$t" "$bin/"
+done
+echo "commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- .. || echo '+changes'), sanitizer $san, ${seconds} s per target, started $(date -u +%FT%TZ)" \
+  | tee -a logs/long-summary.txt
+for t in "${targets[@]}"; do
+  dict="$(awk -v t="$t" '$1 == t {print $2}' dicts/targets.txt)"
+  mkdir -p "corpus/$t" "artifacts/$t"
+  opts=(-max_total_time="$seconds" -timeout=2 -rss_limit_mb=2048 -fork=1
+        -artifact_prefix="$here/artifacts/$t/")
+  [ -n "$dict" ] && [ "$dict" != - ] && opts+=(-dict="$here/dicts/$dict.dict")
+  t0=$SECONDS
+  nice -n 19 "$bin/$t" "${opts[@]}" "corpus/$t" "seeds/$t" >"logs/long-$t.log" 2>&1
+  rc=$?
+  cov="$("$bin/$t" -runs=0 "corpus/$t" 2>&1 | grep -a -m1 'INITED' | sed 's/.*INITED //')"
+  execs="$(grep -a -o '^#[0-9]*' "logs/long-$t.log" | tail -1)"
+  found="$(ls "artifacts/$t" | wc -l)"
+  echo "$t: rc $rc, $((SECONDS - t0)) s, execs ${execs#\#}, $cov, artifacts $found" | tee -a logs/long-summary.txt
+done
