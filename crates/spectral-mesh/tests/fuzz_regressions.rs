@@ -25,6 +25,7 @@ use spectral_mesh::operators::{Laplacian, Operators};
 use spectral_mesh::shapes::{ShapeError, build_limited, parse_shape};
 use spectral_mesh::spectral::eigenbasis::{EigenParams, compute_eigenbasis};
 use spectral_mesh::spectral::filters::{CustomKind, Expr, Filter};
+use spectral_mesh::spectral::store::load_npz;
 
 const STACK: usize = 256 * 1024;
 const TIME_LIMIT: Duration = Duration::from_secs(20);
@@ -93,6 +94,39 @@ fn read(bytes: &[u8], name: &str) -> Option<LoadedMesh> {
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// The archive `fuzz/fuzz_targets/basis_npz.rs` builds: the input split at `NPYSEP` into
+/// the `.npy` members, zipped without compression.
+fn npz_of_members(bytes: &[u8]) -> Vec<u8> {
+    use std::io::Write;
+    const NAMES: [&str; 8] = [
+        "eigenvalues",
+        "eigenvectors",
+        "mass_data",
+        "mass_indices",
+        "mass_indptr",
+        "mass_shape",
+        "residuals",
+        "meta",
+    ];
+    let mut parts = Vec::new();
+    let mut rest = bytes;
+    while let Some(i) = rest.windows(6).position(|w| w == b"NPYSEP") {
+        parts.push(&rest[..i]);
+        rest = &rest[i + 6..];
+    }
+    parts.push(rest);
+    let mut buf = std::io::Cursor::new(Vec::new());
+    let mut zip = zip::ZipWriter::new(&mut buf);
+    let opts =
+        zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+    for (name, part) in NAMES.iter().zip(parts) {
+        zip.start_file(format!("{name}.npy"), opts).unwrap();
+        zip.write_all(part).unwrap();
+    }
+    zip.finish().unwrap();
+    buf.into_inner()
 }
 
 /// Feeds one input the way its fuzz target does.
@@ -175,6 +209,26 @@ fn feed(target: &str, bytes: &[u8]) {
                 }
             }
         }
+        "basis_npz" => {
+            let archive = if bytes.first() == Some(&0x80) {
+                bytes[1..].to_vec()
+            } else {
+                npz_of_members(bytes)
+            };
+            // Through a file and `load_npz`, what `eigs --cache` does.
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join("fuzz.npz");
+            std::fs::write(&path, &archive).unwrap();
+            let name = path.display().to_string();
+            match load_npz(&path) {
+                Ok((b, meta)) => {
+                    assert_eq!((b.n, b.k()), (meta.n, meta.k));
+                    assert_eq!(b.vectors.len(), b.n * b.k());
+                    assert!(b.values.iter().chain(&b.vectors).all(|x| x.is_finite()));
+                }
+                Err(e) => assert!(e.to_string().starts_with(&name), "{e}"),
+            }
+        }
         other => panic!("no check for fuzz target '{other}'"),
     }
 }
@@ -210,4 +264,24 @@ fn every_fuzz_finding_gives_a_clean_error_or_a_valid_result() {
         }
         eprintln!("{label}: ok in {:?}", t0.elapsed());
     }
+}
+
+/// The size checks of the archive reader do not refuse what NumPy writes
+/// (`numpy.savez_compressed`, Fortran-ordered eigenvectors, numpy 2.4).
+#[test]
+fn an_archive_written_by_numpy_still_loads() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fuzz_regressions/basis_npz/numpy-savez-compressed");
+    let bytes = std::fs::read(path).unwrap();
+    let (b, meta) = spectral_mesh::spectral::store::load_npz_from_reader(
+        std::io::Cursor::new(&bytes[1..]),
+        "np",
+    )
+    .unwrap();
+    assert_eq!((b.n, b.k()), (5, 3));
+    assert_eq!(meta.generator, "numpy.savez");
+    assert_eq!(b.values, vec![0.0, 1.25, 2.5]);
+    // Entry (i, j) of the (5, 3) array is (3 i + j) / 10; column-major in memory.
+    assert_eq!(b.vectors[2 * 5 + 4], 1.4);
+    assert_eq!(b.residuals, vec![1e-13; 3]);
 }

@@ -219,20 +219,33 @@ pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(),
 /// Reads an archive written by [`save_npz`] (or by NumPy with the same arrays; the
 /// eigenvectors may be in C or Fortran order).
 pub fn load_npz(path: &Path) -> Result<(Eigenbasis, BasisMeta), StoreError> {
-    let e = io_err(path);
+    let file = std::fs::File::open(path).map_err(io_err(path))?;
+    load_npz_from_reader(std::io::BufReader::new(file), &path.display().to_string())
+}
+
+/// [`load_npz`] from any reader (an upload, a buffer); `name` labels the errors. Every
+/// array is checked against the others and against its declared size before it is
+/// allocated, so a damaged or hostile archive gives [`StoreError::Format`], never a panic
+/// or an allocation larger than its own content.
+pub fn load_npz_from_reader<R: Read + std::io::Seek>(
+    reader: R,
+    name: &str,
+) -> Result<(Eigenbasis, BasisMeta), StoreError> {
     let fmt = |reason: String| StoreError::Format {
-        path: path.display().to_string(),
+        path: name.to_string(),
         reason,
     };
-    let file = std::fs::File::open(path).map_err(&e)?;
-    let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
-        .map_err(|err| fmt(format!("not a zip archive ({err})")))?;
+    let mut zip =
+        zip::ZipArchive::new(reader).map_err(|err| fmt(format!("not a zip archive ({err})")))?;
     let mut read = |name: &str| -> Result<npyz::NpyFile<std::io::Cursor<Vec<u8>>>, StoreError> {
         let mut entry = zip
             .by_name(&format!("{name}.npy"))
             .map_err(|_| fmt(format!("missing array '{name}'")))?;
         let mut bytes = Vec::new();
-        entry.read_to_end(&mut bytes).map_err(&e)?;
+        entry
+            .read_to_end(&mut bytes)
+            .map_err(|err| fmt(format!("array '{name}': {err}")))?;
+        check_npy_size(&bytes).map_err(|reason| fmt(format!("array '{name}': {reason}")))?;
         npyz::NpyFile::new(std::io::Cursor::new(bytes))
             .map_err(|err| fmt(format!("array '{name}': {err}")))
     };
@@ -243,6 +256,10 @@ pub fn load_npz(path: &Path) -> Result<(Eigenbasis, BasisMeta), StoreError> {
     let i64s = |f: npyz::NpyFile<std::io::Cursor<Vec<u8>>>, name: &str| {
         f.into_vec::<i64>()
             .map_err(|err| fmt(format!("array '{name}': {err}")))
+    };
+    let finite = |v: &[f64], name: &str| match v.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(fmt(format!("'{name}' entry {i} is {}", v[i]))),
+        None => Ok(()),
     };
     let meta_bytes = read("meta")?
         .into_vec::<u8>()
@@ -256,14 +273,24 @@ pub fn load_npz(path: &Path) -> Result<(Eigenbasis, BasisMeta), StoreError> {
     if shape.len() != 2 {
         return Err(fmt(format!("eigenvectors have shape {shape:?}")));
     }
-    let (n, k) = (shape[0] as usize, shape[1] as usize);
+    let (Ok(n), Ok(k)) = (usize::try_from(shape[0]), usize::try_from(shape[1])) else {
+        return Err(fmt(format!("eigenvectors have shape {shape:?}")));
+    };
+    if n == 0 || k == 0 || n != meta.n || k != meta.k {
+        return Err(fmt(format!(
+            "eigenvectors {n} x {k}, but the metadata says n = {}, k = {} (both at least 1)",
+            meta.n, meta.k
+        )));
+    }
     let raw = f64s(vf, "eigenvectors")?;
-    if k != values.len() || raw.len() != n * k {
+    if k != values.len() || n.checked_mul(k) != Some(raw.len()) {
         return Err(fmt(format!(
             "eigenvectors {n} x {k} do not match {} eigenvalues",
             values.len()
         )));
     }
+    finite(&values, "eigenvalues")?;
+    finite(&raw, "eigenvectors")?;
     let vectors = match order {
         npyz::Order::Fortran => raw,
         npyz::Order::C => {
@@ -288,12 +315,19 @@ pub fn load_npz(path: &Path) -> Result<(Eigenbasis, BasisMeta), StoreError> {
     if mshape.len() != 2 || mshape[0] != n || mshape[1] != n {
         return Err(fmt(format!("mass shape {mshape:?} does not match n = {n}")));
     }
+    finite(&data, "mass_data")?;
     let mass = SparseMatrix::from_csc(n, n, indptr, indices, data)
         .ok_or_else(|| fmt("the mass matrix arrays are not valid CSC".to_string()))?;
     let residuals = match read("residuals") {
         Ok(f) => f64s(f, "residuals")?,
         Err(_) => Vec::new(),
     };
+    if !(residuals.is_empty() || residuals.len() == k) {
+        return Err(fmt(format!(
+            "{} residuals for {k} eigenpairs",
+            residuals.len()
+        )));
+    }
     let basis = Eigenbasis {
         laplacian: meta.laplacian,
         n,
@@ -303,6 +337,76 @@ pub fn load_npz(path: &Path) -> Result<(Eigenbasis, BasisMeta), StoreError> {
         residuals,
     };
     Ok((basis, meta))
+}
+
+/// Checks, before `npyz` sees it, that the header of an `.npy` file announces no more data
+/// than the file holds (`npyz` multiplies the shape unchecked and reserves that many
+/// elements): the shape's product times the item size must fit in the bytes after the
+/// header.
+fn check_npy_size(bytes: &[u8]) -> Result<(), String> {
+    let bad = |m: &str| Err(format!("not a valid .npy array ({m})"));
+    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+        return bad("no NUMPY magic");
+    }
+    let (len, start): (usize, usize) = match bytes[6] {
+        1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
+        2 | 3 if bytes.len() >= 12 => (
+            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+            12,
+        ),
+        _ => return bad("unknown format version"),
+    };
+    let Some(header) = bytes.get(start..start.saturating_add(len)) else {
+        return bad("truncated header");
+    };
+    let header = String::from_utf8_lossy(header);
+    let item = |key: &str| -> Option<String> {
+        let at = header.find(key)? + key.len();
+        Some(
+            header[at..]
+                .trim_start()
+                .trim_start_matches(':')
+                .trim_start()
+                .to_string(),
+        )
+    };
+    // 'descr': '<f8' -> 8 bytes per element (1 for '|u1').
+    let Some(descr) = item("'descr'") else {
+        return bad("no descr");
+    };
+    let size: u64 = descr
+        .trim_start_matches(['\'', '"'])
+        .chars()
+        .skip(2)
+        .take_while(char::is_ascii_digit)
+        .collect::<String>()
+        .parse()
+        .unwrap_or(1)
+        .max(1);
+    // 'shape': (3, 4) or (3,) or ().
+    let Some(shape) = item("'shape'") else {
+        return bad("no shape");
+    };
+    let Some(inner) = shape.strip_prefix('(').and_then(|s| s.split(')').next()) else {
+        return bad("malformed shape");
+    };
+    let mut count: u64 = 1;
+    for dim in inner.split(',').map(str::trim).filter(|d| !d.is_empty()) {
+        let Some(d) = dim.trim_end_matches('L').parse::<u64>().ok() else {
+            return bad("malformed shape");
+        };
+        count = match count.checked_mul(d) {
+            Some(c) => c,
+            None => return bad("the shape's size overflows"),
+        };
+    }
+    let data = (bytes.len() - (start + len)) as u64;
+    if count.checked_mul(size).is_none_or(|b| b > data) {
+        return Err(format!(
+            "the header announces {count} elements of {size} bytes but only {data} bytes follow"
+        ));
+    }
+    Ok(())
 }
 
 /// The cache file name for a mesh hash, discretization and parameters.
