@@ -291,6 +291,37 @@ def arbitrary_mesh_bytes(switches, scale, verts, tris):
     return b
 
 
+def npy(values, code, shape, fortran=False):
+    """An .npy file (format 1.0) as numpy.save writes it."""
+    descr = {"d": "<f8", "q": "<i8", "B": "|u1"}[code]
+    dims = "".join(f"{d}, " for d in shape).rstrip(" ") if len(shape) != 1 else f"{shape[0]},"
+    header = f"{{'descr': '{descr}', 'fortran_order': {fortran}, 'shape': ({dims}), }}"
+    pad = 64 - (10 + len(header) + 1) % 64
+    header = header + " " * (pad % 64) + "\n"
+    return (b"\x93NUMPY\x01\x00" + struct.pack("<H", len(header)) + header.encode()
+            + struct.pack("<" + code * len(values), *values))
+
+
+def basis_members(n, k, laplacian="fem", fortran=True):
+    """The arrays of spectral::store::save_npz for a made-up n x k basis."""
+    import json
+    values = [0.0] + [float(i) * 1.5 for i in range(1, k)]
+    vecs = [((i + 1) * (j + 2)) % 7 / 7.0 for j in range(k) for i in range(n)]
+    meta = json.dumps({"format_version": 1, "laplacian": laplacian, "n": n, "k": k,
+                       "mesh_hash": "", "params": {"k": k, "tolerance": 1e-10, "dirichlet": None,
+                                                   "method": "auto", "seed": 24301,
+                                                   "block_size": 0},
+                       "generator": "seed"}).encode()
+    return [npy(values, "d", (k,)),
+            npy(vecs, "d", (n, k), fortran),
+            npy([0.25] * n, "d", (n,)),
+            npy(list(range(n)), "q", (n,)),
+            npy(list(range(n + 1)), "q", (n + 1,)),
+            npy([n, n], "q", (2,)),
+            npy([1e-12] * k, "d", (k,)),
+            npy(list(meta), "B", (len(meta),))]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--meshes", default="/work/shared/meshes")
@@ -445,6 +476,24 @@ def main():
                 "bend:30,axis=y", "noise:nan", "scale:1e400", "resample:1e9", "noise:,"]
     for k, t in enumerate(perturbs):
         put("perturb_spec", f"p{k:02}", t)
+    import io
+    import zipfile
+    names = ["eigenvalues", "eigenvectors", "mass_data", "mass_indices", "mass_indptr",
+             "mass_shape", "residuals", "meta"]
+    for n, k, lap, fortran in [(4, 2, "fem", True), (6, 3, "cot", False), (3, 1, "uniform", True)]:
+        members = basis_members(n, k, lap, fortran)
+        put("basis_npz", f"basis-{n}x{k}", b"NPYSEP".join(members))
+        raw = io.BytesIO()
+        with zipfile.ZipFile(raw, "w", zipfile.ZIP_DEFLATED) as z:
+            for name, m in zip(names, members):
+                z.writestr(name + ".npy", m)
+        put("basis_npz", f"basis-{n}x{k}-zip", b"\x80" + raw.getvalue())
+    members = basis_members(4, 2)
+    members[1] = npy([0.0] * 8, "d", (4, 2 ** 62))  # a shape far beyond the data
+    put("basis_npz", "huge-shape", b"NPYSEP".join(members))
+    members = basis_members(4, 2)
+    members[5] = npy([2 ** 62, 2 ** 62], "q", (2,))
+    put("basis_npz", "huge-mass-shape", b"NPYSEP".join(members))
     total = 0
     for root, _, files in os.walk(OUT):
         for f in files:
