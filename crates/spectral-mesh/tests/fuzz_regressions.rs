@@ -66,6 +66,13 @@ fn read(bytes: &[u8], name: &str) -> Option<LoadedMesh> {
         }
         Ok(l) => {
             check_mesh(&l.mesh);
+            if let Some(c) = &l.vertex_colors {
+                assert_eq!(c.len(), l.mesh.n_vertices());
+                assert!(
+                    c.iter().flatten().all(|x| (0.0..=1.0).contains(x)),
+                    "colour outside [0, 1]: {c:?}"
+                );
+            }
             let cases: &[(MeshFormat, bool)] = match l.format {
                 MeshFormat::Ply => &[(MeshFormat::Ply, false), (MeshFormat::Ply, true)],
                 MeshFormat::Stl => &[(MeshFormat::Stl, true)],
