@@ -316,6 +316,20 @@ pub fn load_npz_from_reader<R: Read + std::io::Seek>(
         return Err(fmt(format!("mass shape {mshape:?} does not match n = {n}")));
     }
     finite(&data, "mass_data")?;
+    // `SparseMatrix::from_csc` slices with each column's range before it has seen the
+    // whole index pointer: check it completely first.
+    if indptr.len() != n + 1
+        || indptr.first() != Some(&0)
+        || indptr.last() != Some(&indices.len())
+        || indptr.windows(2).any(|w| w[0] > w[1])
+        || indices.len() != data.len()
+    {
+        return Err(fmt(
+            "the mass matrix arrays are not valid CSC (mass_indptr must rise from 0 to the \
+             number of entries, one per column plus one)"
+                .to_string(),
+        ));
+    }
     let mass = SparseMatrix::from_csc(n, n, indptr, indices, data)
         .ok_or_else(|| fmt("the mass matrix arrays are not valid CSC".to_string()))?;
     let residuals = match read("residuals") {
