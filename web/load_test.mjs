@@ -58,14 +58,14 @@ async function worker(w, ids) {
     switch (kind) {
       case 0: req = ['POST', '/api/mesh', { shape: pick(shapes, rnd()) }]; break;
       case 1: req = ['GET', `/api/mesh/${m.id}/geometry`]; break;
-      case 2: req = field({ experiment: 'heat', k: 40, t: 0.01 + rnd(), source: Math.floor(rnd() * m.n), levels: 10 }); break;
-      case 3: req = field({ experiment: 'distance', k: 40, filter: pick(['diffusion', 'commute', 'biharmonic', 'mix'], rnd()), source: Math.floor(rnd() * m.n) }); break;
-      case 4: req = field({ experiment: 'harmonic', constraints: pick(['2', '4'], rnd()) }); break;
-      case 5: req = ['GET', `/api/mesh/${m.id}/download?format=txt&experiment=signature&k=40&filter=diffusion&t=0.1`]; break;
+      case 2: req = field({ kind: 'heat', k: 40, t: 0.001 + 0.05 * rnd(), anchor: Math.floor(rnd() * m.n), levels: 10 }); break;
+      case 3: req = field({ kind: 'distance', k: 40, distance: pick(['diffusion:t=0.01', 'commute', 'biharmonic', 'mix:a=0.5,t=0.01'], rnd()), source: Math.floor(rnd() * m.n) }); break;
+      case 4: req = field({ kind: 'harmonic', constraints: pick([2, 4], rnd()) }); break;
+      case 5: req = ['GET', `/api/mesh/${m.id}/download?format=txt&body=${encodeURIComponent(JSON.stringify({ kind: 'spectral-function', k: 40, filter: 'diffusion:t=0.1' }))}`]; break;
       case 6: valid = false; req = ['POST', '/api/mesh', { shape: 'no-such-shape' }]; break;
-      case 7: valid = false; req = ['POST', `/api/mesh/${m.id}/field`, '{"experiment":"heat","k":40,"t":NaN}', { 'Content-Type': 'application/json' }]; break;
-      case 8: valid = false; req = field({ experiment: 'heat', k: m.n + 1 }); break;
-      case 9: valid = false; req = field({ experiment: 'distance', k: 40, source: m.n + 3 }); break;
+      case 7: valid = false; req = ['POST', `/api/mesh/${m.id}/field`, '{"kind":"heat","k":40,"t":NaN}', { 'Content-Type': 'application/json' }]; break;
+      case 8: valid = false; req = field({ kind: 'heat', k: m.n + 1 }); break;
+      case 9: valid = false; req = field({ kind: 'distance', k: 40, source: m.n + 3 }); break;
       case 10: valid = false; req = ['POST', '/api/mesh', 'OFF\n3 1 0\n0 0 0\nnope\n', { 'Content-Type': 'application/octet-stream', 'X-Filename': 'bad.off' }]; break;
       default: valid = false; req = ['POST', '/api/mesh', new Uint8Array((1 << 20) + 4096), { 'Content-Type': 'application/octet-stream', 'X-Filename': 'big.off' }]; break;
     }

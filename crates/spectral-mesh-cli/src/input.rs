@@ -1,10 +1,13 @@
-//! Resolving the MESH|SHAPE argument into a mesh.
+//! Resolving the MESH|SHAPE argument into a mesh, and reading per-vertex field files.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use spectral_mesh::Mesh;
+use spectral_mesh::experiments::file::{parent_dir, relative_path};
+use spectral_mesh::experiments::paper::MeshSummary;
 use spectral_mesh::io::read_mesh;
+use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::mesh::validate::{RepairOptions, repair};
 use spectral_mesh::shapes;
 
@@ -17,20 +20,30 @@ pub enum Source {
     Shape(String),
 }
 
-/// A resolved input mesh.
+/// Where a loaded mesh came from and what happened on the way (the mesh itself is held
+/// apart, usually by an analysis).
 #[derive(Debug, Clone)]
-pub struct Input {
-    /// The mesh.
-    pub mesh: Mesh,
+pub struct MeshInfo {
     /// File or shape.
     pub source: Source,
     /// Polygons that were split into triangles on reading.
     pub polygons_triangulated: usize,
     /// Notes from the reader or the repair.
     pub notes: Vec<String>,
+    /// The content hash of the mesh as read, when a repair changed it afterwards.
+    hash_as_read: Option<String>,
 }
 
-impl Input {
+/// A resolved input mesh.
+#[derive(Debug, Clone)]
+pub struct Input {
+    /// The mesh (repaired when asked).
+    pub mesh: Mesh,
+    /// Where it came from.
+    pub info: MeshInfo,
+}
+
+impl MeshInfo {
     /// A short label: the file name or the shape spec.
     pub fn label(&self) -> String {
         match &self.source {
@@ -38,19 +51,75 @@ impl Input {
             Source::Shape(s) => s.clone(),
         }
     }
+
+    /// The name of the mesh in summaries: the file name (not the path, so that a replay
+    /// from another folder writes the same summary) or the shape spec.
+    pub fn name(&self) -> String {
+        match &self.source {
+            Source::File(p) => p
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_else(|| self.label()),
+            Source::Shape(s) => s.clone(),
+        }
+    }
+
+    /// [`Mesh::content_hash`] of the mesh as read (before any repair); `mesh` is the mesh
+    /// loaded with this information.
+    pub fn hash(&self, mesh: &Mesh) -> String {
+        self.hash_as_read
+            .clone()
+            .unwrap_or_else(|| mesh.content_hash())
+    }
+
+    /// The library's summary of `mesh` (loaded with this information).
+    pub fn summary(&self, mesh: &Mesh, topology: &Topology) -> MeshSummary {
+        MeshSummary::new(self.name(), self.hash(mesh), mesh, topology)
+    }
+
+    /// The `mesh` entry of an experiment file saved at `file`: a shape spec as is, a mesh
+    /// file relative to the experiment file's folder (which is created, so that the path
+    /// is computed from its real location; a failure is reported when the file is
+    /// written).
+    pub fn entry(&self, file: &Path) -> String {
+        match &self.source {
+            Source::Shape(s) => s.clone(),
+            Source::File(p) => {
+                let _ = std::fs::create_dir_all(parent_dir(file));
+                relative_path(p, &parent_dir(file))
+                    .to_string_lossy()
+                    .into_owned()
+            }
+        }
+    }
+}
+
+impl Input {
+    /// A short label: the file name or the shape spec.
+    pub fn label(&self) -> String {
+        self.info.label()
+    }
 }
 
 /// Loads a file or builds a shape; `None` means the paper's default shape.
 pub fn load(spec: Option<&str>) -> Result<Input> {
     let spec = spec.unwrap_or(shapes::DEFAULT_SHAPE);
     let path = Path::new(spec);
+    let info = |source, polygons_triangulated, notes| MeshInfo {
+        source,
+        polygons_triangulated,
+        notes,
+        hash_as_read: None,
+    };
     if path.exists() {
         let loaded = read_mesh(path)?;
         return Ok(Input {
             mesh: loaded.mesh,
-            source: Source::File(path.to_path_buf()),
-            polygons_triangulated: loaded.polygons_triangulated,
-            notes: loaded.warnings,
+            info: info(
+                Source::File(path.to_path_buf()),
+                loaded.polygons_triangulated,
+                loaded.warnings,
+            ),
         });
     }
     if shapes::is_shape_spec(spec) {
@@ -58,9 +127,7 @@ pub fn load(spec: Option<&str>) -> Result<Input> {
         let mesh = shapes::build(&s).with_context(|| format!("building shape '{spec}'"))?;
         return Ok(Input {
             mesh,
-            source: Source::Shape(spec.to_string()),
-            polygons_triangulated: 0,
-            notes: Vec::new(),
+            info: info(Source::Shape(spec.to_string()), 0, Vec::new()),
         });
     }
     if spec.contains(['/', '\\', '.']) {
@@ -71,14 +138,57 @@ pub fn load(spec: Option<&str>) -> Result<Input> {
     bail!("{spec}: neither a file nor a built-in shape (see `spectral-mesh shapes`)")
 }
 
-/// Loads and, when asked, repairs.
+/// Loads and, when asked, repairs (keeping the hash of the mesh as read).
 pub fn load_repaired(spec: Option<&str>, do_repair: bool) -> Result<Input> {
     let mut input = load(spec)?;
     if do_repair {
         let r = repair(&input.mesh, &RepairOptions::default())
             .with_context(|| format!("repairing {}", input.label()))?;
+        input.info.hash_as_read = Some(input.mesh.content_hash());
         input.mesh = r.mesh;
-        input.notes.extend(r.log);
+        input.info.notes.extend(r.log);
     }
     Ok(input)
+}
+
+/// Reads a per-vertex field: numbers separated by white space or commas, one or more a
+/// line (blank lines and `#` comments allowed). Refuses a wrong length or a non-finite
+/// value, naming the file and line.
+///
+/// Kept here until the library has its own reader of field files
+/// (`spectral_mesh::io::read_field_text` is planned); then this becomes a call to it.
+pub fn read_field(path: &Path, n: usize) -> Result<Vec<f64>> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
+    let mut values = Vec::with_capacity(n);
+    for (i, line) in text.lines().enumerate() {
+        let t = line.split('#').next().unwrap_or("").trim();
+        if t.is_empty() {
+            continue;
+        }
+        for tok in t
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|s| !s.is_empty())
+        {
+            let v: f64 = tok.parse().map_err(|_| {
+                anyhow::anyhow!("{}:{}: '{tok}' is not a number", path.display(), i + 1)
+            })?;
+            if !v.is_finite() {
+                bail!(
+                    "{}:{}: value {tok} is not finite (NaN or infinite)",
+                    path.display(),
+                    i + 1
+                );
+            }
+            values.push(v);
+        }
+    }
+    if values.len() != n {
+        bail!(
+            "{}: has {} values but the mesh has {n} vertices",
+            path.display(),
+            values.len()
+        );
+    }
+    Ok(values)
 }

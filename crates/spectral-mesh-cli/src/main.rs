@@ -1,9 +1,8 @@
 //! `spectral-mesh`: harmonic maps, heat diffusion and spectral distances on triangle
 //! meshes, from the command line. See `spectral-mesh --help`.
 
-mod basis;
 mod commands;
-mod expfile;
+mod engine;
 mod figure;
 mod input;
 mod output;

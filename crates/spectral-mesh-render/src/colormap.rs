@@ -211,6 +211,21 @@ fn diverging(t: f64) -> [f64; 3] {
     ]
 }
 
+/// A colour per label: hues spaced by the golden ratio, alternating saturation and value so
+/// that neighbouring labels stay distinguishable (segmentations).
+pub fn label_colors(labels: &[usize]) -> Vec<[f32; 3]> {
+    const GOLDEN: f64 = 0.618_033_988_749_895;
+    labels
+        .iter()
+        .map(|&l| {
+            let h = (l as f64 * GOLDEN).fract() * 360.0;
+            let v = if (l / 7) % 2 == 0 { 0.95 } else { 0.7 };
+            let s = if l % 2 == 0 { 0.75 } else { 0.55 };
+            hsv_to_rgb(h, s, v).map(|c| c as f32)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -13,12 +13,14 @@
 //! [`spectral_mesh::fields::level_sets`].
 
 pub mod colormap;
+pub mod figure;
 pub mod plots;
 pub mod raster;
 mod text;
 pub mod vrml;
 
 pub use colormap::Colormap;
+pub use figure::{Figure, FigureError, FigureOptions};
 pub use raster::{
     Background, Camera, ColorBar, Marker, MarkerKind, Projection, RenderOptions, Scene, View,
     field_colors, field_range, render, render_scene,

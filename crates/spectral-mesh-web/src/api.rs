@@ -1,10 +1,11 @@
-//! The router and its handlers.
+//! The router and its handlers. Every field is computed by the library's
+//! [`spectral_mesh::analysis::Analysis`]; this module only parses, caches and encodes.
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use axum::body::Bytes;
-use axum::extract::rejection::{BytesRejection, JsonRejection};
+use axum::extract::rejection::{BytesRejection, JsonRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
@@ -12,12 +13,19 @@ use axum::routing::{get, post};
 use axum::{Json, Router};
 use serde::Deserialize;
 use serde_json::json;
-use spectral_mesh::mesh::topology::{Topology, VertexTriangles};
-use spectral_mesh::{Eigenbasis, Laplacian, Mesh};
-use spectral_mesh_render as render;
+use spectral_mesh::analysis::{Analysis, AnalysisError, request::DEFAULT_K};
+use spectral_mesh::experiments::file::ExperimentFile;
+use spectral_mesh::linalg::EigenProgress;
+use spectral_mesh::mesh::topology::Topology;
+use spectral_mesh::spectral::eigenbasis::EigenError;
+use spectral_mesh::{Laplacian, Mesh};
+use spectral_mesh_render::figure::Figure;
 
-use crate::compute::{self, BadRequest, Experiment, FieldParams};
-use crate::state::{AppState, Item, Job, Key, MeshEntry, basis_bytes, mesh_bytes};
+use crate::body::{BodyError, FieldBody};
+use crate::field::{FieldReply, field_reply};
+use crate::state::{
+    AnalysisKey, AppState, Item, Job, JobSlot, Key, MeshEntry, basis_bytes, mesh_bytes,
+};
 
 type St = State<Arc<AppState>>;
 
@@ -37,10 +45,29 @@ impl ApiError {
     }
 }
 
-impl From<BadRequest> for ApiError {
-    fn from(b: BadRequest) -> Self {
-        Self::unprocessable(b.0)
+impl From<BodyError> for ApiError {
+    fn from(b: BodyError) -> Self {
+        Self::bad(b.0)
     }
+}
+
+impl From<AnalysisError> for ApiError {
+    fn from(e: AnalysisError) -> Self {
+        let status = match &e {
+            AnalysisError::BasisTooSmall { .. } | AnalysisError::Eigen(EigenError::Cancelled) => {
+                StatusCode::CONFLICT
+            }
+            AnalysisError::NoBasis | AnalysisError::CriticalPoints(_) => {
+                StatusCode::INTERNAL_SERVER_ERROR
+            }
+            _ => StatusCode::UNPROCESSABLE_ENTITY,
+        };
+        Self(status, e.to_string())
+    }
+}
+
+fn internal(e: impl std::fmt::Display) -> ApiError {
+    ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string())
 }
 
 impl IntoResponse for ApiError {
@@ -67,10 +94,16 @@ pub fn router(state: Arc<AppState>) -> Router {
         .route("/api/mesh", post(load_mesh))
         .route("/api/mesh/{id}", get(mesh_info))
         .route("/api/mesh/{id}/geometry", get(geometry))
-        .route("/api/mesh/{id}/basis", post(start_basis))
+        .route(
+            "/api/mesh/{id}/basis",
+            post(start_basis).delete(cancel_basis),
+        )
         .route("/api/mesh/{id}/basis/status", get(basis_status))
         .route("/api/mesh/{id}/field", post(field))
-        .route("/api/mesh/{id}/download", get(download))
+        .route(
+            "/api/mesh/{id}/download",
+            get(download_get).post(download_post),
+        )
         .fallback(|| async { ApiError::not_found("no such page") })
         .layer(DefaultBodyLimit::max(limit))
         .with_state(state)
@@ -169,21 +202,6 @@ fn check_id(id: &str) -> ApiResult<()> {
     }
 }
 
-fn mesh_id(mesh: &Mesh) -> String {
-    let mut h = blake3::Hasher::new();
-    for p in mesh.positions() {
-        for c in p {
-            h.update(&c.to_le_bytes());
-        }
-    }
-    for t in mesh.triangles() {
-        for c in t {
-            h.update(&(*c as u64).to_le_bytes());
-        }
-    }
-    h.finalize().to_hex()[..16].to_string()
-}
-
 fn info_json(mesh: &Mesh, topo: &Topology) -> serde_json::Value {
     let report = spectral_mesh::mesh::validate::report(mesh);
     let problems = report.problems();
@@ -230,23 +248,22 @@ fn insert_mesh(
     source: String,
     notes: Vec<String>,
 ) -> ApiResult<serde_json::Value> {
-    let id = mesh_id(&mesh);
+    let hash = mesh.content_hash();
+    let id = hash[..16].to_string();
     if let Some(item) = s.mesh(&id)
         && let Item::Mesh(e) = &*item
     {
         return Ok(mesh_reply(e));
     }
     let topo = Topology::new(&mesh);
-    let vt = VertexTriangles::new(&mesh);
     let mut info = info_json(&mesh, &topo);
     info["reader_notes"] = json!(notes);
     let bytes = mesh_bytes(&mesh);
     let entry = MeshEntry {
         id: id.clone(),
+        hash,
         source,
-        mesh,
-        topo,
-        vt,
+        mesh: Arc::new(mesh),
         info,
     };
     let reply = mesh_reply(&entry);
@@ -303,7 +320,7 @@ async fn load_mesh(
             insert_mesh(&s2, mesh, req.shape.clone(), Vec::new())
         })
         .await
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))??
+        .map_err(internal)??
     } else {
         let name = headers
             .get("x-filename")
@@ -329,7 +346,7 @@ async fn load_mesh(
             insert_mesh(&s2, loaded.mesh, name, notes)
         })
         .await
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))??
+        .map_err(internal)??
     };
     Ok(Json(reply))
 }
@@ -346,10 +363,7 @@ fn get_mesh(s: &AppState, id: &str) -> ApiResult<Arc<Item>> {
 fn entry(item: &Item) -> ApiResult<&MeshEntry> {
     match item {
         Item::Mesh(e) => Ok(e),
-        _ => Err(ApiError(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            "cache mix-up".into(),
-        )),
+        _ => Err(internal("cache mix-up")),
     }
 }
 
@@ -391,46 +405,57 @@ async fn geometry(State(s): St, Path(id): Path<String>) -> ApiResult<Response> {
 
 // ---------- eigenbasis ----------
 
+/// Body of `POST /api/mesh/{id}/basis`.
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct BasisBody {
     laplacian: Option<String>,
+    normalize: Option<bool>,
     k: Option<usize>,
 }
 
 fn parse_laplacian(s: Option<&str>) -> ApiResult<Laplacian> {
     match s {
         None => Ok(Laplacian::Fem),
-        Some(s) => s.parse::<Laplacian>().map_err(ApiError::unprocessable),
+        Some(s) => s
+            .parse::<Laplacian>()
+            .map_err(|e| ApiError::bad(format!("laplacian: {e}"))),
     }
 }
 
-fn compute_basis(
-    ops: &spectral_mesh::Operators,
-    k: usize,
-    progress: &mut dyn FnMut(f64, String),
-) -> Result<Eigenbasis, String> {
-    use spectral_mesh::spectral::eigenbasis::{EigenParams, EigenProgress, compute_eigenbasis};
-    let params = EigenParams {
-        k,
-        ..Default::default()
-    };
-    let mut cb = |p: EigenProgress| match p {
-        EigenProgress::Dense { n } => progress(0.1, format!("dense solver, n = {n}")),
-        EigenProgress::Factorization { n, .. } => progress(0.02, format!("factoring, n = {n}")),
+/// The progress of an eigenbasis computation as (fraction done, message).
+fn progress_of(p: &EigenProgress) -> (f64, String) {
+    match p {
+        EigenProgress::Dense { n } => (0.1, format!("dense solver, n = {n}")),
+        EigenProgress::Factorization { n, .. } => (0.02, format!("factoring, n = {n}")),
         EigenProgress::Iteration {
             iteration,
             converged,
             wanted,
             ..
-        } => progress(
-            0.05 + 0.9 * converged as f64 / wanted.max(1) as f64,
+        } => (
+            0.05 + 0.9 * *converged as f64 / (*wanted).max(1) as f64,
             format!("iteration {iteration}: {converged} of {wanted} pairs converged"),
         ),
-        _ => progress(0.99, "finishing".into()),
-    };
-    compute_eigenbasis(ops, &params, &mut cb).map_err(|e| e.to_string())
+        EigenProgress::Finished { .. } => (0.99, "finishing".into()),
+    }
 }
 
+fn job_of(key: &AnalysisKey, k: usize, held_k: usize, state: &str, message: String) -> Job {
+    Job {
+        state: state.into(),
+        laplacian: key.laplacian.name().into(),
+        normalize: key.normalize,
+        k,
+        held_k,
+        progress: if state == "done" { 1.0 } else { 0.0 },
+        message,
+        seconds: 0.0,
+    }
+}
+
+/// Starts `analysis.basis(k)` off the request thread. One computation per mesh: a request
+/// for other parameters cancels the running one (its status becomes "cancelled").
 async fn start_basis(
     State(s): St,
     Path(id): Path<String>,
@@ -440,122 +465,156 @@ async fn start_basis(
     let item = get_mesh(&s, &id)?;
     let e = entry(&item)?;
     let n = e.mesh.n_vertices();
-    let lap = parse_laplacian(body.laplacian.as_deref())?;
-    let k = body.k.unwrap_or(100);
+    let key = AnalysisKey {
+        id: id.clone(),
+        laplacian: parse_laplacian(body.laplacian.as_deref())?,
+        normalize: body.normalize.unwrap_or(true),
+    };
+    let k = body.k.unwrap_or(DEFAULT_K);
     if k == 0 || k > n {
         return Err(ApiError::unprocessable(format!(
             "k must be in 1..={n} (the number of vertices); got {k}"
         )));
     }
-    let need = basis_bytes(n, k, 0);
+    let need = basis_bytes(n, k);
     if need > s.cache.capacity() / 2 {
         return Err(ApiError::unprocessable(format!(
-            "an eigenbasis of k = {k} on {n} vertices needs {need} bytes, more than half the cache"
+            "an eigenbasis of k = {k} on {n} vertices needs {need} bytes, more than half the cache ({} bytes)",
+            s.cache.capacity()
         )));
     }
-    if s.basis(&id, lap, k).is_some() {
-        let job = Job {
-            state: "done".into(),
-            laplacian: lap.name().into(),
-            k,
-            progress: 1.0,
-            message: "cached".into(),
-            seconds: 0.0,
-        };
-        s.jobs().insert(id.clone(), job.clone());
+    // Assembling the operators is O(n): off the async threads.
+    let (s2, key2, item2) = (s.clone(), key.clone(), item.clone());
+    let analysis = tokio::task::spawn_blocking(move || -> ApiResult<Arc<Analysis>> {
+        Ok(s2.analysis(entry(&item2)?, &key2))
+    })
+    .await
+    .map_err(internal)??;
+    let held = analysis.held_k();
+    let mut jobs = s.jobs();
+    if held >= k {
+        let job = job_of(&key, k, held, "done", format!("held ({held} pairs)"));
+        // A finished status is replaced; a running job for other parameters goes on.
+        if jobs.get(&id).is_none_or(|j| j.job.state != "running") {
+            jobs.insert(
+                id.clone(),
+                JobSlot {
+                    job: job.clone(),
+                    serial: s.serial(),
+                    cancel: Default::default(),
+                    analysis: None,
+                    key,
+                },
+            );
+        }
         return Ok((StatusCode::OK, Json(job)));
     }
+    if let Some(slot) = jobs.get(&id)
+        && slot.job.state == "running"
     {
-        let mut jobs = s.jobs();
-        if let Some(j) = jobs.get(&id)
-            && j.state == "running"
-        {
-            if j.laplacian == lap.name() && j.k == k {
-                return Ok((StatusCode::ACCEPTED, Json(j.clone())));
-            }
-            return Err(ApiError(
-                StatusCode::CONFLICT,
-                format!(
-                    "an eigenbasis ({} , k = {}) is already being computed for this mesh; wait for it",
-                    j.laplacian, j.k
-                ),
-            ));
+        if slot.key == key && slot.job.k >= k {
+            return Ok((StatusCode::ACCEPTED, Json(slot.job.clone())));
         }
-        let job = Job {
-            state: "running".into(),
-            laplacian: lap.name().into(),
-            k,
-            progress: 0.0,
-            message: "assembling operators".into(),
-            seconds: 0.0,
-        };
-        jobs.insert(id.clone(), job.clone());
+        slot.cancel.cancel();
     }
+    let serial = s.serial();
+    let cancel = spectral_mesh::cancel::CancelToken::new();
+    let mut job = job_of(&key, k, held, "running", "starting".into());
+    job.progress = 0.0;
+    jobs.insert(
+        id.clone(),
+        JobSlot {
+            job: job.clone(),
+            serial,
+            cancel: cancel.clone(),
+            analysis: Some(analysis.clone()),
+            key: key.clone(),
+        },
+    );
+    drop(jobs);
     let s2 = s.clone();
-    let id2 = id.clone();
-    let item2 = item.clone();
-    tokio::task::spawn_blocking(move || {
-        let start = Instant::now();
-        let Ok(e) = entry(&item2) else { return };
-        let ops_item = s2.ops(e, lap);
-        let Item::Ops(ops) = &*ops_item else { return };
-        let mut progress = |p: f64, msg: String| {
-            if let Some(j) = s2.jobs().get_mut(&id2) {
-                j.progress = p;
-                j.message = msg;
-                j.seconds = start.elapsed().as_secs_f64();
-            }
-        };
-        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            compute_basis(ops, k, &mut progress)
-        }))
-        .unwrap_or_else(|_| Err("the eigensolver failed unexpectedly".into()));
-        let mut jobs = s2.jobs();
-        let Some(j) = jobs.get_mut(&id2) else { return };
-        j.seconds = start.elapsed().as_secs_f64();
-        match result {
-            Ok(b) => {
-                let bytes = basis_bytes(b.n, b.k(), b.mass.nnz());
-                s2.cache.insert(
-                    Key::Basis(id2.clone(), lap, k),
-                    Arc::new(Item::Basis(b)),
-                    bytes,
-                );
-                j.state = "done".into();
-                j.progress = 1.0;
-                j.message = format!("{k} pairs in {:.2} s", j.seconds);
-            }
-            Err(msg) => {
-                j.state = "error".into();
-                j.message = msg;
-            }
-        }
-    });
-    let job = s.jobs().get(&id).cloned();
-    Ok((
-        StatusCode::ACCEPTED,
-        Json(job.unwrap_or_else(|| unreachable_job(lap, k))),
-    ))
+    tokio::task::spawn_blocking(move || run_basis(&s2, &key, &analysis, k, serial, &cancel));
+    Ok((StatusCode::ACCEPTED, Json(job)))
 }
 
-fn unreachable_job(lap: Laplacian, k: usize) -> Job {
-    Job {
-        state: "running".into(),
-        laplacian: lap.name().into(),
-        k,
-        progress: 0.0,
-        message: String::new(),
-        seconds: 0.0,
+/// The body of a basis job: computes, reports progress into the job (if it is still the
+/// current one), and re-enters the analysis into the cache with its new size.
+fn run_basis(
+    s: &AppState,
+    key: &AnalysisKey,
+    analysis: &Arc<Analysis>,
+    k: usize,
+    serial: u64,
+    cancel: &spectral_mesh::cancel::CancelToken,
+) {
+    let start = Instant::now();
+    let update = |f: &mut dyn FnMut(&mut Job)| {
+        if let Some(slot) = s.jobs().get_mut(&key.id)
+            && slot.serial == serial
+        {
+            f(&mut slot.job);
+            slot.job.seconds = start.elapsed().as_secs_f64();
+        }
+    };
+    let mut progress = |p: EigenProgress| {
+        let (frac, msg) = progress_of(&p);
+        update(&mut |j| {
+            j.progress = frac;
+            j.message = msg.clone();
+        });
+    };
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        analysis.basis(k, &mut progress, cancel)
+    }));
+    let held = analysis.held_k();
+    let (state, message) = match result {
+        Ok(Ok(b)) => (
+            "done",
+            format!("{} pairs in {:.2} s", b.k(), start.elapsed().as_secs_f64()),
+        ),
+        Ok(Err(AnalysisError::Eigen(EigenError::Cancelled))) => {
+            ("cancelled", "cancelled by another request".to_string())
+        }
+        Ok(Err(e)) => ("error", e.to_string()),
+        Err(_) => ("error", "the eigensolver failed unexpectedly".to_string()),
+    };
+    if let Some(slot) = s.jobs().get_mut(&key.id)
+        && slot.serial == serial
+    {
+        slot.job.state = state.into();
+        slot.job.message = message;
+        slot.job.held_k = held;
+        slot.job.seconds = start.elapsed().as_secs_f64();
+        if state == "done" {
+            slot.job.progress = 1.0;
+        }
+        slot.analysis = None;
     }
+    s.remember(key, analysis);
+}
+
+/// Cancels the running eigenbasis computation of a mesh, if any.
+async fn cancel_basis(State(s): St, Path(id): Path<String>) -> ApiResult<Json<Job>> {
+    get_mesh(&s, &id)?;
+    let jobs = s.jobs();
+    let slot = jobs
+        .get(&id)
+        .ok_or_else(|| ApiError::not_found("no eigenbasis computation for this mesh"))?;
+    if slot.job.state == "running" {
+        slot.cancel.cancel();
+    }
+    Ok(Json(slot.job.clone()))
 }
 
 async fn basis_status(State(s): St, Path(id): Path<String>) -> ApiResult<Json<Job>> {
     get_mesh(&s, &id)?;
-    let job = s.jobs().get(&id).cloned();
+    let job = s.jobs().get(&id).map(|slot| slot.job.clone());
     Ok(Json(job.unwrap_or(Job {
         state: "idle".into(),
         laplacian: String::new(),
+        normalize: true,
         k: 0,
+        held_k: 0,
         progress: 0.0,
         message: "no eigenbasis requested yet".into(),
         seconds: 0.0,
@@ -564,350 +623,184 @@ async fn basis_status(State(s): St, Path(id): Path<String>) -> ApiResult<Json<Jo
 
 // ---------- fields ----------
 
-/// A computed field with everything the page draws.
-pub struct FieldOutput {
-    /// The values (f64).
-    pub values: Vec<f64>,
-    /// The JSON header.
-    pub header: serde_json::Value,
-    /// Level-set segments.
-    pub segments: Vec<f32>,
-    /// Level sets (for the picture downloads).
-    pub level_sets: Vec<render::LevelSet>,
-    /// Critical points (for the picture downloads).
-    pub critical: spectral_mesh::fields::critical_points::CriticalPoints,
+/// Parses a body (400 on bad JSON or keys).
+fn parse_body(bytes: &[u8]) -> ApiResult<FieldBody> {
+    let v: serde_json::Value =
+        serde_json::from_slice(bytes).map_err(|e| ApiError::bad(format!("bad JSON: {e}")))?;
+    Ok(FieldBody::from_value(v)?)
 }
 
-fn compute_field(s: &AppState, e: &MeshEntry, p: &FieldParams) -> ApiResult<FieldOutput> {
-    let start = Instant::now();
-    let n = e.mesh.n_vertices();
-    let c = compute::check(p, n)?;
-    let lap = parse_laplacian(p.laplacian.as_deref())?;
-    let basis_info;
-    let values = if p.experiment.needs_basis() {
-        let k = p.k.unwrap_or(100);
-        if k == 0 || k > n {
-            return Err(ApiError::unprocessable(format!(
-                "k must be in 1..={n} (the number of vertices); got {k}"
-            )));
-        }
-        let item = s.basis(&e.id, lap, k).ok_or_else(|| {
-            ApiError(
-                StatusCode::CONFLICT,
-                format!(
-                    "no eigenbasis ({}, k = {k}) for this mesh yet: compute it first",
-                    lap.name()
-                ),
-            )
-        })?;
-        let Item::Basis(b) = &*item else {
-            return Err(ApiError(
-                StatusCode::INTERNAL_SERVER_ERROR,
-                "cache mix-up".into(),
-            ));
-        };
-        basis_info = json!({
-            "laplacian": lap.name(), "k": k, "basis_k": b.k(),
-            "lambda_min": b.values.first(), "lambda_max": b.values.get(k - 1),
-        });
-        compute::spectral_field(p.experiment, b, k, &c)?
-    } else {
-        let ops_item = s.ops(e, lap);
-        let Item::Ops(ops) = &*ops_item else {
-            return Err(ApiError(
-                StatusCode::INTERNAL_SERVER_ERROR,
-                "cache mix-up".into(),
-            ));
-        };
-        let spec = compute::parse_constraints(p.constraints.as_deref().unwrap_or("2"), n)?;
-        let cons = spec
-            .resolve(&e.mesh)
-            .map_err(|err| ApiError::unprocessable(err.to_string()))?;
-        let f =
-            spectral_mesh::fields::harmonic::harmonic_map_with_operators(&e.mesh, ops, &cons, 1)
-                .map_err(|err| ApiError::unprocessable(err.to_string()))?;
-        basis_info = json!({"laplacian": lap.name(), "constraints": cons});
-        f
-    };
-    if values.iter().any(|v| !v.is_finite()) {
-        return Err(ApiError::unprocessable(
-            "the field has non-finite values (try a larger t or another filter)",
-        ));
-    }
-    let compute_ms = start.elapsed().as_secs_f64() * 1e3;
-    let (lo, hi) = compute::min_max(&values);
-    let cp = spectral_mesh::fields::critical_points::critical_points(&e.mesh, &values)
-        .map_err(|err| ApiError(StatusCode::INTERNAL_SERVER_ERROR, err.to_string()))?;
-    let chi = e.topo.euler_characteristic();
-    let bordered = !e.topo.boundary_loops.is_empty();
-    let (found, expected) = if bordered {
-        cp.euler_check_doubled(chi)
-    } else {
-        cp.euler_check(chi)
-    };
-    let critical = json!({
-        "minima": cp.minima, "maxima": cp.maxima, "saddles": cp.saddles,
-        "on_boundary": cp.on_boundary, "non_manifold": cp.non_manifold,
-        "saddle_count": cp.saddle_count(),
-        "doubled": bordered, "euler_found": found, "euler_expected": expected,
-        "euler_ok": found == expected, "chi": chi,
-    });
-    let isos = render::level_values(lo, hi, c.levels);
-    let sets = render::extract_level_sets(&e.mesh, &values, &isos);
-    let mut counts = Vec::with_capacity(sets.len());
-    let mut segments = Vec::new();
-    for ls in &sets {
-        counts.push(ls.segments.len() as u32);
-        for seg in &ls.segments {
-            for q in seg {
-                segments.extend(q.iter().map(|&x| x as f32));
-            }
-        }
-    }
-    let header = json!({
-        "n": n,
-        "experiment": p.experiment.name(),
-        "min": lo,
-        "max": hi,
-        "source": c.source,
-        "levels": isos,
-        "level_counts": counts,
-        "critical": critical,
-        "basis": basis_info,
-        "compute_ms": compute_ms,
-        "total_ms": start.elapsed().as_secs_f64() * 1e3,
-    });
-    Ok(FieldOutput {
-        values,
-        header,
-        segments,
-        level_sets: sets,
-        critical: cp,
-    })
-}
-
-async fn run_field(s: &Arc<AppState>, id: &str, p: FieldParams) -> ApiResult<FieldOutput> {
+/// The reply to `body` on mesh `id` (off the request thread); 409 when the basis is not
+/// there yet.
+/// With `encode`, the binary reply too (on the field threads as well).
+async fn compute(
+    s: &Arc<AppState>,
+    id: &str,
+    body: FieldBody,
+    encode: bool,
+) -> ApiResult<(FieldReply, Option<Vec<u8>>, Arc<Item>)> {
     let item = get_mesh(s, id)?;
     let s2 = s.clone();
-    tokio::task::spawn_blocking(move || {
-        let e = entry(&item)?;
-        compute_field(&s2, e, &p)
+    let item2 = item.clone();
+    let id = id.to_string();
+    let (reply, bytes) = tokio::task::spawn_blocking(move || -> ApiResult<_> {
+        let e = entry(&item2)?;
+        let key = AnalysisKey {
+            id: id.clone(),
+            laplacian: body.laplacian,
+            normalize: body.normalize,
+        };
+        let analysis = s2.analysis(e, &key);
+        let before = analysis.held_k();
+        let reply = s2.on_field_threads(|| -> ApiResult<_> {
+            let Some(r) = field_reply(&analysis, &body.request, body.levels)? else {
+                return Ok(None);
+            };
+            let bytes = if encode {
+                Some(r.to_bytes().map_err(internal)?)
+            } else {
+                None
+            };
+            Ok(Some((r, bytes)))
+        })?;
+        match reply {
+            Some((r, bytes)) => {
+                if r.field.request.eigenpairs().is_none() && before == analysis.held_k() {
+                    // Harmonic maps factor a solver: account for it.
+                    s2.remember(&key, &analysis);
+                }
+                Ok((r, bytes))
+            }
+            None => Err(missing_basis(&s2, &key, &body, analysis.held_k())),
+        }
     })
     .await
-    .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
+    .map_err(internal)??;
+    Ok((reply, bytes, item))
 }
 
-async fn field(
-    State(s): St,
-    Path(id): Path<String>,
-    body: Result<Json<FieldParams>, JsonRejection>,
-) -> ApiResult<Response> {
-    let Json(p) = body.map_err(|r| ApiError::bad(r.body_text()))?;
-    let out = run_field(&s, &id, p).await?;
-    let mut head = serde_json::to_vec(&out.header)
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?;
-    while head.len() % 4 != 0 {
-        head.push(b' ');
-    }
-    let mut buf =
-        Vec::with_capacity(4 + head.len() + 4 * out.values.len() + 4 * out.segments.len());
-    buf.extend((head.len() as u32).to_le_bytes());
-    buf.extend(head);
-    for v in &out.values {
-        buf.extend((*v as f32).to_le_bytes());
-    }
-    for v in &out.segments {
-        buf.extend(v.to_le_bytes());
-    }
-    Ok(octet(buf))
+/// The 409 of a field whose eigenbasis is not there yet.
+fn missing_basis(s: &AppState, key: &AnalysisKey, body: &FieldBody, held: usize) -> ApiError {
+    let k = body.request.eigenpairs().unwrap_or(0);
+    let running = s
+        .jobs()
+        .get(&key.id)
+        .filter(|slot| slot.job.state == "running" && slot.key == *key)
+        .map(|slot| {
+            format!(
+                " (a basis of k = {} is being computed: {:.0}%)",
+                slot.job.k,
+                100.0 * slot.job.progress
+            )
+        })
+        .unwrap_or_default();
+    ApiError(
+        StatusCode::CONFLICT,
+        format!(
+            "no eigenbasis of {k} pairs for this mesh yet ({}, normalize = {}; {held} pairs held){running}: POST /api/mesh/{}/basis with {{\"k\": {k}}} first",
+            key.laplacian.name(),
+            key.normalize,
+            key.id
+        ),
+    )
+}
+
+async fn field(State(s): St, Path(id): Path<String>, body: Bytes) -> ApiResult<Response> {
+    let body = parse_body(&body)?;
+    let (_, bytes, _) = compute(&s, &id, body, true).await?;
+    Ok(octet(bytes.unwrap_or_default()))
 }
 
 // ---------- downloads ----------
 
-fn hue_rgb(v: f64) -> [u8; 3] {
-    // Hue of HSV from red through yellow, green, cyan, blue, magenta (MATH.md).
-    let h = (v.clamp(0.0, 1.0) * 300.0) / 60.0;
-    let x = 1.0 - (h % 2.0 - 1.0).abs();
-    let (r, g, b) = match h as u32 {
-        0 => (1.0, x, 0.0),
-        1 => (x, 1.0, 0.0),
-        2 => (0.0, 1.0, x),
-        3 => (0.0, x, 1.0),
-        _ => (x, 0.0, 1.0),
-    };
-    [(r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8]
+/// Query of `GET /api/mesh/{id}/download`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DownloadQuery {
+    format: Option<String>,
+    /// The same JSON object as the body of a field request.
+    body: String,
 }
 
-fn normalized(values: &[f64]) -> Vec<f64> {
-    let (lo, hi) = compute::min_max(values);
-    let d = if hi > lo { hi - lo } else { 1.0 };
-    values.iter().map(|v| (v - lo) / d).collect()
-}
-
-fn experiment_toml(e: &MeshEntry, p: &FieldParams) -> String {
-    let mut t = toml::Table::new();
-    let mut put = |k: &str, v: toml::Value| {
-        t.insert(k.to_string(), v);
-    };
-    put("experiment", p.experiment.name().into());
-    put("mesh", e.source.clone().into());
-    put(
-        "laplacian",
-        p.laplacian.clone().unwrap_or_else(|| "fem".into()).into(),
-    );
-    if p.experiment != Experiment::Harmonic {
-        put("k", (p.k.unwrap_or(100) as i64).into());
-        put("t", p.t.unwrap_or(0.5).into());
-        let filter = serde_json::to_value(p.filter.unwrap_or_default())
-            .ok()
-            .and_then(|v| v.as_str().map(String::from))
-            .unwrap_or_else(|| "biharmonic".into());
-        if filter == "mix" {
-            put("a", p.a.unwrap_or(0.5).into());
-        }
-        if filter == "custom" {
-            put("custom", p.custom.clone().unwrap_or_default().into());
-            put(
-                "custom_kind",
-                p.custom_kind.clone().unwrap_or_else(|| "w".into()).into(),
-            );
-        }
-        put("filter", filter.into());
-        put("source", (p.source.unwrap_or(0) as i64).into());
-    } else {
-        put(
-            "constraints",
-            p.constraints.clone().unwrap_or_else(|| "2".into()).into(),
-        );
-    }
-    if let Some(c) = p.component {
-        put("component", (c as i64).into());
-    }
-    if p.experiment == Experiment::Segmentation {
-        put("segments", (p.segments.unwrap_or(5) as i64).into());
-    }
-    put("levels", (p.levels.unwrap_or(10) as i64).into());
-    let body = toml::to_string(&t).unwrap_or_default();
-    format!(
-        "# spectral-mesh experiment, saved by the web app.\n# Replay: spectral-mesh run THIS_FILE.toml\n{body}"
-    )
-}
-
-async fn download(
+async fn download_get(
     State(s): St,
     Path(id): Path<String>,
-    query: Result<Query<FieldParams>, axum::extract::rejection::QueryRejection>,
+    query: Result<Query<DownloadQuery>, QueryRejection>,
 ) -> ApiResult<Response> {
-    let Query(p) = query.map_err(|r| ApiError::bad(r.body_text()))?;
-    let format = p.format.clone().unwrap_or_else(|| "txt".into());
-    let item = get_mesh(&s, &id)?;
-    let e = entry(&item)?;
-    let stem = format!("{}-{}", p.experiment.name(), &id[..8]);
-    let attach = |name: String, mime: &'static str, body: Vec<u8>| -> Response {
-        (
-            [
-                (header::CONTENT_TYPE, mime.to_string()),
-                (
-                    header::CONTENT_DISPOSITION,
-                    format!("attachment; filename=\"{name}\""),
-                ),
-            ],
-            body,
-        )
-            .into_response()
-    };
-    if format == "toml" {
-        compute::check(&p, e.mesh.n_vertices())?;
-        return Ok(attach(
-            format!("{stem}.toml"),
-            "application/toml",
-            experiment_toml(e, &p).into_bytes(),
-        ));
+    let Query(q) = query.map_err(|r| {
+        ApiError::bad(format!(
+            "{}: expected ?format=png|wrl|ply|txt|toml&body=<the field request as JSON>",
+            r.body_text()
+        ))
+    })?;
+    let mut body = parse_body(q.body.as_bytes())?;
+    if q.format.is_some() {
+        body.format = q.format;
     }
-    if !matches!(format.as_str(), "txt" | "ply" | "wrl" | "png") {
+    download(&s, &id, body).await
+}
+
+async fn download_post(State(s): St, Path(id): Path<String>, body: Bytes) -> ApiResult<Response> {
+    let body = parse_body(&body)?;
+    download(&s, &id, body).await
+}
+
+/// Formats a download can have.
+pub const DOWNLOAD_FORMATS: [&str; 5] = ["png", "wrl", "ply", "txt", "toml"];
+
+async fn download(s: &Arc<AppState>, id: &str, body: FieldBody) -> ApiResult<Response> {
+    let format = body
+        .format
+        .clone()
+        .unwrap_or_else(|| "txt".into())
+        .to_ascii_lowercase();
+    if !DOWNLOAD_FORMATS.contains(&format.as_str()) {
         return Err(ApiError::bad(format!(
-            "unknown format '{format}': expected txt, ply, wrl, png or toml"
+            "unknown format '{format}': expected {}",
+            DOWNLOAD_FORMATS.join(", ")
         )));
     }
-    let p_colormap = p.colormap.clone().unwrap_or_else(|| "hue".into());
-    let uses_source = matches!(
-        p.experiment,
-        Experiment::Heat | Experiment::Diffusion | Experiment::Distance
-    );
-    let source = p.source.unwrap_or(0);
-    let out = run_field(&s, &id, p).await?;
-    let values = &out.values;
-    match format.as_str() {
-        "txt" => {
-            let mut s = String::with_capacity(values.len() * 24);
-            for v in values {
-                s.push_str(&format!("{v}\n"));
-            }
-            Ok(attach(format!("{stem}.txt"), "text/plain", s.into_bytes()))
-        }
-        "ply" => {
-            let norm = normalized(values);
-            let mut s = format!(
-                "ply\nformat ascii 1.0\ncomment spectral-mesh field\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nproperty double value\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
-                e.mesh.n_vertices(),
-                e.mesh.n_triangles()
-            );
-            for ((p, v), u) in e.mesh.positions().iter().zip(values).zip(&norm) {
-                let c = hue_rgb(*u);
-                s.push_str(&format!(
-                    "{} {} {} {} {} {} {}\n",
-                    p[0], p[1], p[2], c[0], c[1], c[2], v
-                ));
-            }
-            for t in e.mesh.triangles() {
-                s.push_str(&format!("3 {} {} {}\n", t[0], t[1], t[2]));
-            }
-            Ok(attach(
-                format!("{stem}.ply"),
-                "application/octet-stream",
-                s.into_bytes(),
-            ))
-        }
-        _ => {
-            let cmap: render::Colormap = p_colormap
-                .parse()
-                .map_err(|_| ApiError::bad(format!("unknown colour map '{p_colormap}'")))?;
-            let mut scene = render::Scene::with_field(&e.mesh, values, cmap, None);
-            scene.level_sets = out.level_sets;
-            let pos = e.mesh.positions();
-            let mut mark = |v: usize, kind| {
-                scene.markers.push(render::Marker {
-                    position: pos[v],
-                    kind,
-                })
+    let options = body.figure_options()?;
+    let (laplacian, normalize) = (body.laplacian, body.normalize);
+    let (reply, _, item) = compute(s, id, FieldBody { levels: 0, ..body }, false).await?;
+    let name = format!("{}-{}.{format}", reply.field.request.kind(), &id[..8]);
+    let mime = match format.as_str() {
+        "png" => "image/png",
+        "wrl" => "model/vrml",
+        "ply" => "application/octet-stream",
+        "toml" => "application/toml",
+        _ => "text/plain; charset=utf-8",
+    };
+    let bytes = tokio::task::spawn_blocking(move || -> ApiResult<Vec<u8>> {
+        let e = entry(&item)?;
+        let field = &reply.field;
+        if format == "toml" {
+            let mut f = ExperimentFile::for_field(&e.source, field.request.clone());
+            f.mesh_hash = Some(e.hash.clone());
+            f.laplacian = Some(laplacian.name().into());
+            f.normalize = Some(normalize);
+            f.basis_k = match (field.k, field.basis_k) {
+                (Some(k), Some(bk)) if bk > k => Some(bk),
+                _ => None,
             };
-            out.critical
-                .minima
-                .iter()
-                .for_each(|&v| mark(v, render::MarkerKind::Minimum));
-            out.critical
-                .maxima
-                .iter()
-                .for_each(|&v| mark(v, render::MarkerKind::Maximum));
-            out.critical
-                .saddles
-                .iter()
-                .for_each(|&(v, _)| mark(v, render::MarkerKind::Saddle));
-            if uses_source {
-                mark(source, render::MarkerKind::Source);
-            }
-            let mut buf = Vec::new();
-            if format == "wrl" {
-                render::write_vrml(&mut buf, &scene)
-                    .map_err(|err| ApiError(StatusCode::INTERNAL_SERVER_ERROR, err.to_string()))?;
-                Ok(attach(format!("{stem}.wrl"), "model/vrml", buf))
-            } else {
-                let img = render::render_scene(&scene, &render::RenderOptions::default())
-                    .map_err(|err| ApiError(StatusCode::INTERNAL_SERVER_ERROR, err.to_string()))?;
-                img.write_png(&mut buf)
-                    .map_err(|err| ApiError(StatusCode::INTERNAL_SERVER_ERROR, err.to_string()))?;
-                Ok(attach(format!("{stem}.png"), "image/png", buf))
-            }
+            f.figure = Some(options.to_file());
+            f.validate().map_err(internal)?;
+            return Ok(f.to_toml().map_err(internal)?.into_bytes());
         }
-    }
+        let fig = Figure::of_field(&e.mesh, field, options).map_err(internal)?;
+        fig.bytes(&format).map_err(internal)
+    })
+    .await
+    .map_err(internal)??;
+    Ok((
+        [
+            (header::CONTENT_TYPE, mime.to_string()),
+            (
+                header::CONTENT_DISPOSITION,
+                format!("attachment; filename=\"{name}\""),
+            ),
+        ],
+        bytes,
+    )
+        .into_response())
 }

@@ -4,42 +4,85 @@
 //! a JSON + binary API. Pick a shape or open a file, click a vertex, move a slider: the
 //! field, its level sets and its critical points follow.
 //!
+//! The server is a thin face over the library's [`spectral_mesh::analysis::Analysis`]:
+//! it keeps one analysis per (mesh, Laplacian, normalisation) in a byte-bounded cache
+//! (least recently used out), computes eigenbases off the request threads, and answers
+//! field requests from the held basis only. Every field is the analysis' own
+//! (`Analysis::field_if_ready`), so the page, the CLI, Python and experiment files give
+//! the same numbers for the same request, with the same defaults: the shape scaled to
+//! unit area, k = 100, t = 0.5, the bi-harmonic filter, the source at the vertex of
+//! largest x.
+//!
 //! ## API (all under `/api`)
-//! - `GET  /api/shapes` -> `{shapes: [{name, description}]}`
+//!
+//! Meshes:
+//! - `GET  /api/shapes` -> `{shapes: [{name, description, default_vertices, vertex_formula}]}`
 //! - `POST /api/mesh` with JSON `{"shape": "sphere:res=3"}`, or the raw bytes of a mesh
 //!   file (`Content-Type: application/octet-stream`, file name in `X-Filename`)
-//!   -> `{mesh_id, n, m, info}`. Uploads stay in memory; over the cap: 413.
-//! - `GET  /api/mesh/{id}` -> `{mesh_id, n, m, info}`
+//!   -> `{mesh_id, n, m, source, info}`. The id is the first 16 hex digits of
+//!   [`spectral_mesh::Mesh::content_hash`]. Uploads stay in memory; over the cap: 413.
+//! - `GET  /api/mesh/{id}` -> `{mesh_id, n, m, source, info}`
 //! - `GET  /api/mesh/{id}/geometry` -> binary, little-endian: `u32 n, u32 m`,
 //!   `f32 positions[3n]`, `u32 triangles[3m]`.
-//! - `POST /api/mesh/{id}/basis` `{laplacian, k}` -> starts the eigenbasis off the request
-//!   thread (one computation per mesh at a time; 409 when another is running);
-//!   `GET /api/mesh/{id}/basis/status` -> `{state, laplacian, k, progress, message}`.
-//! - `POST /api/mesh/{id}/field` with [`compute::FieldParams`] as JSON -> binary:
+//!
+//! Eigenbases (one computation per mesh at a time):
+//! - `POST /api/mesh/{id}/basis` `{"k": 100, "laplacian": "fem", "normalize": true}` (all
+//!   optional, these are the defaults) -> a job `{state, laplacian, normalize, k, held_k,
+//!   progress, message, seconds}`: 200 with `state = "done"` when the analysis already
+//!   holds `k` pairs, else 202 and `analysis.basis(k)` runs off the request thread. The
+//!   same or a smaller `k` of the same analysis joins the running job; other parameters
+//!   replace it and cancel its token (its state becomes `"cancelled"`). The eigensolver
+//!   checks the token inside its iteration: a cancelled solve stops within a fraction of
+//!   a second (the factorization itself is not interrupted).
+//! - `GET  /api/mesh/{id}/basis/status` -> the job (`state`: `idle`, `running`, `done`,
+//!   `error` or `cancelled`).
+//! - `DELETE /api/mesh/{id}/basis` cancels the running computation.
+//!
+//! Fields:
+//! - `POST /api/mesh/{id}/field` with a JSON object: a
+//!   [`spectral_mesh::analysis::FieldRequest`] in the library's serde form (`kind` and its
+//!   keys, unknown keys refused: `{"kind": "heat", "t": 0.01, "anchor": 12, "k": 200}`,
+//!   `{"kind": "distance", "distance": "wfem-diffusion:t=0.1"}`, `{"kind": "harmonic",
+//!   "constraints": [{"vertex": 3, "value": 0}, {"vertex": 9, "value": 1}]}`, ...) plus the
+//!   analysis keys `laplacian` (default `fem`) and `normalize` (default `true`) and the
+//!   picture key `levels` (level sets, default 10, at most 1000). Answered from the held
+//!   basis only: 409 with a message when the analysis holds fewer than the request's `k`
+//!   pairs (compute the basis first). The reply is binary, little-endian:
 //!   `u32 header_len`, the JSON header (padded with spaces to a multiple of 4 bytes),
-//!   `f32 values[n]`, `f32 segments[6 * total_segments]` (level-set segments
-//!   `x1 y1 z1 x2 y2 z2`). The header has `min, max, levels, level_counts, critical`.
-//! - `GET  /api/mesh/{id}/download?format=txt|ply|wrl|png|toml&...` with the same
-//!   parameters as the field request, as a query string.
+//!   `f32 values[n]`, `f32 segments[6 * total]` (level-set segments `x1 y1 z1 x2 y2 z2`,
+//!   level after level). The header ([`field::FieldHeader`]) has `n`, `kind`, `request`
+//!   (every default resolved, e.g. the source filled in), `source`, `marks`,
+//!   `constraints`, `floating` (components a harmonic map left unconstrained), `laplacian`, `normalized`, `k`, `basis_k`, `lambda_max`,
+//!   `categorical` (segmentation labels), `min`, `max`, `levels`, `level_counts`,
+//!   `critical` (the library's `CriticalReport`: `points {minima, maxima, saddles,
+//!   on_boundary, non_manifold}`, counts, `chi`, `doubled`, `lhs`, `rhs`, `holds`,
+//!   `formula`, the check per component; `null` for labels) and `timing_ms {field, critical, levels, total}`.
 //!
-//! Every error is a 4xx/5xx with `{"error": message}`. No endpoint takes a file path.
+//! Downloads:
+//! - `POST /api/mesh/{id}/download` with the body of a field request plus `format` (`png`,
+//!   `wrl`, `ply`, `txt`, `toml`; default `txt`) and the picture keys `colormap`, `view`,
+//!   `size` (16..=4096), `transparent`, `critical_points`, `colorbar` (as the `[figure]`
+//!   table of experiment files), or `GET /api/mesh/{id}/download?format=F&body=JSON`
+//!   with the same object URL-encoded. `png`, `wrl`, `ply` and `txt` are the render
+//!   crate's [`spectral_mesh_render::figure::Figure`] of the field (`txt`: one value per
+//!   line at full precision); `toml` is the experiment file
+//!   ([`spectral_mesh::experiments::file::ExperimentFile::for_field`]) that
+//!   `spectral-mesh run FILE.toml` replays to the same bits: `experiment = "field"`,
+//!   `mesh` (the shape spec, or the uploaded file's name: put the file beside the
+//!   experiment file), `mesh_hash`, `laplacian`, `normalize`, `basis_k` (when the basis
+//!   held more pairs than the `k` used), the resolved request as `[field]` and the picture
+//!   options as `[figure]`.
 //!
-//! ## Experiment file (`format=toml`)
-//! A TOML file that `spectral-mesh run FILE.toml` replays. Keys (all but `experiment`
-//! optional): `experiment` (harmonic | heat | diffusion | distance | signature |
-//! segmentation | embedding | eigenfunction), `mesh` (a built-in shape spec such as
-//! `"sphere:res=3"`, or the uploaded file's name), `laplacian` (cot | voronoi-cot | fem |
-//! mixed-voronoi | uniform), `k`, `t`, `a`, `filter` (diffusion | commute | biharmonic | mix
-//! | custom), `custom` (expression in s, t, a), `custom_kind` (w | phi), `source` (vertex,
-//! 0-based), `constraints` (`"2"`, `"4"`, `"6"` or `"v=x,v=x"`), `levels`, `component`,
-//! `segments`.
-
-// Index loops over vertex ids read more plainly than zipped iterators in mesh code.
-#![allow(clippy::needless_range_loop)]
+//! Every error is a 4xx/5xx with `{"error": message}`: 400 for malformed JSON, unknown
+//! keys or bad picture options, 404 for an unknown or evicted mesh, 409 for a missing
+//! eigenbasis, 413 for an upload over the cap, 422 for values the analysis refuses (a
+//! vertex out of range, `k` larger than the mesh, a filter that is not positive, ...).
+//! No endpoint takes a file path. The server listens on 127.0.0.1 unless told otherwise.
 
 pub mod api;
+pub mod body;
 pub mod cache;
-pub mod compute;
+pub mod field;
 pub mod state;
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
@@ -53,7 +96,8 @@ pub struct ServeConfig {
     pub host: IpAddr,
     /// Port (default 8000; 0 = any free port).
     pub port: u16,
-    /// Memory cap of the mesh and eigenbasis cache, in bytes (default 1 GiB).
+    /// Memory cap of the cache of meshes and analyses (operators, factorizations,
+    /// eigenbases), in bytes (default 1 GiB).
     pub cache_bytes: usize,
     /// Largest accepted upload, in bytes (default 64 MiB); larger ones get 413.
     pub max_upload_bytes: usize,
@@ -142,4 +186,56 @@ pub fn serve_blocking(config: ServeConfig) -> Result<(), ServeError> {
         .enable_all()
         .build()?;
     rt.block_on(serve(config))
+}
+
+/// A server running on a thread of its own (tests, tools): stops when dropped.
+pub struct RunningServer {
+    /// The address bound.
+    pub addr: SocketAddr,
+    shutdown: Option<tokio::sync::oneshot::Sender<()>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl RunningServer {
+    /// `http://host:port/`.
+    pub fn url(&self) -> String {
+        format!("http://{}/", self.addr)
+    }
+}
+
+impl Drop for RunningServer {
+    fn drop(&mut self) {
+        if let Some(tx) = self.shutdown.take() {
+            let _ = tx.send(());
+        }
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// [`bind`]s on a new thread with its own tokio runtime and serves there until the
+/// returned handle is dropped; returns once the socket is bound.
+pub fn spawn(config: ServeConfig) -> Result<RunningServer, ServeError> {
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()?;
+    let server = rt.block_on(bind(config))?;
+    let addr = server.addr;
+    let (tx, rx) = tokio::sync::oneshot::channel::<()>();
+    let thread = std::thread::spawn(move || {
+        rt.block_on(async move {
+            let _ = axum::serve(server.listener, server.app)
+                .with_graceful_shutdown(async {
+                    let _ = rx.await;
+                })
+                .await;
+        });
+    });
+    Ok(RunningServer {
+        addr,
+        shutdown: Some(tx),
+        thread: Some(thread),
+    })
 }

@@ -5,13 +5,12 @@ import * as THREE from 'three';
 import { OrbitControls } from '/vendor/OrbitControls.js';
 
 const $ = (id) => document.getElementById(id);
-const NEEDS_BASIS = new Set(['heat', 'diffusion', 'distance', 'signature', 'segmentation', 'embedding', 'eigenfunction']);
-const USES_SOURCE = new Set(['heat', 'diffusion', 'distance']);
+// The page's experiments, each one kind of the library's field request (see fieldRequest).
 const USES_FILTER = new Set(['distance', 'signature', 'segmentation', 'embedding']);
 
 const app = {
   meshId: null, n: 0, m: 0, info: null, positions: null, triangles: null,
-  basisKey: null,        // "laplacian:k" of a basis known to be ready
+  basisKey: null,        // "laplacian:k" of a basis known to be held
   pending: null,         // an update waiting for the one in flight
   inFlight: false,
   inputTime: 0,          // performance.now() of the input that started the update
@@ -129,6 +128,7 @@ function colorize(values, lo, hi, map) {
 function tValue() { return Math.pow(10, parseFloat($('t').value)); }
 
 function params() {
+  const src = $('source').value.trim();
   return {
     experiment: $('experiment').value,
     laplacian: $('laplacian').value,
@@ -138,12 +138,51 @@ function params() {
     filter: $('filter').value,
     custom: $('custom').value,
     custom_kind: $('custom-kind').value,
-    source: parseInt($('source').value, 10),
+    source: src === '' ? null : parseInt(src, 10), // null: the library's default (largest x)
     constraints: $('constraints').value,
     levels: parseInt($('levels').value, 10),
     component: parseInt($('component').value, 10),
-    segments: parseInt($('segments').value, 10),
+    persistence: parseFloat($('persistence').value),
   };
+}
+
+// The filter in the library's text form (spectral_mesh::spectral::filters).
+function filterText(p) {
+  switch (p.filter) {
+    case 'diffusion': return `diffusion:t=${p.t}`;
+    case 'mix': return `mix:a=${p.a},t=${p.t}`;
+    case 'custom': return `custom-${p.custom_kind === 'phi' ? 'phi' : 'w'}:${p.custom};t=${p.t},a=${p.a}`;
+    default: return p.filter; // commute, biharmonic
+  }
+}
+
+// Harmonic constraints: a preset count (2, 4, 6) or "vertex=value,..." pairs.
+function constraintsOf(text) {
+  const t = text.trim();
+  if (/^[246]$/.test(t)) return parseInt(t, 10);
+  return t.split(',').map((item) => {
+    const m = item.trim().match(/^(\d+)\s*=\s*(\S+)$/);
+    if (!m || !Number.isFinite(Number(m[2]))) throw new Error(`constraints: '${item.trim()}' should be vertex=value (or use 2, 4 or 6)`);
+    return { vertex: parseInt(m[1], 10), value: Number(m[2]) };
+  });
+}
+
+// The body of a field request: the library's FieldRequest (serde form, tagged by kind)
+// plus the analysis keys and the number of level sets.
+function fieldRequest(p) {
+  const withSource = (key, r) => (p.source === null ? r : { ...r, [key]: p.source });
+  let r;
+  switch (p.experiment) {
+    case 'harmonic': r = { kind: 'harmonic', constraints: constraintsOf(p.constraints) }; break;
+    case 'heat': r = withSource('anchor', { kind: 'heat', t: p.t, k: p.k }); break;
+    case 'diffusion': r = withSource('source', { kind: 'distance', distance: `wfem-diffusion:t=${p.t}`, k: p.k }); break;
+    case 'distance': r = withSource('source', { kind: 'distance', distance: filterText(p), k: p.k }); break;
+    case 'signature': r = { kind: 'spectral-function', filter: filterText(p), k: p.k }; break;
+    case 'segmentation': r = { kind: 'segmentation', signature: p.filter === 'diffusion' ? `hks:t=${p.t}` : `spectral-function:${filterText(p)}`, persistence: p.persistence, k: p.k }; break;
+    case 'embedding': r = { kind: 'embedding', filter: filterText(p), component: p.component, k: p.k }; break;
+    default: r = { kind: 'eigenfunction', index: p.component, k: p.k };
+  }
+  return { ...r, laplacian: p.laplacian, normalize: true, levels: p.levels };
 }
 
 function refreshParamVisibility() {
@@ -155,7 +194,7 @@ function refreshParamVisibility() {
   show('p-t', p.experiment === 'heat' || p.experiment === 'diffusion' || (usesFilter && ['diffusion', 'mix', 'custom'].includes(p.filter)));
   show('p-a', usesFilter && (p.filter === 'mix' || p.filter === 'custom'));
   show('p-component', p.experiment === 'embedding' || p.experiment === 'eigenfunction');
-  show('p-segments', p.experiment === 'segmentation');
+  show('p-persistence', p.experiment === 'segmentation');
   show('p-constraints', p.experiment === 'harmonic');
   $('click-hint').textContent = p.experiment === 'harmonic'
     ? 'click the surface to add a constraint (vertex = click value)'
@@ -186,7 +225,7 @@ async function setMesh(reply) {
   if ([...$('shape-select').options].some((o) => o.value === shapeName)) $('shape-select').value = shapeName;
   $('k').max = String(reply.n);
   if (parseInt($('k').value, 10) > reply.n) $('k').value = String(Math.min(reply.n, 100));
-  if (parseInt($('source').value, 10) >= reply.n) $('source').value = '0';
+  $('source').value = ''; // the library's default source on the new mesh
   const buf = await api('GET', `/api/mesh/${app.meshId}/geometry`, undefined, true);
   const dv = new DataView(buf);
   const n = dv.getUint32(0, true), m = dv.getUint32(4, true);
@@ -239,23 +278,22 @@ async function loadFile(file) {
 async function ensureBasis(p) {
   const key = `${p.laplacian}:${p.k}`;
   if (app.basisKey === key) return true;
-  let st;
-  try {
-    st = await api('POST', `/api/mesh/${app.meshId}/basis`, { laplacian: p.laplacian, k: p.k });
-  } catch (e) {
-    if (e.status !== 409) throw e;
-    st = { state: 'running', progress: 0, message: e.message };
-  }
-  while (st.state === 'running') {
+  const want = { laplacian: p.laplacian, normalize: true, k: p.k };
+  const mine = (st) => st.laplacian === p.laplacian && st.normalize === true && st.held_k >= p.k;
+  let st = await api('POST', `/api/mesh/${app.meshId}/basis`, want);
+  // A computation for other parameters (another tab) may cancel this one: ask again, a
+  // few times.
+  for (let tries = 0; !(st.state === 'done' && mine(st)); ) {
+    if (st.state === 'error') throw new Error(`eigenbasis: ${st.message}`);
     setProgress(st);
     await new Promise((r) => setTimeout(r, 150));
     st = await api('GET', `/api/mesh/${app.meshId}/basis/status`);
-    if (st.state === 'done' && (st.laplacian !== p.laplacian || st.k !== p.k)) {
-      st = await api('POST', `/api/mesh/${app.meshId}/basis`, { laplacian: p.laplacian, k: p.k });
+    if (st.state !== 'running' && !(st.state === 'done' && mine(st))) {
+      if (++tries > 3) throw new Error(`eigenbasis: ${st.message}`);
+      st = await api('POST', `/api/mesh/${app.meshId}/basis`, want);
     }
   }
   setProgress(st);
-  if (st.state === 'error') throw new Error(`eigenbasis: ${st.message}`);
   app.basisKey = key;
   return true;
 }
@@ -298,15 +336,17 @@ async function updateOnce() {
   app.inputTime = 0;
   showError(null);
   try {
-    if (NEEDS_BASIS.has(p.experiment)) await ensureBasis(p);
+    const body = fieldRequest(p);
+    const needsBasis = body.kind !== 'harmonic';
+    if (needsBasis) await ensureBasis(p);
     let buf;
     try {
-      buf = await api('POST', `/api/mesh/${app.meshId}/field`, p, true);
+      buf = await api('POST', `/api/mesh/${app.meshId}/field`, body, true);
     } catch (e) {
-      if (e.status !== 409 || !NEEDS_BASIS.has(p.experiment)) throw e;
+      if (e.status !== 409 || !needsBasis) throw e;
       app.basisKey = null; // evicted: compute again
       await ensureBasis(p);
-      buf = await api('POST', `/api/mesh/${app.meshId}/field`, p, true);
+      buf = await api('POST', `/api/mesh/${app.meshId}/field`, body, true);
     }
     const t1 = performance.now();
     app.field = parseField(buf);
@@ -314,9 +354,9 @@ async function updateOnce() {
     drawField();
     await new Promise((r) => requestAnimationFrame(() => r()));
     const t2 = performance.now();
-    const timing = { total_ms: t2 - t0, fetch_ms: t1 - t0, draw_ms: t2 - t1, server_ms: app.field.header.total_ms, experiment: p.experiment };
+    const timing = { total_ms: t2 - t0, fetch_ms: t1 - t0, draw_ms: t2 - t1, server_ms: app.field.header.timing_ms.total, experiment: p.experiment };
     window.__timings.push(timing);
-    window.__lastField = { values: Array.from(app.field.values), header: app.field.header, params: p, timing };
+    window.__lastField = { values: Array.from(app.field.values), header: app.field.header, params: p, body, timing };
     window.__fieldCount = (window.__fieldCount || 0) + 1;
     $('field-stats').textContent = `min ${fmt(app.field.header.min)}  max ${fmt(app.field.header.max)}  ·  ${timing.total_ms.toFixed(0)} ms (server ${timing.server_ms.toFixed(0)} ms)`;
   } catch (e) {
@@ -343,9 +383,9 @@ function drawField() {
   if ($('show-critical').checked && cp) {
     const pts = [], cols = [];
     const add = (v, c) => { pts.push(app.positions[3 * v], app.positions[3 * v + 1], app.positions[3 * v + 2]); cols.push(...c); };
-    cp.minima.forEach((v) => add(v, [0.1, 0.2, 1]));
-    cp.maxima.forEach((v) => add(v, [1, 0.1, 0.1]));
-    cp.saddles.forEach(([v]) => add(v, [0, 0.7, 0.1]));
+    cp.points.minima.forEach((v) => add(v, [0.1, 0.2, 1]));
+    cp.points.maxima.forEach((v) => add(v, [1, 0.1, 0.1]));
+    cp.points.saddles.forEach(([v]) => add(v, [0, 0.7, 0.1]));
     if (pts.length) {
       const g = new THREE.BufferGeometry();
       g.setAttribute('position', new THREE.Float32BufferAttribute(pts, 3));
@@ -354,19 +394,22 @@ function drawField() {
       scene.add(critObj);
     }
   }
-  if (USES_SOURCE.has(header.experiment)) {
+  if (header.source !== null && header.source !== undefined) {
     const s = header.source;
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', new THREE.Float32BufferAttribute([app.positions[3 * s], app.positions[3 * s + 1], app.positions[3 * s + 2]], 3));
     markerObj = new THREE.Points(g, new THREE.PointsMaterial({ size: 14, sizeAttenuation: false, color: 0x000000 }));
     scene.add(markerObj);
   }
+  const el = $('critical');
   if (cp) {
     const what = cp.doubled ? '2(m − s + M) inside + (m − s + M) on the boundary' : 'minima − saddles + maxima';
-    const el = $('critical');
-    el.textContent = `minima ${cp.minima.length}  maxima ${cp.maxima.length}  saddles ${cp.saddles.length} (with multiplicity ${cp.saddle_count})\n` +
-      `${cp.euler_ok ? '✓' : '✗'} ${what} = ${cp.euler_found}, ${cp.doubled ? '2χ' : 'χ'} = ${cp.euler_expected}`;
-    el.className = 'info small ' + (cp.euler_ok ? 'ok' : 'bad');
+    el.textContent = `minima ${cp.minima}  maxima ${cp.maxima}  saddles ${cp.points.saddles.length} (with multiplicity ${cp.saddles})\n` +
+      `${cp.holds ? '✓' : '✗'} ${what} = ${cp.lhs}, ${cp.doubled ? '2χ' : 'χ'} = ${cp.rhs}`;
+    el.className = 'info small ' + (cp.holds ? 'ok' : 'bad');
+  } else {
+    el.textContent = header.categorical ? `${header.max + 1} segments` : '';
+    el.className = 'info small';
   }
   render();
 }
@@ -413,10 +456,8 @@ window.__screenOf = (v) => {
 
 // ---------- downloads ----------
 function downloadUrl(format) {
-  const q = new URLSearchParams();
-  for (const [k, v] of Object.entries(params())) if (v !== undefined && !(typeof v === 'number' && Number.isNaN(v))) q.set(k, String(v));
-  q.set('format', format);
-  q.set('colormap', $('colormap').value);
+  const body = { ...fieldRequest(params()), colormap: $('colormap').value };
+  const q = new URLSearchParams({ format, body: JSON.stringify(body) });
   return `/api/mesh/${app.meshId}/download?${q}`;
 }
 document.querySelectorAll('#downloads a').forEach((a) => {
@@ -440,7 +481,7 @@ window.__downloadUrl = downloadUrl;
 
 // ---------- wiring ----------
 function onInput() { app.inputTime = performance.now(); refreshParamVisibility(); requestUpdate(); }
-for (const id of ['experiment', 'laplacian', 'filter', 'custom-kind', 'k', 'source', 'constraints', 'component', 'segments', 'custom']) $(id).addEventListener('change', onInput);
+for (const id of ['experiment', 'laplacian', 'filter', 'custom-kind', 'k', 'source', 'constraints', 'component', 'persistence', 'custom']) $(id).addEventListener('change', onInput);
 for (const id of ['t', 'a', 'levels']) $(id).addEventListener('input', onInput);
 $('colormap').addEventListener('change', () => { drawField(); });
 $('show-levels').addEventListener('change', () => drawField());

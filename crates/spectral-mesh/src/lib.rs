@@ -7,6 +7,8 @@
 //! mass B); operators give an eigenbasis; the basis (or a direct solve) gives fields.
 //! Conventions are those of the project's `MATH.md`.
 
+pub mod analysis;
+pub mod cancel;
 pub mod experiments;
 pub mod fields;
 pub mod io;
@@ -17,7 +19,9 @@ pub mod perturb;
 pub mod shapes;
 pub mod spectral;
 
+pub use analysis::{Analysis, AnalysisOptions, Field, FieldRequest};
+pub use cancel::CancelToken;
 pub use linalg::SparseMatrix;
-pub use mesh::Mesh;
+pub use mesh::{Mesh, PointCloud};
 pub use operators::{Laplacian, Operators};
-pub use spectral::Eigenbasis;
+pub use spectral::{BasisView, Eigenbasis};

@@ -8,12 +8,12 @@ mod fields_util;
 use fields_util::{flat_square, icosphere, torus, union};
 use spectral_mesh::fields::critical_points::critical_points;
 use spectral_mesh::fields::harmonic::{
-    Constraint, ConstraintSpec, HarmonicError, HarmonicParams, HarmonicSolver, harmonic_map,
-    max_change_near, vertex_adjacency,
+    Constraint, ConstraintSpec, FloatingComponent, HarmonicError, HarmonicParams, HarmonicSolver,
+    harmonic_map, max_change_near, vertex_adjacency,
 };
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::operators::cotan_stiffness;
-use spectral_mesh::{Laplacian, Mesh};
+use spectral_mesh::{Laplacian, Mesh, Operators};
 
 fn params(order: u32, laplacian: Laplacian) -> HarmonicParams {
     HarmonicParams { order, laplacian }
@@ -223,7 +223,7 @@ fn locality_of_added_constraints() {
 }
 
 #[test]
-fn unconstrained_component_is_named() {
+fn unconstrained_component_floats_at_the_mean_and_is_named() {
     let a = torus(3.0, 1.0, 24, 8);
     let b = icosphere(1);
     let m = union(&a, &b, [20.0, 0.0, 0.0]);
@@ -239,35 +239,25 @@ fn unconstrained_component_is_named() {
             value: 1.0,
         },
     ];
-    let e = harmonic_map(&m, &cons, &HarmonicParams::default()).unwrap_err();
-    let want_comp = topo.vertex_component[a.n_vertices()];
-    match &e {
-        HarmonicError::UnconstrainedComponent {
-            component,
-            vertex,
-            size,
-        } => {
-            assert_eq!(*component, want_comp);
-            assert_eq!(*vertex, a.n_vertices());
-            assert_eq!(*size, b.n_vertices());
-        }
-        other => panic!("unexpected {other}"),
-    }
-    let msg = e.to_string();
-    assert!(
-        msg.contains(&format!("component {want_comp}")) && msg.contains("42 vertices"),
-        "{msg}"
+    let f = harmonic_map(&m, &cons, &HarmonicParams::default()).unwrap();
+    // The constrained torus is solved; the sphere holds the mean of the values, 0.5.
+    let na = a.n_vertices();
+    assert!(f[na..].iter().all(|&v| v == 0.5), "{:?}", &f[na..na + 4]);
+    assert!(f[..na].iter().any(|&v| v != 0.5));
+    let on_torus = harmonic_map(&a, &cons, &HarmonicParams::default()).unwrap();
+    assert_eq!(&f[..na], &on_torus[..]);
+    let solver =
+        HarmonicSolver::with_operators(&m, &Operators::new(&m, Laplacian::Fem), &[0, 5], 1)
+            .unwrap();
+    let want_comp = topo.vertex_component[na];
+    assert_eq!(
+        solver.floating_components(),
+        &[FloatingComponent {
+            component: want_comp,
+            first_vertex: na,
+            vertices: b.n_vertices(),
+        }]
     );
-    // With a constraint on each component it solves, and the components stay independent.
-    let mut both = cons.clone();
-    both.push(Constraint {
-        vertex: a.n_vertices(),
-        value: 7.0,
-    });
-    let f = harmonic_map(&m, &both, &HarmonicParams::default()).unwrap();
-    for v in a.n_vertices()..m.n_vertices() {
-        assert!((f[v] - 7.0).abs() < 1e-12);
-    }
 }
 
 #[test]

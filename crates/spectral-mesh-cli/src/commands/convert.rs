@@ -48,13 +48,16 @@ pub fn run(args: Args) -> Result<()> {
         args.output.display(),
         input.mesh.n_vertices(),
         input.mesh.n_triangles(),
-        if input.polygons_triangulated > 0 {
-            format!(" ({} polygons triangulated)", input.polygons_triangulated)
+        if input.info.polygons_triangulated > 0 {
+            format!(
+                " ({} polygons triangulated)",
+                input.info.polygons_triangulated
+            )
         } else {
             String::new()
         }
     );
-    for n in &input.notes {
+    for n in &input.info.notes {
         println!("note: {n}");
     }
     Ok(())

@@ -1,20 +1,20 @@
 //! `spectral-mesh distance MESH --source V --distance FILTER -o out.png`: filtered
 //! spectral distances from a vertex, and optionally the all-pairs matrix as `.npy`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use spectral_mesh::spectral::distances::{
-    ALL_PAIRS_LIMIT, all_pairs, distances_from, wfem_diffusion_distances_from,
-};
-use spectral_mesh::spectral::filters::Filter;
+use spectral_mesh::analysis::{DistanceSpec, FieldRequest};
+use spectral_mesh::experiments::paper::FieldStats;
+use spectral_mesh::spectral::distances::{ALL_PAIRS_LIMIT, all_pairs};
+use spectral_mesh::spectral::store::npy_f64;
 
-use super::eigs::{
-    BasisArgs, FIGURE_EXTS, check_outputs, check_vertex, default_vertex, extension, normalized,
-};
-use crate::figure::{Figure, FigureArgs};
+use crate::engine::{self, BasisArgs, check_vertex};
+use crate::figure::{FigureArgs, write_field};
 use crate::input;
-use crate::output::{check_writable, write_atomic};
+use crate::output::{
+    FIGURE_EXTS, check_experiment_file, check_outputs, check_writable, extension, write,
+};
 
 /// The syntax of `--distance` / `--filter`, shown in `--help`.
 pub const FILTER_HELP: &str = "The filter, stored as its weight w = 1/phi; \
@@ -41,7 +41,7 @@ pub struct Args {
     #[arg(long)]
     pub source: Option<usize>,
     /// The filter (see below); also wfem-diffusion:t=0.5 for the paper's eq. 15.
-    #[arg(long, default_value = "biharmonic", long_help = FILTER_HELP)]
+    #[arg(long, default_value_t = DistanceSpec::default().to_string(), long_help = FILTER_HELP)]
     pub distance: String,
     #[command(flatten)]
     pub basis: BasisArgs,
@@ -54,6 +54,10 @@ pub struct Args {
     /// Output file(s) of the distances from the source: .png, .wrl, .ply or .txt.
     #[arg(long, short = 'o')]
     pub out: Vec<PathBuf>,
+    /// Also write an experiment file that reproduces the distances from the source with
+    /// `run FILE.toml`.
+    #[arg(long, value_name = "FILE.toml")]
+    pub save_experiment: Option<PathBuf>,
     /// Overwrite existing outputs.
     #[arg(long, short = 'f')]
     pub force: bool,
@@ -61,124 +65,83 @@ pub struct Args {
     pub figure: FigureArgs,
 }
 
-/// What `--distance` denotes.
-enum Kind {
-    Filter(Filter),
-    WfemDiffusion(f64),
-}
-
-fn parse_kind(text: &str) -> Result<Kind> {
-    if let Some(rest) = text.trim().strip_prefix("wfem-diffusion") {
-        let t = rest.trim_start_matches(':').trim();
-        let t = t.strip_prefix("t=").unwrap_or(t).trim();
-        if t.is_empty() {
-            return Ok(Kind::WfemDiffusion(0.5));
-        }
-        let v: f64 = t
-            .parse()
-            .map_err(|_| anyhow::anyhow!("--distance {text}: bad time '{t}'"))?;
-        if !(v.is_finite() && v >= 0.0) {
-            bail!("--distance {text}: the time must be finite and >= 0");
-        }
-        return Ok(Kind::WfemDiffusion(v));
-    }
-    text.parse::<Filter>()
-        .map(Kind::Filter)
-        .map_err(|e| anyhow::anyhow!("--distance {text}: {e}"))
-}
-
-/// A little-endian float64 NumPy `.npy` file of the given shape (C order).
-pub fn npy_bytes(shape: &[usize], data: &[f64]) -> Vec<u8> {
-    let dims = match shape {
-        [one] => format!("({one},)"),
-        _ => format!(
-            "({})",
-            shape
-                .iter()
-                .map(|d| d.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    };
-    let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': {dims}, }}");
-    // Magic (6) + version (2) + length (2) + header + '\n' is a multiple of 64.
-    let unpadded = 10 + header.len() + 1;
-    header.push_str(&" ".repeat((64 - unpadded % 64) % 64));
-    header.push('\n');
-    let mut out = Vec::with_capacity(10 + header.len() + 8 * data.len());
-    out.extend_from_slice(b"\x93NUMPY\x01\x00");
-    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    out.extend_from_slice(header.as_bytes());
-    for v in data {
-        out.extend_from_slice(&v.to_le_bytes());
-    }
-    out
-}
-
-fn check_npy(p: &Path, force: bool) -> Result<()> {
-    if extension(p).as_deref() != Some("npy") {
-        bail!("{}: --all-pairs writes a .npy file", p.display());
-    }
-    check_writable(p, force)
-}
-
 /// Computes the distances and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
-    let input = input::load(args.mesh.as_deref())?;
-    let mesh = &input.mesh;
-    let n = mesh.n_vertices();
-    let kind = parse_kind(&args.distance)?;
+    let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
+    let n = input.mesh.n_vertices();
+    let spec: DistanceSpec = args
+        .distance
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--distance {}: {e}", args.distance))?;
     if args.out.is_empty() && args.all_pairs.is_none() {
         bail!("nothing to write: give -o FILE and/or --all-pairs OUT.npy");
     }
     check_outputs(&args.out, &FIGURE_EXTS, args.force)?;
-    if let Some(p) = &args.all_pairs {
-        check_npy(p, args.force)?;
-        if matches!(kind, Kind::WfemDiffusion(_)) {
-            bail!("--all-pairs: only for filters of the form w(lambda), not wfem-diffusion");
+    check_experiment_file(args.save_experiment.as_ref(), args.force)?;
+    let filter = match (&args.all_pairs, &spec) {
+        (None, _) => None,
+        (Some(p), spec) => {
+            if extension(p).as_deref() != Some("npy") {
+                bail!("{}: --all-pairs writes a .npy file", p.display());
+            }
+            check_writable(p, args.force)?;
+            let DistanceSpec::Filter(f) = spec else {
+                bail!("--all-pairs: only for filters of the form w(lambda), not wfem-diffusion");
+            };
+            if n > ALL_PAIRS_LIMIT {
+                bail!(
+                    "--all-pairs: the mesh has {n} vertices; the n x n matrix is limited to {ALL_PAIRS_LIMIT}"
+                );
+            }
+            Some(f.clone())
         }
-        if n > ALL_PAIRS_LIMIT {
-            bail!(
-                "--all-pairs: the mesh has {n} vertices; the n x n matrix is limited to {ALL_PAIRS_LIMIT}"
-            );
-        }
+    };
+    if let Some(s) = args.source {
+        check_vertex(s, n, "--source")?;
     }
-    let source = args.source.unwrap_or_else(|| default_vertex(mesh));
-    check_vertex(source, mesh, "--source")?;
-    let tb = args.basis.compute(mesh, None)?;
-    let basis = normalized(&tb.basis, args.no_normalize);
-    let d = match &kind {
-        Kind::Filter(f) => distances_from(&basis, source, f),
-        Kind::WfemDiffusion(t) => wfem_diffusion_distances_from(&basis, source, *t),
-    }
-    .map_err(|e| anyhow::anyhow!("--distance {}: {e}", args.distance))?;
-    let (far, dmax) = d.iter().enumerate().fold(
-        (source, 0.0f64),
-        |b, (i, &v)| if v > b.1 { (i, v) } else { b },
-    );
+    args.basis.warn_unrecorded(args.save_experiment.as_ref());
+    let request = FieldRequest::Distance {
+        source: args.source,
+        distance: spec,
+        k: args.basis.k,
+    };
+    let info = input.info;
+    let an = args.basis.analysis(input.mesh, !args.no_normalize)?;
+    let (field, seconds) = engine::field(&an, &request, args.basis.cache.as_deref())
+        .map_err(|e| anyhow::anyhow!("--distance {}: {e:#}", args.distance))?;
+    let source = field.marks[0];
+    let stats = FieldStats::of(&field.values);
     println!(
-        "{}: n = {n}; {} distance from vertex {source}, k = {} ({}){}, eigenpairs in {:.2} s",
-        input.label(),
+        "{}: n = {n}; {} distance from vertex {source}, k = {} ({}){}, eigenpairs in {seconds:.2} s",
+        info.label(),
         args.distance,
-        tb.basis.k(),
-        tb.basis.laplacian,
+        args.basis.k,
+        an.options().laplacian,
         if args.no_normalize {
             ""
         } else {
             ", unit-area shape"
         },
-        tb.seconds
     );
-    println!("max distance {dmax} at vertex {far}");
-    let fig = Figure::new(mesh, &d, vec![source], &args.figure)?;
-    for o in &args.out {
-        fig.write_by_extension(o, &args.figure)?;
-        println!("-> {}", o.display());
-    }
-    if let (Some(p), Kind::Filter(f)) = (&args.all_pairs, &kind) {
-        let m = all_pairs(&basis, f)?;
-        write_atomic(p, &npy_bytes(&[n, n], &m))?;
+    println!("max distance {} at vertex {}", stats.max, stats.argmax);
+    let figure = args.figure.options();
+    write_field(an.mesh(), &field, &args.out, figure)?;
+    if let (Some(p), Some(f)) = (&args.all_pairs, &filter) {
+        let basis = engine::basis(&an, args.basis.k, None)?.basis;
+        let m = all_pairs(basis.view(args.basis.k), f)?;
+        write(p, &npy_f64(&m, &[n as u64, n as u64], false)?)?;
         println!("all pairs ({n} x {n}) -> {}", p.display());
+    }
+    if let Some(file) = &args.save_experiment {
+        engine::save_field_experiment(
+            file,
+            &info,
+            &an,
+            &field,
+            args.basis.repair,
+            &figure,
+            args.force,
+        )?;
     }
     Ok(())
 }

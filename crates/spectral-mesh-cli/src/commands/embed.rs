@@ -4,15 +4,14 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use spectral_mesh::Mesh;
-use spectral_mesh::io::{MeshFormat, WriteOptions, write_mesh_to};
-use spectral_mesh::spectral::embedding::spectral_embedding;
+use spectral_mesh::io::{MeshFormat, WriteOptions, write_mesh};
+use spectral_mesh::spectral::embedding::{embedding_mesh, spectral_embedding};
 use spectral_mesh::spectral::filters::Filter;
 
 use super::distance::FILTER_HELP;
-use super::eigs::{BasisArgs, check_outputs, normalized};
+use crate::engine::{self, BasisArgs};
 use crate::input;
-use crate::output::{check_writable, write_atomic};
+use crate::output::{check_outputs, check_writable, write};
 
 /// Arguments of `embed`.
 #[derive(Debug, clap::Args)]
@@ -20,10 +19,11 @@ pub struct Args {
     /// Mesh file or built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// The filter whose distance the embedding realizes (see below).
-    #[arg(long, default_value = "biharmonic", long_help = FILTER_HELP)]
+    #[arg(long, default_value_t = Filter::Biharmonic.to_string(), long_help = FILTER_HELP)]
     pub filter: String,
-    /// Number of coordinates (pairs with non-zero weight, in basis order); the mesh
-    /// output uses the first three (missing ones are 0).
+    /// Number of coordinates (pairs with non-zero weight, in basis order) written by
+    /// --coords. The mesh output always has the first three (0 where the basis has fewer
+    /// pairs of non-zero weight).
     #[arg(long, default_value_t = 3)]
     pub dims: usize,
     #[command(flatten)]
@@ -44,8 +44,7 @@ pub struct Args {
 
 /// Computes the embedding and writes it.
 pub fn run(args: Args) -> Result<()> {
-    let input = input::load(args.mesh.as_deref())?;
-    let mesh = &input.mesh;
+    let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
     let filter: Filter = args
         .filter
         .parse()
@@ -60,14 +59,18 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(c) = &args.coords {
         check_writable(c, args.force)?;
     }
-    let tb = args.basis.compute(mesh, None)?;
-    let basis = normalized(&tb.basis, args.no_normalize);
-    let coords = spectral_embedding(&basis, &filter, args.dims)
+    args.basis.check_k(input.mesh.n_vertices())?;
+    let label = input.label();
+    let k = args.basis.k;
+    let an = args.basis.analysis(input.mesh, !args.no_normalize)?;
+    let engine::Solved { basis, seconds, .. } = engine::basis(&an, k, args.basis.cache.as_deref())?;
+    let view = basis.view(k);
+    let mesh = an.mesh();
+    let coords = spectral_embedding(view, &filter, args.dims)
         .map_err(|e| anyhow::anyhow!("--filter {}: {e}", args.filter))?;
     let got = coords.first().map_or(0, Vec::len);
     println!(
-        "{}: n = {}, m = {}; {} embedding with {got} coordinate(s){}, k = {} ({}){}, eigenpairs in {:.2} s",
-        input.label(),
+        "{label}: n = {}, m = {}; {} embedding with {got} coordinate(s){}, k = {k} ({}){}, eigenpairs in {seconds:.2} s",
         mesh.n_vertices(),
         mesh.n_triangles(),
         args.filter,
@@ -79,21 +82,15 @@ pub fn run(args: Args) -> Result<()> {
         } else {
             String::new()
         },
-        tb.basis.k(),
-        tb.basis.laplacian,
+        an.options().laplacian,
         if args.no_normalize {
             ""
         } else {
             ", unit-area shape"
         },
-        tb.seconds
     );
     if !args.out.is_empty() {
-        let pos: Vec<[f64; 3]> = coords
-            .iter()
-            .map(|v| std::array::from_fn(|d| v.get(d).copied().unwrap_or(0.0)))
-            .collect();
-        let embedded = Mesh::new(pos, mesh.triangles().to_vec())
+        let embedded = embedding_mesh(mesh, view, &filter)
             .context("the embedded positions do not form a mesh")?;
         let (lo, hi) = embedded.bounding_box();
         println!(
@@ -105,18 +102,14 @@ pub fn run(args: Args) -> Result<()> {
         for o in &args.out {
             let format = MeshFormat::from_path(o)
                 .with_context(|| format!("{}: unknown mesh format", o.display()))?;
-            let mut buf = Vec::new();
-            write_mesh_to(
-                &mut buf,
-                format,
+            write_mesh(
+                o,
                 &embedded,
                 &WriteOptions {
                     format: Some(format),
                     ..Default::default()
                 },
-            )
-            .with_context(|| format!("writing {}", o.display()))?;
-            write_atomic(o, &buf)?;
+            )?;
             println!("-> {}", o.display());
         }
     }
@@ -127,7 +120,7 @@ pub fn run(args: Args) -> Result<()> {
             s.push_str(&r.join(" "));
             s.push('\n');
         }
-        write_atomic(c, s.as_bytes())?;
+        write(c, s.as_bytes())?;
         println!("coordinates ({} x {got}) -> {}", coords.len(), c.display());
     }
     Ok(())

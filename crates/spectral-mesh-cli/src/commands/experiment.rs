@@ -1,30 +1,29 @@
 //! `spectral-mesh experiment harmonic | diffusion-basis | spectral-distance | paper`:
-//! the executable paper's three experiments with its defaults and file names.
+//! the executable paper's three experiments with its defaults and file names. What they
+//! compute and summarise is the library's (`experiments::paper`); this module parses the
+//! arguments and writes the files.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use serde_json::json;
-use spectral_mesh::experiments::harmonic::{HarmonicExperimentParams, harmonic_experiment};
-use spectral_mesh::fields::critical_points::{CriticalPoints, critical_points};
-use spectral_mesh::fields::harmonic::{
-    Constraint, ConstraintSpec, HarmonicParams, harmonic_map, parse_constraint_arg,
-    read_constraints_file,
+use spectral_mesh::analysis::request::{DEFAULT_HEAT_T, DEFAULT_K};
+use spectral_mesh::analysis::{Analysis, AnalysisOptions, DistanceSpec, FieldRequest, Kernel};
+use spectral_mesh::experiments::file::parent_dir;
+use spectral_mesh::experiments::file::{ExperimentFile, HarmonicConstraints, relative_path};
+use spectral_mesh::experiments::paper::{
+    self, SUMMARY_FILE, field_outputs, harmonic_outputs, output_stem,
 };
-use spectral_mesh::mesh::topology::Topology;
-use spectral_mesh::spectral::distances::{distances_from, wfem_diffusion_distances_from};
+use spectral_mesh::fields::harmonic::{Constraint, parse_constraint_arg, read_constraints_file};
+use spectral_mesh::linalg::EigenProgress;
 use spectral_mesh::spectral::eigenbasis::EigenParams;
-use spectral_mesh::spectral::heat::{HeatSolver, KernelKind, ScaleNormalization, normalize_basis};
-use spectral_mesh::{Laplacian, Mesh};
+use spectral_mesh::{CancelToken, Laplacian};
+use spectral_mesh_render::figure::{Figure, FigureOptions};
 
-use spectral_mesh::experiments::mesh_hash;
-use spectral_mesh::mesh::validate::{RepairOptions, repair};
-
-use crate::basis;
-use crate::expfile::{DistanceSpec, ExperimentFile, figure_file, parse_distance, relative_path};
-use crate::figure::{Figure, FigureArgs};
-use crate::input::{self, Input, Source};
-use crate::output::{check_writable, prepare_outputs, write_atomic};
+use crate::engine::check_vertex;
+use crate::figure::{FigureArgs, write_field_files};
+use crate::input::{self, Input};
+use crate::output::{check_experiment_file, prepare_outputs, save_experiment, write_json};
+use crate::progress::EigenBar;
 
 /// The experiments.
 #[derive(Debug, clap::Subcommand)]
@@ -62,6 +61,34 @@ pub struct Common {
     pub figure: FigureArgs,
 }
 
+/// Where and how an experiment writes: [`Common`] with the picture options resolved (from
+/// the command line or from an experiment file's `[figure]`).
+#[derive(Debug, Clone)]
+pub struct Outputs {
+    /// Output folder.
+    pub out: PathBuf,
+    /// Overwrite existing files.
+    pub force: bool,
+    /// Repair the mesh before computing.
+    pub repair: bool,
+    /// Experiment file to save.
+    pub save_experiment: Option<PathBuf>,
+    /// Picture options.
+    pub figure: FigureOptions,
+}
+
+impl From<&Common> for Outputs {
+    fn from(c: &Common) -> Self {
+        Self {
+            out: c.out.clone(),
+            force: c.force,
+            repair: c.repair,
+            save_experiment: c.save_experiment.clone(),
+            figure: c.figure.options(),
+        }
+    }
+}
+
 /// Arguments of `experiment harmonic`.
 #[derive(Debug, clap::Args)]
 pub struct HarmonicArgs {
@@ -80,7 +107,7 @@ pub struct HarmonicArgs {
     #[arg(long, default_value_t = 1)]
     pub order: u32,
     /// Discretization (matters for the bi-harmonic map's mass).
-    #[arg(long, default_value = "fem")]
+    #[arg(long, default_value_t = AnalysisOptions::default().laplacian)]
     pub laplacian: Laplacian,
     #[command(flatten)]
     pub common: Common,
@@ -92,13 +119,13 @@ pub struct DiffusionArgs {
     /// Mesh file or built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// Discretization: cot (K = X D_t X^T), voronoi-cot (X D_t X^T D), fem (X D_t X^T B).
-    #[arg(long, default_value = "fem")]
+    #[arg(long, default_value_t = AnalysisOptions::default().laplacian)]
     pub laplacian: Laplacian,
     /// Diffusion time (for the shape scaled to unit area unless --no-normalize).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = DEFAULT_HEAT_T)]
     pub t: f64,
     /// Number of eigenpairs.
-    #[arg(long, short = 'k', default_value_t = 100)]
+    #[arg(long, short = 'k', default_value_t = DEFAULT_K)]
     pub k: usize,
     /// Anchor vertex (default: the vertex of largest x, ties to the lowest index).
     #[arg(long)]
@@ -117,13 +144,13 @@ pub struct DistanceArgs {
     pub mesh: Option<String>,
     /// The filter: biharmonic, commute, diffusion:t=0.5, mix:a=0.5,t=0.5, poly:p=3,
     /// custom-w:EXPR;name=value, custom-phi:EXPR;..., or wfem-diffusion:t=0.5 (eq. 15).
-    #[arg(long, default_value = "biharmonic")]
+    #[arg(long, default_value_t = DistanceSpec::default().to_string())]
     pub distance: String,
     /// Discretization.
-    #[arg(long, default_value = "fem")]
+    #[arg(long, default_value_t = AnalysisOptions::default().laplacian)]
     pub laplacian: Laplacian,
     /// Number of eigenpairs.
-    #[arg(long, short = 'k', default_value_t = 100)]
+    #[arg(long, short = 'k', default_value_t = DEFAULT_K)]
     pub k: usize,
     /// Source vertex (default: the vertex of largest x, ties to the lowest index).
     #[arg(long)]
@@ -147,446 +174,295 @@ pub struct PaperArgs {
 /// Runs an experiment.
 pub fn run(e: Experiment) -> Result<()> {
     match e {
-        Experiment::Harmonic(a) => run_harmonic(a),
-        Experiment::DiffusionBasis(a) => run_diffusion(a),
-        Experiment::SpectralDistance(a) => run_distance(a),
+        Experiment::Harmonic(a) => {
+            let input = input::load_repaired(a.mesh.as_deref(), a.common.repair)?;
+            let constraints = match (&a.constraints_file, a.explicit.is_empty()) {
+                (Some(f), _) => {
+                    let mut c = read_constraints_file(f)?;
+                    c.extend(a.explicit.iter().copied());
+                    HarmonicConstraints::Explicit(c)
+                }
+                (None, false) => HarmonicConstraints::Explicit(a.explicit.clone()),
+                (None, true) => HarmonicConstraints::Counts(a.constraints.clone()),
+            };
+            run_harmonic(
+                input,
+                &constraints,
+                a.order,
+                a.laplacian,
+                &(&a.common).into(),
+            )
+        }
+        Experiment::DiffusionBasis(a) => {
+            // The experiment file's rule (a replay must accept what was run): t > 0.
+            if !(a.t.is_finite() && a.t > 0.0) {
+                bail!("--t {}: the time must be a positive number", a.t);
+            }
+            let input = input::load_repaired(a.mesh.as_deref(), a.common.repair)?;
+            let request = FieldRequest::Heat {
+                anchor: a.anchor,
+                t: a.t,
+                kernel: Kernel::Wfem,
+                k: a.k,
+            };
+            let setup = FieldSetup {
+                experiment: "diffusion-basis",
+                request,
+                basis_k: None,
+                laplacian: a.laplacian,
+                normalize: !a.no_normalize,
+            };
+            run_field(input, &setup, &(&a.common).into())
+        }
+        Experiment::SpectralDistance(a) => {
+            let input = input::load_repaired(a.mesh.as_deref(), a.common.repair)?;
+            let distance = a
+                .distance
+                .parse()
+                .map_err(|e| anyhow::anyhow!("--distance {}: {e}", a.distance))?;
+            let setup = FieldSetup {
+                experiment: "spectral-distance",
+                request: FieldRequest::Distance {
+                    source: a.source,
+                    distance,
+                    k: a.k,
+                },
+                basis_k: None,
+                laplacian: a.laplacian,
+                normalize: !a.no_normalize,
+            };
+            run_field(input, &setup, &(&a.common).into())
+        }
         Experiment::Paper(a) => run_paper(a),
     }
 }
 
-/// The default anchor/source: the vertex of largest x (lowest index on ties).
-pub fn default_vertex(mesh: &Mesh) -> usize {
-    let p = mesh.positions();
-    (0..p.len()).fold(0, |best, i| if p[i][0] > p[best][0] { i } else { best })
+/// A field experiment: the paper's diffusion basis or spectral distance, or a `field`.
+#[derive(Debug, Clone)]
+pub struct FieldSetup {
+    /// `diffusion-basis`, `spectral-distance` or `field`.
+    pub experiment: &'static str,
+    /// The field.
+    pub request: FieldRequest,
+    /// Pairs to compute when more than the request's `k` (replays).
+    pub basis_k: Option<usize>,
+    /// Discretization.
+    pub laplacian: Laplacian,
+    /// Shape scaled to unit area.
+    pub normalize: bool,
 }
 
-fn check_vertex(v: usize, mesh: &Mesh, what: &str) -> Result<()> {
-    if v >= mesh.n_vertices() {
-        bail!(
-            "--{what} {v}: the mesh has only {} vertices",
-            mesh.n_vertices()
-        );
+/// Runs a field experiment on `input` and writes `STEM.{wrl,png,txt}` and `summary.json`.
+pub fn run_field(input: Input, setup: &FieldSetup, o: &Outputs) -> Result<()> {
+    let n = input.mesh.n_vertices();
+    let request = &setup.request;
+    request
+        .validate()
+        .map_err(|e| anyhow::anyhow!("--{e}"))
+        .with_context(|| format!("experiment {}", setup.experiment))?;
+    if let Some(v) = request.source() {
+        let option = match request {
+            FieldRequest::Heat { .. } => "--anchor",
+            _ => "--source",
+        };
+        check_vertex(v, n, option)?;
+    }
+    if let Some(k) = request.eigenpairs().into_iter().chain(setup.basis_k).max()
+        && k > n
+    {
+        bail!("-k {k}: the mesh has only {n} vertices");
+    }
+    let stem = output_stem(setup.experiment, request);
+    let names = field_outputs(&stem);
+    let all = [
+        names[0].as_str(),
+        names[1].as_str(),
+        names[2].as_str(),
+        SUMMARY_FILE,
+    ];
+    let paths = prepare_outputs(&o.out, &all, o.force)?;
+    check_experiment_file(o.save_experiment.as_ref(), o.force)?;
+    let Input { mesh, info } = input;
+    let an = Analysis::new(
+        mesh,
+        AnalysisOptions {
+            laplacian: setup.laplacian,
+            normalize: setup.normalize,
+            eigen: EigenParams::default(),
+        },
+    );
+    let mesh_summary = info.summary(an.mesh(), an.topology());
+    let bar = EigenBar::new(setup.basis_k.or(request.eigenpairs()).unwrap_or(0));
+    let t0 = std::time::Instant::now();
+    let mut solved = 0.0;
+    let run = paper::run_field(
+        &an,
+        setup.experiment,
+        mesh_summary,
+        request,
+        setup.basis_k,
+        &mut |p| {
+            if matches!(p, EigenProgress::Finished { .. }) {
+                solved = t0.elapsed().as_secs_f64();
+            }
+            bar.update(p)
+        },
+        &CancelToken::new(),
+    )?;
+    bar.finish();
+    write_field_files(an.mesh(), &run.field, &paths[..3], o.figure)?;
+    write_json(&paths[3], &run.summary)?;
+    let basis_note = match &run.summary.basis {
+        Some(b) => format!(
+            ", k = {} ({}): eigenpairs in {solved:.2} s, max residual {:.1e}",
+            b.k,
+            setup.laplacian,
+            b.max_relative_residual.unwrap_or(f64::NAN)
+        ),
+        None => String::new(),
+    };
+    println!(
+        "{} {}{basis_note}; wrote {}",
+        setup.experiment,
+        describe(&run.field.request),
+        o.out.display()
+    );
+    if let Some(file) = &o.save_experiment {
+        let mut e = experiment_file(setup.experiment, &info, &an, o, file);
+        let req = run.field.request.clone();
+        e.basis_k = match (run.field.k, run.field.basis_k) {
+            (Some(k), Some(bk)) if bk > k => Some(bk),
+            _ => None,
+        };
+        match (setup.experiment, req) {
+            ("diffusion-basis", FieldRequest::Heat { anchor, t, k, .. }) => {
+                e.k = Some(k);
+                e.t = Some(t);
+                e.anchor = anchor;
+            }
+            (
+                "spectral-distance",
+                FieldRequest::Distance {
+                    source,
+                    distance,
+                    k,
+                },
+            ) => {
+                e.k = Some(k);
+                e.distance = Some(distance.to_string());
+                e.source = source;
+            }
+            (_, req) => e.field = Some(req),
+        }
+        save_experiment(file, &e, o.force)?;
     }
     Ok(())
 }
 
-/// A loaded mesh with the hash of the mesh as read (before any repair).
-pub struct Loaded {
-    /// The input (repaired when asked).
-    pub input: Input,
-    /// `mesh_hash` of the mesh as read.
-    pub hash: String,
-}
-
-/// Loads a mesh or shape, hashes it, then repairs it when asked.
-pub fn load_mesh(spec: Option<&str>, do_repair: bool) -> Result<Loaded> {
-    let mut input = input::load(spec)?;
-    let hash = mesh_hash(&input.mesh);
-    if do_repair {
-        let r = repair(&input.mesh, &RepairOptions::default())
-            .with_context(|| format!("repairing {}", input.label()))?;
-        input.mesh = r.mesh;
-        input.notes.extend(r.log);
-    }
-    Ok(Loaded { input, hash })
-}
-
-/// The name of the mesh in summaries: the file name (not the path, so that a replay from
-/// another folder writes the same summary) or the shape spec.
-fn mesh_name(input: &Input) -> String {
-    match &input.source {
-        Source::File(p) => p
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| input.label()),
-        Source::Shape(s) => s.clone(),
+/// A one-line description of a resolved request.
+fn describe(r: &FieldRequest) -> String {
+    match r {
+        FieldRequest::Heat { anchor, t, .. } => {
+            format!("at vertex {}, t = {t}", anchor.unwrap_or(0))
+        }
+        FieldRequest::Distance {
+            source, distance, ..
+        } => format!("{distance} from vertex {}", source.unwrap_or(0)),
+        other => other.kind().to_string(),
     }
 }
 
-fn mesh_json(loaded: &Loaded) -> serde_json::Value {
-    let input = &loaded.input;
-    let topo = Topology::new(&input.mesh);
-    json!({
-        "source": mesh_name(input),
-        "mesh_hash": loaded.hash,
-        "vertices": input.mesh.n_vertices(),
-        "triangles": input.mesh.n_triangles(),
-        "components": topo.n_components(),
-        "euler_characteristic": topo.euler_characteristic(),
-        "genus": topo.components.iter().map(|c| c.genus).collect::<Vec<_>>(),
-        "boundary_loops": topo.boundary_loops.len(),
-        "area": input.mesh.area(),
-    })
-}
-
-fn critical_json(cp: &CriticalPoints, chi: i64, closed: bool) -> serde_json::Value {
-    let (lhs, rhs) = if closed {
-        cp.euler_check(chi)
-    } else {
-        cp.euler_check_doubled(chi)
-    };
-    json!({
-        "minima": cp.minima.len(),
-        "maxima": cp.maxima.len(),
-        "saddles_with_multiplicity": cp.saddle_count(),
-        "minima_vertices": cp.minima,
-        "maxima_vertices": cp.maxima,
-        "saddle_vertices": cp.saddles,
-        "euler_check": {
-            "formula": if closed { "m - s + M = chi" } else { "doubled across the boundary: 2(m_i - s_i + M_i) + (m_b - s_b + M_b) = 2 chi" },
-            "lhs": lhs, "rhs": rhs, "holds": lhs == rhs,
-        },
-    })
-}
-
-/// The `mesh` entry of an experiment file saved at `file`: a shape spec as is, a mesh
-/// file relative to the experiment file's folder.
-fn mesh_entry(input: &Input, file: &Path) -> String {
-    match &input.source {
-        Source::Shape(s) => s.clone(),
-        Source::File(p) => relative_path(p, &parent_dir(file))
-            .to_string_lossy()
-            .into_owned(),
-    }
-}
-
-/// The folder of `file` (`.` for a bare name).
-pub fn parent_dir(file: &Path) -> PathBuf {
-    match file.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    }
-}
-
-/// The skeleton of an experiment file for `common`'s output and figure options.
+/// The keys every saved experiment file has.
 fn experiment_file(
     experiment: &str,
-    loaded: &Loaded,
-    common: &Common,
+    info: &input::MeshInfo,
+    an: &Analysis,
+    o: &Outputs,
     file: &Path,
-    laplacian: Laplacian,
 ) -> ExperimentFile {
-    // The folder must exist for the relative paths to be computed from its real location
-    // (a failure is reported when the file is written).
-    let _ = std::fs::create_dir_all(parent_dir(file));
-    ExperimentFile {
-        experiment: experiment.into(),
-        mesh: mesh_entry(&loaded.input, file),
-        mesh_hash: Some(loaded.hash.clone()),
-        repair: Some(common.repair),
-        laplacian: Some(laplacian.name().into()),
-        k: None,
-        t: None,
-        normalize: None,
-        anchor: None,
-        distance: None,
-        source: None,
-        constraints: None,
-        order: None,
-        out: Some(
-            relative_path(&common.out, &parent_dir(file))
-                .to_string_lossy()
-                .into_owned(),
-        ),
-        figure: Some(figure_file(&common.figure)),
+    let mut e = crate::engine::experiment_file(experiment, file, info, an, o.repair, &o.figure);
+    e.out = Some(
+        relative_path(&o.out, &parent_dir(file))
+            .to_string_lossy()
+            .into_owned(),
+    );
+    e
+}
+
+/// Runs the harmonic experiment on `input` and writes its maps and `summary.json`.
+pub fn run_harmonic(
+    input: Input,
+    constraints: &HarmonicConstraints,
+    order: u32,
+    laplacian: Laplacian,
+    o: &Outputs,
+) -> Result<()> {
+    if order != 1 && order != 2 {
+        bail!("--order {order}: must be 1 (harmonic) or 2 (bi-harmonic)");
     }
-}
-
-/// Writes an experiment file (refusing to overwrite without `force`).
-fn save_experiment(file: &Path, f: &ExperimentFile, force: bool) -> Result<()> {
-    check_writable(file, force)?;
-    let dir = parent_dir(file);
-    std::fs::create_dir_all(&dir)
-        .map_err(|e| anyhow::anyhow!("{}: cannot create folder: {e}", dir.display()))?;
-    write_atomic(file, f.to_toml()?.as_bytes())?;
-    println!("saved the experiment to {}", file.display());
-    Ok(())
-}
-
-fn write_json(path: &Path, v: &serde_json::Value) -> Result<()> {
-    write_atomic(path, (serde_json::to_string_pretty(v)? + "\n").as_bytes())
-}
-
-/// Runs `experiment harmonic`.
-pub fn run_harmonic(a: HarmonicArgs) -> Result<()> {
-    let loaded = load_mesh(a.mesh.as_deref(), a.common.repair)?;
-    let mesh = &loaded.input.mesh;
-    let topo = Topology::new(mesh);
-    let chi = topo.euler_characteristic();
-    let closed = topo.boundary_loops.is_empty();
-    if a.order != 1 && a.order != 2 {
-        bail!(
-            "--order {}: must be 1 (harmonic) or 2 (bi-harmonic)",
-            a.order
-        );
-    }
-    // Explicit constraints give one map; otherwise one map per default count.
-    let explicit: Option<Vec<Constraint>> = match (&a.constraints_file, a.explicit.is_empty()) {
-        (Some(f), _) => {
-            let mut c = read_constraints_file(f)?;
-            c.extend(a.explicit.iter().copied());
-            Some(c)
-        }
-        (None, false) => Some(a.explicit.clone()),
-        (None, true) => None,
+    let maps = match constraints {
+        HarmonicConstraints::Counts(c) => c.len(),
+        HarmonicConstraints::Explicit(_) => 1,
     };
-    let explicit_used = explicit.clone();
-    let mut maps: Vec<(Vec<Constraint>, Vec<f64>, serde_json::Value)> = Vec::new();
-    match explicit {
-        Some(c) => {
-            let c = ConstraintSpec::Explicit(c).resolve(mesh)?;
-            let f = harmonic_map(
-                mesh,
-                &c,
-                &HarmonicParams {
-                    order: a.order,
-                    laplacian: a.laplacian,
-                },
-            )?;
-            maps.push((c, f, json!({})));
+    let mut names: Vec<String> = (1..=maps).flat_map(harmonic_outputs).collect();
+    names.push(SUMMARY_FILE.into());
+    let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
+    let paths = prepare_outputs(&o.out, &name_refs, o.force)?;
+    check_experiment_file(o.save_experiment.as_ref(), o.force)?;
+    let Input { mesh, info } = input;
+    // The analysis holds the mesh, its topology and the hash; the maps need no basis.
+    let an = Analysis::new(
+        mesh,
+        AnalysisOptions {
+            laplacian,
+            ..AnalysisOptions::default()
+        },
+    );
+    let run = paper::run_harmonic(
+        an.mesh(),
+        info.summary(an.mesh(), an.topology()),
+        constraints,
+        order,
+        laplacian,
+    )?;
+    for (i, map) in run.maps.iter().enumerate() {
+        let sources: Vec<usize> = map.constraints.iter().map(|c| c.vertex).collect();
+        let mut fig = Figure::new(
+            an.mesh(),
+            &map.field,
+            sources,
+            FigureOptions {
+                critical_points: false,
+                ..o.figure
+            },
+        )?;
+        if o.figure.critical_points {
+            fig.critical = Some(map.critical.points.clone());
         }
-        None => {
-            let params = HarmonicExperimentParams {
-                constraint_counts: a.constraints.clone(),
-                order: a.order,
-                laplacian: a.laplacian,
-                ..Default::default()
-            };
-            for r in harmonic_experiment(mesh, &params)? {
-                let extra = json!({
-                    "constraint_count": r.count,
-                    "locality": {
-                        "rings": params.locality_rings,
-                        "max_change_near_previous_constraints": r.change_near_previous,
-                        "max_change_anywhere": r.change_anywhere,
-                    },
-                });
-                maps.push((r.constraints, r.field, extra));
-            }
+        for p in &paths[3 * i..3 * i + 3] {
+            fig.write(p)?;
         }
-    }
-    let mut names = Vec::new();
-    for i in 1..=maps.len() {
-        names.push(format!("harmonic-map-{i}.wrl"));
-        names.push(format!("harmonic-map-{i}.png"));
-        names.push(format!("harmonic-field-{i}.txt"));
-    }
-    names.push("summary.json".into());
-    let name_refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    let paths = prepare_outputs(&a.common.out, &name_refs, a.common.force)?;
-    let mut summaries = Vec::new();
-    for (i, (c, f, extra)) in maps.iter().enumerate() {
-        let sources: Vec<usize> = c.iter().map(|c| c.vertex).collect();
-        let mut fig = Figure::new(mesh, f, sources, &a.common.figure)?;
-        let cp = match fig.critical.take() {
-            Some(cp) => cp,
-            None => critical_points(mesh, f)?,
-        };
-        if !a.common.figure.no_critical_points {
-            fig.critical = Some(cp.clone());
-        }
-        fig.write_wrl(&paths[3 * i], &a.common.figure)?;
-        fig.write_png(&paths[3 * i + 1], &a.common.figure)?;
-        fig.write_txt(&paths[3 * i + 2])?;
-        let mut s = json!({
-            "map": i + 1,
-            "constraints": c.iter().map(|c| json!({"vertex": c.vertex, "value": c.value})).collect::<Vec<_>>(),
-            "critical_points": critical_json(&cp, chi, closed),
-            "m": cp.minima.len(), "M": cp.maxima.len(), "s": cp.saddle_count(),
-            "chi": chi,
-            "genus": topo.components.iter().map(|c| c.genus).collect::<Vec<_>>(),
-        });
-        if let (Some(o), Some(e)) = (s.as_object_mut(), extra.as_object()) {
-            o.extend(e.clone());
-        }
-        summaries.push(s);
+        let c = &map.critical;
         println!(
-            "map {}: {} constraints, m = {}, M = {}, s = {} (with multiplicity), m - s + M = {} (chi = {chi})",
+            "map {}: {} constraints, m = {}, M = {}, s = {} (with multiplicity), m - s + M = {} (chi = {})",
             i + 1,
-            c.len(),
-            cp.minima.len(),
-            cp.maxima.len(),
-            cp.saddle_count(),
-            cp.minima.len() as i64 - cp.saddle_count() as i64 + cp.maxima.len() as i64
+            map.constraints.len(),
+            c.minima,
+            c.maxima,
+            c.saddles,
+            c.minima as i64 - c.saddles as i64 + c.maxima as i64,
+            c.chi
         );
     }
-    let summary = json!({
-        "experiment": "harmonic",
-        "mesh": mesh_json(&loaded),
-        "order": a.order,
-        "laplacian": a.laplacian.name(),
-        "maps": summaries,
-    });
-    write_json(paths.last().context("no summary path")?, &summary)?;
-    println!("wrote {} files to {}", names.len(), a.common.out.display());
-    if let Some(file) = &a.common.save_experiment {
-        let mut f = experiment_file("harmonic", &loaded, &a.common, file, a.laplacian);
-        f.order = Some(a.order);
-        f.constraints = Some(match &explicit_used {
-            Some(list) => toml::Value::Array(
-                list.iter()
-                    .map(|c| {
-                        toml::Value::Table(
-                            [
-                                ("vertex".to_string(), toml::Value::Integer(c.vertex as i64)),
-                                ("value".to_string(), toml::Value::Float(c.value)),
-                            ]
-                            .into_iter()
-                            .collect(),
-                        )
-                    })
-                    .collect(),
-            ),
-            None => toml::Value::Array(
-                a.constraints
-                    .iter()
-                    .map(|&c| toml::Value::Integer(c as i64))
-                    .collect(),
-            ),
-        });
-        save_experiment(file, &f, a.common.force)?;
-    }
-    Ok(())
-}
-
-fn eigen_params(k: usize) -> EigenParams {
-    EigenParams {
-        k,
-        ..EigenParams::default()
-    }
-}
-
-/// Runs `experiment diffusion-basis`.
-pub fn run_diffusion(a: DiffusionArgs) -> Result<()> {
-    let loaded = load_mesh(a.mesh.as_deref(), a.common.repair)?;
-    let mesh = &loaded.input.mesh;
-    let anchor = a.anchor.unwrap_or_else(|| default_vertex(mesh));
-    check_vertex(anchor, mesh, "anchor")?;
-    if !(a.t.is_finite() && a.t > 0.0) {
-        bail!("--t {}: the time must be a positive number", a.t);
-    }
-    let names = [
-        "diffusion-basis.wrl",
-        "diffusion-basis.png",
-        "diffusion-basis.txt",
-        "summary.json",
-    ];
-    let paths = prepare_outputs(&a.common.out, &names, a.common.force)?;
-    let tb = basis::compute(mesh, a.laplacian, &eigen_params(a.k))?;
-    let norm = if a.no_normalize {
-        ScaleNormalization::None
-    } else {
-        ScaleNormalization::UnitArea
-    };
-    // K_t = X D_t X^T B with the discretization's own B: the paper's wFEM kernel for
-    // fem, X D_t X^T D for voronoi-cot, X D_t X^T for cot (B = I).
-    let solver = HeatSolver::new(&tb.basis, KernelKind::Wfem, norm);
-    let f = solver.basis_function(anchor, a.t)?;
-    let fig = Figure::new(mesh, &f, vec![anchor], &a.common.figure)?;
-    fig.write_wrl(&paths[0], &a.common.figure)?;
-    fig.write_png(&paths[1], &a.common.figure)?;
-    fig.write_txt(&paths[2])?;
-    let (res, orth) = basis::quality(&tb.basis);
-    let topo = Topology::new(mesh);
-    let cp = critical_points(mesh, &f)?;
-    let summary = json!({
-        "experiment": "diffusion-basis",
-        "mesh": mesh_json(&loaded),
-        "laplacian": a.laplacian.name(),
-        "kernel": "K_t = X D_t X^T B (B the discretization's mass)",
-        "t": a.t,
-        "scale_normalization": if a.no_normalize { "none" } else { "unit area" },
-        "k": a.k,
-        "anchor": anchor,
-        "eigenvalues": tb.basis.values,
-        "max_relative_residual": res,
-        "max_orthonormality_error": orth,
-        "value_at_anchor": f[anchor],
-        "min": f.iter().copied().fold(f64::INFINITY, f64::min),
-        "max": f.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        "critical_points": critical_json(&cp, topo.euler_characteristic(), topo.boundary_loops.is_empty()),
-    });
-    write_json(&paths[3], &summary)?;
-    println!(
-        "diffusion basis at vertex {anchor}, t = {}, k = {} ({}): eigenpairs in {:.2} s, max residual {res:.1e}; wrote {}",
-        a.t,
-        a.k,
-        a.laplacian,
-        tb.seconds,
-        a.common.out.display()
-    );
-    if let Some(file) = &a.common.save_experiment {
-        let mut e = experiment_file("diffusion-basis", &loaded, &a.common, file, a.laplacian);
-        e.k = Some(a.k);
-        e.t = Some(a.t);
-        e.anchor = Some(anchor);
-        e.normalize = Some(!a.no_normalize);
-        save_experiment(file, &e, a.common.force)?;
-    }
-    Ok(())
-}
-
-/// Runs `experiment spectral-distance`.
-pub fn run_distance(a: DistanceArgs) -> Result<()> {
-    let loaded = load_mesh(a.mesh.as_deref(), a.common.repair)?;
-    let mesh = &loaded.input.mesh;
-    let source = a.source.unwrap_or_else(|| default_vertex(mesh));
-    check_vertex(source, mesh, "source")?;
-    // eq. 15 is not a filter of the form w(lambda); everything else is.
-    let spec = parse_distance(&a.distance).with_context(|| format!("--distance {}", a.distance))?;
-    let names = [
-        "filtered-spectral-distance.wrl",
-        "filtered-spectral-distance.png",
-        "filtered-spectral-distance.txt",
-        "summary.json",
-    ];
-    let paths = prepare_outputs(&a.common.out, &names, a.common.force)?;
-    let tb = basis::compute(mesh, a.laplacian, &eigen_params(a.k))?;
-    let norm = if a.no_normalize {
-        ScaleNormalization::None
-    } else {
-        ScaleNormalization::UnitArea
-    };
-    let basis = normalize_basis(&tb.basis, norm);
-    let d = match &spec {
-        DistanceSpec::Filter(f) => distances_from(&basis, source, f)?,
-        DistanceSpec::Wfem(t) => wfem_diffusion_distances_from(&basis, source, *t)?,
-    };
-    let fig = Figure::new(mesh, &d, vec![source], &a.common.figure)?;
-    fig.write_wrl(&paths[0], &a.common.figure)?;
-    fig.write_png(&paths[1], &a.common.figure)?;
-    fig.write_txt(&paths[2])?;
-    let (res, orth) = basis::quality(&tb.basis);
-    let summary = json!({
-        "experiment": "spectral-distance",
-        "mesh": mesh_json(&loaded),
-        "distance": a.distance,
-        "weight_convention": "d(p,q)^2 = sum over nonzero eigenvalues of w(lambda) (x(p) - x(q))^2, w = 1/phi",
-        "laplacian": a.laplacian.name(),
-        "scale_normalization": if a.no_normalize { "none" } else { "unit area" },
-        "k": a.k,
-        "source": source,
-        "max_relative_residual": res,
-        "max_orthonormality_error": orth,
-        "max_distance": d.iter().copied().fold(0.0, f64::max),
-        "farthest_vertex": (0..d.len()).fold(0, |b, i| if d[i] > d[b] { i } else { b }),
-    });
-    write_json(&paths[3], &summary)?;
-    println!(
-        "{} distance from vertex {source}, k = {} ({}): eigenpairs in {:.2} s; wrote {}",
-        a.distance,
-        a.k,
-        a.laplacian,
-        tb.seconds,
-        a.common.out.display()
-    );
-    if let Some(file) = &a.common.save_experiment {
-        let mut e = experiment_file("spectral-distance", &loaded, &a.common, file, a.laplacian);
-        e.k = Some(a.k);
-        e.distance = Some(a.distance.clone());
-        e.source = Some(source);
-        e.normalize = Some(!a.no_normalize);
-        save_experiment(file, &e, a.common.force)?;
+    write_json(paths.last().context("no summary path")?, &run.summary)?;
+    println!("wrote {} files to {}", names.len(), o.out.display());
+    if let Some(file) = &o.save_experiment {
+        let mut f = experiment_file("harmonic", &info, &an, o, file);
+        // The harmonic maps do not depend on the normalisation: the file leaves it out.
+        f.normalize = None;
+        f.order = Some(order);
+        f.set_harmonic_constraints(constraints);
+        save_experiment(file, &f, o.force)?;
     }
     Ok(())
 }
@@ -594,42 +470,50 @@ pub fn run_distance(a: DistanceArgs) -> Result<()> {
 fn run_paper(a: PaperArgs) -> Result<()> {
     // --save-experiment FILE.toml saves FILE-harmonic.toml, FILE-diffusion-basis.toml and
     // FILE-spectral-distance.toml.
-    let sub = |name: &str| Common {
-        out: a.common.out.join(name),
-        save_experiment: a.common.save_experiment.as_ref().map(|f| {
+    let common: Outputs = (&a.common).into();
+    let sub = |name: &str| Outputs {
+        out: common.out.join(name),
+        save_experiment: common.save_experiment.as_ref().map(|f| {
             let stem = f
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_else(|| "experiment".into());
             f.with_file_name(format!("{stem}-{name}.toml"))
         }),
-        ..a.common.clone()
+        ..common.clone()
     };
-    run_harmonic(HarmonicArgs {
-        mesh: a.mesh.clone(),
-        constraints: vec![2, 4, 6],
-        explicit: Vec::new(),
-        constraints_file: None,
-        order: 1,
-        laplacian: Laplacian::Fem,
-        common: sub("harmonic"),
-    })?;
-    run_diffusion(DiffusionArgs {
-        mesh: a.mesh.clone(),
-        laplacian: Laplacian::Fem,
-        t: 0.5,
-        k: 100,
-        anchor: None,
-        no_normalize: false,
-        common: sub("diffusion-basis"),
-    })?;
-    run_distance(DistanceArgs {
-        mesh: a.mesh.clone(),
-        distance: "biharmonic".into(),
-        laplacian: Laplacian::Fem,
-        k: 100,
-        source: None,
-        no_normalize: false,
-        common: sub("spectral-distance"),
-    })
+    let load = || input::load_repaired(a.mesh.as_deref(), common.repair);
+    let laplacian = AnalysisOptions::default().laplacian;
+    run_harmonic(
+        load()?,
+        &HarmonicConstraints::Counts(vec![2, 4, 6]),
+        1,
+        laplacian,
+        &sub("harmonic"),
+    )?;
+    let paper_field = |experiment, request| FieldSetup {
+        experiment,
+        request,
+        basis_k: None,
+        laplacian,
+        normalize: true,
+    };
+    run_field(
+        load()?,
+        &paper_field(
+            "diffusion-basis",
+            FieldRequest::Heat {
+                anchor: None,
+                t: DEFAULT_HEAT_T,
+                kernel: Kernel::Wfem,
+                k: DEFAULT_K,
+            },
+        ),
+        &sub("diffusion-basis"),
+    )?;
+    run_field(
+        load()?,
+        &paper_field("spectral-distance", FieldRequest::default()),
+        &sub("spectral-distance"),
+    )
 }

@@ -4,42 +4,20 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use spectral_mesh::spectral::heat::{HeatSolver, KernelKind};
+use spectral_mesh::analysis::request::DEFAULT_HEAT_T;
+use spectral_mesh::analysis::{FieldRequest, Kernel, Signal};
+use spectral_mesh::experiments::paper::FieldStats;
 
-use super::eigs::{BasisArgs, FIGURE_EXTS, check_outputs, check_vertex, default_vertex};
-use crate::figure::{Figure, FigureArgs, read_field};
-use crate::input;
+use crate::engine::{self, BasisArgs, check_vertex};
+use crate::figure::{FigureArgs, write_field};
+use crate::input::{self, read_field};
+use crate::output::{FIGURE_EXTS, check_experiment_file, check_outputs};
 
-/// Which heat kernel.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Kernel {
-    /// `K_t = X D_t X^T B` (the paper's wFEM kernel; conserves the B-mass).
-    Wfem,
-    /// `K*_t = X D_t X^T D`, D the lumped mass.
-    VoronoiCot,
-    /// `K~_t = X D_t X^T` (no mass).
-    Standard,
-}
-
-impl Kernel {
-    /// The name typed on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Kernel::Wfem => "wfem",
-            Kernel::VoronoiCot => "voronoi-cot",
-            Kernel::Standard => "standard",
-        }
-    }
-}
-
-impl From<Kernel> for KernelKind {
-    fn from(k: Kernel) -> Self {
-        match k {
-            Kernel::Wfem => KernelKind::Wfem,
-            Kernel::VoronoiCot => KernelKind::VoronoiCot,
-            Kernel::Standard => KernelKind::Standard,
-        }
-    }
+/// The kernels, as typed.
+fn kernel_parser() -> impl clap::builder::TypedValueParser<Value = Kernel> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(Kernel::ALL.map(Kernel::name))
+        .try_map(|s| s.parse::<Kernel>())
 }
 
 /// Arguments of `heat`.
@@ -51,7 +29,7 @@ pub struct Args {
     #[arg(long)]
     pub anchor: Option<usize>,
     /// Diffusion time (for the shape scaled to unit area unless --no-normalize).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = DEFAULT_HEAT_T)]
     pub t: f64,
     #[command(flatten)]
     pub basis: BasisArgs,
@@ -62,8 +40,9 @@ pub struct Args {
     /// vertex V, written V,R.
     #[arg(long, value_name = "V,R", conflicts_with = "anchor")]
     pub indicator: Option<String>,
-    /// Heat kernel discretization.
-    #[arg(long, value_enum, default_value = "wfem")]
+    /// Heat kernel discretization: wfem (X D_t X^T B, the paper's), voronoi-cot
+    /// (X D_t X^T D, D the lumped mass) or standard (X D_t X^T).
+    #[arg(long, default_value = Kernel::default().name(), value_parser = kernel_parser())]
     pub kernel: Kernel,
     /// Use times for the shape as given instead of scaled to unit area.
     #[arg(long)]
@@ -71,6 +50,9 @@ pub struct Args {
     /// Output file(s): .png, .wrl, .ply or .txt by extension (repeatable).
     #[arg(long, short = 'o', required = true)]
     pub out: Vec<PathBuf>,
+    /// Also write an experiment file that reproduces the field with `run FILE.toml`.
+    #[arg(long, value_name = "FILE.toml")]
+    pub save_experiment: Option<PathBuf>,
     /// Overwrite existing outputs.
     #[arg(long, short = 'f')]
     pub force: bool,
@@ -98,90 +80,84 @@ fn parse_indicator(text: &str) -> Result<(usize, f64)> {
 
 /// Computes the basis function or the diffusion and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
-    let input = input::load(args.mesh.as_deref())?;
-    let mesh = &input.mesh;
-    let n = mesh.n_vertices();
-    if !(args.t.is_finite() && args.t >= 0.0) {
-        bail!("--t {}: the time must be a finite number >= 0", args.t);
-    }
+    let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
+    let n = input.mesh.n_vertices();
     // What is diffused: None = e_anchor.
-    let (signal, marks, what): (Option<Vec<f64>>, Vec<usize>, String) =
-        match (&args.signal, &args.indicator) {
-            (Some(p), _) => (
-                Some(read_field(p, n)?),
-                Vec::new(),
-                format!("signal {}", p.display()),
-            ),
-            (None, Some(spec)) => {
-                let (v, r) = parse_indicator(spec)?;
-                check_vertex(v, mesh, "--indicator")?;
-                let c = mesh.positions()[v];
-                let f: Vec<f64> = mesh
-                    .positions()
-                    .iter()
-                    .map(|p| {
-                        let d2: f64 = (0..3).map(|i| (p[i] - c[i]).powi(2)).sum();
-                        if d2 <= r * r { 1.0 } else { 0.0 }
-                    })
-                    .collect();
-                let count = f.iter().filter(|x| **x > 0.0).count();
-                (
-                    Some(f),
-                    vec![v],
-                    format!(
-                        "indicator of the ball of radius {r} around vertex {v} ({count} vertices)"
-                    ),
-                )
+    let (signal, what) = match (&args.signal, &args.indicator) {
+        (Some(p), _) => (
+            Some(Signal::Values(read_field(p, n)?)),
+            format!("signal {}", p.display()),
+        ),
+        (None, Some(spec)) => {
+            let (v, r) = parse_indicator(spec)?;
+            check_vertex(v, n, "--indicator")?;
+            (
+                Some(Signal::Ball {
+                    vertex: v,
+                    radius: r,
+                }),
+                format!("indicator of the ball of radius {r} around vertex {v}"),
+            )
+        }
+        (None, None) => {
+            if let Some(a) = args.anchor {
+                check_vertex(a, n, "--anchor")?;
             }
-            (None, None) => {
-                let a = args.anchor.unwrap_or_else(|| default_vertex(mesh));
-                check_vertex(a, mesh, "--anchor")?;
-                (None, vec![a], format!("basis function K_t e_{a}"))
-            }
-        };
-    check_outputs(&args.out, &FIGURE_EXTS, args.force)?;
-    let tb = args.basis.compute(mesh, None)?;
-    let solver = HeatSolver::new(
-        &tb.basis,
-        args.kernel.into(),
-        super::eigs::normalization(args.no_normalize),
-    );
-    let bmass = |f: &[f64]| -> f64 { solver.basis().mass.mul_vec(f).iter().sum() };
-    let (f, mass_in) = match &signal {
-        Some(s) => (solver.diffuse(s, args.t)?, bmass(s)),
-        None => {
-            let a = marks[0];
-            let mut e = vec![0.0; n];
-            e[a] = 1.0;
-            (solver.basis_function(a, args.t)?, bmass(&e))
+            (None, String::new())
         }
     };
-    let mass_out = bmass(&f);
-    let (imax, fmax) =
-        f.iter().enumerate().fold(
-            (0, f64::NEG_INFINITY),
-            |b, (i, &v)| if v > b.1 { (i, v) } else { b },
-        );
-    let fmin = f.iter().copied().fold(f64::INFINITY, f64::min);
+    let (t, kernel, k) = (args.t, args.kernel, args.basis.k);
+    let request = match &signal {
+        Some(s) => FieldRequest::Diffusion {
+            signal: s.clone(),
+            t,
+            kernel,
+            k,
+        },
+        None => FieldRequest::Heat {
+            anchor: args.anchor,
+            t,
+            kernel,
+            k,
+        },
+    };
+    request.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;
+    check_outputs(&args.out, &FIGURE_EXTS, args.force)?;
+    check_experiment_file(args.save_experiment.as_ref(), args.force)?;
+    args.basis.warn_unrecorded(args.save_experiment.as_ref());
+    let info = input.info;
+    let an = args.basis.analysis(input.mesh, !args.no_normalize)?;
+    let (field, seconds) = engine::field(&an, &request, args.basis.cache.as_deref())?;
+    let f = &field.values;
+    // The B-mass of what was diffused, and of the result.
+    let start = match &signal {
+        Some(s) => an.signal(s)?,
+        None => an.signal(&Signal::Impulse(field.marks[0]))?,
+    };
+    let (mass_in, mass_out) = (an.mass_of(&start), an.mass_of(f));
+    let what = match signal {
+        Some(_) => what,
+        None => format!("basis function K_t e_{}", field.marks[0]),
+    };
+    let stats = FieldStats::of(f);
     println!(
-        "{}: n = {}; {what}, t = {}{}, kernel {}, k = {} ({}), eigenpairs in {:.2} s",
-        input.label(),
-        n,
-        args.t,
+        "{}: n = {n}; {what}, t = {t}{}, kernel {}, k = {k} ({}), eigenpairs in {seconds:.2} s",
+        info.label(),
         if args.no_normalize {
             ""
         } else {
             " (unit-area shape)"
         },
-        args.kernel.name(),
-        tb.basis.k(),
-        tb.basis.laplacian,
-        tb.seconds
+        kernel.name(),
+        an.options().laplacian,
     );
-    if let Some(&a) = marks.first() {
+    if let Some(&a) = field.marks.first() {
         println!("value at vertex {a}: {}", f[a]);
     }
-    println!("min {fmin}, max {fmax} at vertex {imax}");
+    println!(
+        "min {}, max {} at vertex {}",
+        stats.min, stats.max, stats.argmax
+    );
     println!(
         "B-mass (1^T B f{}): input {mass_in}, output {mass_out}, relative change {:.2e}",
         if args.no_normalize {
@@ -195,10 +171,18 @@ pub fn run(args: Args) -> Result<()> {
             (mass_out - mass_in).abs()
         }
     );
-    let fig = Figure::new(mesh, &f, marks, &args.figure)?;
-    for o in &args.out {
-        fig.write_by_extension(o, &args.figure)?;
-        println!("-> {}", o.display());
+    let figure = args.figure.options();
+    write_field(an.mesh(), &field, &args.out, figure)?;
+    if let Some(file) = &args.save_experiment {
+        engine::save_field_experiment(
+            file,
+            &info,
+            &an,
+            &field,
+            args.basis.repair,
+            &figure,
+            args.force,
+        )?;
     }
     Ok(())
 }

@@ -1,7 +1,12 @@
 //! `spectral-mesh info MESH|SHAPE [--repair] [--json]`.
 
+use std::path::Path;
+
 use anyhow::Result;
-use spectral_mesh::mesh::validate::report;
+use spectral_mesh::Mesh;
+use spectral_mesh::io::{Input, LoadedPoints, read_input};
+use spectral_mesh::mesh::validate::{MeshReport, report};
+use spectral_mesh::operators::cotan_stiffness;
 
 use crate::input;
 
@@ -29,20 +34,113 @@ fn list<T: std::fmt::Debug>(v: &[T]) -> String {
     }
 }
 
+/// Which discretizations suit the mesh, and why: the cotangent ones assume a manifold mesh
+/// without degenerate triangles and are best with non-negative weights; `robust` takes
+/// anything.
+fn advice(mesh: &Mesh, r: &MeshReport) -> (Vec<&'static str>, String) {
+    let mut why = Vec::new();
+    if !r.non_manifold_edges.is_empty() {
+        why.push(format!("{} non-manifold edges", r.non_manifold_edges.len()));
+    }
+    if !r.non_manifold_vertices.is_empty() {
+        why.push(format!(
+            "{} non-manifold vertices",
+            r.non_manifold_vertices.len()
+        ));
+    }
+    if !r.degenerate_faces.is_empty() {
+        why.push(format!("{} degenerate faces", r.degenerate_faces.len()));
+    }
+    if !r.duplicate_faces.is_empty() {
+        why.push(format!("{} duplicate faces", r.duplicate_faces.len()));
+    }
+    if !why.is_empty() {
+        return (
+            vec!["robust"],
+            format!("{}: use --laplacian robust", why.join(", ")),
+        );
+    }
+    let s = cotan_stiffness(mesh);
+    let negative = (0..s.ncols())
+        .map(|c| {
+            let (rows, vals) = s.col(c);
+            rows.iter()
+                .zip(vals)
+                .filter(|(r, v)| **r > c && **v > 0.0)
+                .count()
+        })
+        .sum::<usize>();
+    if negative > 0 {
+        (
+            vec!["robust", "fem", "voronoi-cot", "mixed-voronoi", "cot"],
+            format!(
+                "manifold; {negative} edges have negative cotangent weights \
+                 (--laplacian robust flips them: intrinsic Delaunay)"
+            ),
+        )
+    } else {
+        (
+            vec!["fem", "voronoi-cot", "mixed-voronoi", "cot", "robust"],
+            "manifold, every cotangent weight >= 0: all apply (robust = voronoi-cot here, up to mollification)".to_string(),
+        )
+    }
+}
+
+fn run_points(spec: &str, p: &LoadedPoints, json: bool) -> Result<()> {
+    let c = &p.cloud;
+    let (lo, hi) = c.bounding_box();
+    if json {
+        let v = serde_json::json!({
+            "source": spec,
+            "kind": "point cloud",
+            "format": p.format.to_string(),
+            "points": c.n_points(),
+            "normals": c.n_normals(),
+            "bbox_min": lo,
+            "bbox_max": hi,
+            "suitable_laplacians": ["robust"],
+            "notes": p.warnings,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    println!("point cloud        {spec} ({})", p.format);
+    println!("points             {}", c.n_points());
+    println!("normals            {}", c.n_normals());
+    println!(
+        "bounding box       [{:.6e}, {:.6e}, {:.6e}] .. [{:.6e}, {:.6e}, {:.6e}]",
+        lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
+    );
+    println!("laplacian          robust (point-cloud Laplacian: `operators` writes it)");
+    for n in &p.warnings {
+        println!("note: {n}");
+    }
+    Ok(())
+}
+
 /// Prints counts, topology and problems.
 pub fn run(args: Args) -> Result<()> {
+    if let Some(spec) = args.mesh.as_deref()
+        && Path::new(spec).is_file()
+        && let Input::Points(p) = read_input(Path::new(spec))?
+    {
+        return run_points(spec, &p, args.json);
+    }
     let input = input::load_repaired(args.mesh.as_deref(), args.repair)?;
     let r = report(&input.mesh);
+    let (suitable, why) = advice(&input.mesh, &r);
     if args.json {
         let mut v = serde_json::to_value(&r)?;
         if let Some(o) = v.as_object_mut() {
             o.insert("source".into(), input.label().into());
             o.insert(
                 "polygons_triangulated".into(),
-                input.polygons_triangulated.into(),
+                input.info.polygons_triangulated.into(),
             );
-            o.insert("notes".into(), input.notes.clone().into());
+            o.insert("notes".into(), input.info.notes.clone().into());
             o.insert("problems".into(), r.problems().into());
+            o.insert("suitable_laplacians".into(), suitable.clone().into());
+            o.insert("laplacian_advice".into(), why.clone().into());
         }
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
@@ -51,10 +149,10 @@ pub fn run(args: Args) -> Result<()> {
     println!("vertices           {}", r.vertices);
     println!("edges              {}", r.edges);
     println!("faces              {}", r.faces);
-    if input.polygons_triangulated > 0 {
+    if input.info.polygons_triangulated > 0 {
         println!(
             "triangulated       {} polygons were split into triangles",
-            input.polygons_triangulated
+            input.info.polygons_triangulated
         );
     }
     println!("components         {}", r.components);
@@ -95,6 +193,7 @@ pub fn run(args: Args) -> Result<()> {
     );
     println!("mis-oriented edges {}", r.inconsistently_oriented_edges);
     println!("orientable         {}", r.orientable);
+    println!("laplacian          {} ({why})", suitable.join(", "));
     let problems = r.problems();
     if problems.is_empty() {
         println!("problems           none");
@@ -113,7 +212,7 @@ pub fn run(args: Args) -> Result<()> {
             println!("(run with --repair to fix what can be fixed)");
         }
     }
-    for n in &input.notes {
+    for n in &input.info.notes {
         println!("note: {n}");
     }
     Ok(())

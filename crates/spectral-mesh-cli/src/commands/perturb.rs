@@ -9,9 +9,9 @@ use spectral_mesh::io::{MeshFormat, WriteOptions, write_mesh_to};
 use spectral_mesh::mesh::topology::VertexTriangles;
 use spectral_mesh::perturb::{SurfaceMap, apply, parse_perturbation};
 
-use super::eigs::check_outputs;
 use crate::input;
-use crate::output::{check_writable, write_atomic};
+use crate::output::check_outputs;
+use crate::output::{check_writable, write};
 
 /// Help of `--apply`.
 const APPLY_HELP: &str = "A perturbation, applied in the order given (repeatable):
@@ -250,7 +250,7 @@ pub fn run(args: Args) -> Result<()> {
             },
         )
         .with_context(|| format!("writing {}", o.display()))?;
-        write_atomic(o, &buf)?;
+        write(o, &buf)?;
         println!("-> {}", o.display());
     }
     if let Some(mp) = &args.map {
@@ -271,7 +271,7 @@ pub fn run(args: Args) -> Result<()> {
                 }
             }
         }
-        write_atomic(mp, s.as_bytes())?;
+        write(mp, s.as_bytes())?;
         println!("map -> {}", mp.display());
         if approx > 0 {
             println!(

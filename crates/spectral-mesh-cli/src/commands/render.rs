@@ -4,8 +4,10 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use crate::figure::{Figure, FigureArgs, read_field};
-use crate::input;
+use spectral_mesh_render::figure::Figure;
+
+use crate::figure::FigureArgs;
+use crate::input::{self, read_field};
 use crate::output::check_writable;
 
 /// Arguments of `render`.
@@ -52,8 +54,8 @@ pub fn run(args: Args) -> Result<()> {
         None => args.out.clone(),
     };
     check_writable(&out, args.force)?;
-    let fig = Figure::new(mesh, &field, args.marks.clone(), &args.figure)?;
-    fig.write_by_extension(&out, &args.figure)?;
+    let fig = Figure::new(mesh, &field, args.marks.clone(), args.figure.options())?;
+    fig.write(&out)?;
     println!("{} -> {}", input.label(), out.display());
     Ok(())
 }

@@ -1,14 +1,14 @@
 //! `spectral-mesh run FILE.toml`: replays an experiment file (see
-//! `docs/experiment-files.md`).
+//! `docs/experiment-files.md`): the paper's three experiments and `experiment = "field"`.
 
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
+use spectral_mesh::experiments::file::{ExperimentFile, parent_dir, resolve_mesh};
+use spectral_mesh_render::figure::FigureOptions;
 
-use crate::commands::experiment::{
-    self, Common, DiffusionArgs, DistanceArgs, HarmonicArgs, load_mesh, parent_dir,
-};
-use crate::expfile::{Constraints, ExperimentFile, resolve_mesh};
+use crate::commands::experiment::{self, FieldSetup, Outputs};
+use crate::input;
 
 /// Arguments of `run`.
 #[derive(Debug, clap::Args)]
@@ -34,74 +34,65 @@ pub fn run(a: Args) -> Result<()> {
     let f = ExperimentFile::parse(&text, &origin)?;
     let base = parent_dir(&a.file);
     let mesh = resolve_mesh(&f.mesh, &base).with_context(|| format!("{origin}: key 'mesh'"))?;
-    let loaded = load_mesh(Some(&mesh), false).with_context(|| format!("{origin}: key 'mesh'"))?;
+    let repair = f.repair.unwrap_or(false);
+    let input = input::load_repaired(Some(&mesh), repair)
+        .with_context(|| format!("{origin}: key 'mesh'"))?;
+    let hash = input.info.hash(&input.mesh);
     match &f.mesh_hash {
-        Some(h) if !h.eq_ignore_ascii_case(&loaded.hash) => {
+        Some(h) if !h.eq_ignore_ascii_case(&hash) => {
             if a.allow_changed_mesh {
                 eprintln!(
-                    "warning: mesh {mesh} has hash {} but {origin} expects {h}; running anyway (--allow-changed-mesh)",
-                    loaded.hash
+                    "warning: mesh {mesh} has hash {hash} but {origin} expects {h}; running anyway (--allow-changed-mesh)"
                 );
             } else {
                 bail!(
-                    "mesh {mesh} changed: its hash is {} but {origin} expects {h} (pass --allow-changed-mesh to run anyway)",
-                    loaded.hash
+                    "mesh {mesh} changed: its hash is {hash} but {origin} expects {h} (pass --allow-changed-mesh to run anyway)"
                 );
             }
         }
         Some(_) => {}
         None => eprintln!(
-            "note: {origin} has no mesh_hash; the mesh ({mesh}) is not checked (hash {})",
-            loaded.hash
+            "note: {origin} has no mesh_hash; the mesh ({mesh}) is not checked (hash {hash})"
         ),
     }
-    drop(loaded);
-    let common = Common {
+    let outputs = Outputs {
         out: match &a.out {
             Some(o) => o.clone(),
             None => base.join(f.out.as_deref().unwrap_or(".")),
         },
         force: a.force,
-        repair: f.repair.unwrap_or(false),
+        repair,
         save_experiment: None,
-        figure: f.figure_args()?,
+        figure: FigureOptions::from_file(&f.figure.clone().unwrap_or_default())
+            .with_context(|| origin.clone())?,
     };
     let laplacian = f.laplacian()?;
-    let mesh = Some(mesh);
     match f.experiment.as_str() {
-        "harmonic" => {
-            let (constraints, explicit) = match f.constraints()? {
-                Constraints::Counts(c) => (c, Vec::new()),
-                Constraints::Explicit(list) => (Vec::new(), list),
+        "harmonic" => experiment::run_harmonic(
+            input,
+            &f.harmonic_constraints()?,
+            f.order.unwrap_or(1),
+            laplacian,
+            &outputs,
+        ),
+        exp @ ("diffusion-basis" | "spectral-distance" | "field") => {
+            let request = f
+                .request()
+                .with_context(|| format!("{origin}: no field to compute"))?;
+            let experiment = match exp {
+                "diffusion-basis" => "diffusion-basis",
+                "spectral-distance" => "spectral-distance",
+                _ => "field",
             };
-            experiment::run_harmonic(HarmonicArgs {
-                mesh,
-                constraints,
-                explicit,
-                constraints_file: None,
-                order: f.order.unwrap_or(1),
+            let setup = FieldSetup {
+                experiment,
+                request,
+                basis_k: f.basis_k,
                 laplacian,
-                common,
-            })
+                normalize: f.normalize(),
+            };
+            experiment::run_field(input, &setup, &outputs).with_context(|| origin.clone())
         }
-        "diffusion-basis" => experiment::run_diffusion(DiffusionArgs {
-            mesh,
-            laplacian,
-            t: f.t.unwrap_or(0.5),
-            k: f.k.unwrap_or(100),
-            anchor: f.anchor,
-            no_normalize: !f.normalize.unwrap_or(true),
-            common,
-        }),
-        "spectral-distance" => experiment::run_distance(DistanceArgs {
-            mesh,
-            distance: f.distance.clone().unwrap_or_else(|| "biharmonic".into()),
-            laplacian,
-            k: f.k.unwrap_or(100),
-            source: f.source,
-            no_normalize: !f.normalize.unwrap_or(true),
-            common,
-        }),
         other => bail!("{origin}: key 'experiment': unknown experiment '{other}'"),
     }
 }

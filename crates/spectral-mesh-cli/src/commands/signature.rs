@@ -4,7 +4,10 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use spectral_mesh::spectral::Eigenbasis;
+use spectral_mesh::analysis::FieldRequest;
+use spectral_mesh::analysis::request::{DEFAULT_SIGNATURE_T, DEFAULT_WKS_SIGMA};
+use spectral_mesh::experiments::paper::FieldStats;
+use spectral_mesh::spectral::BasisView;
 use spectral_mesh::spectral::distances::spectral_function;
 use spectral_mesh::spectral::filters::Filter;
 use spectral_mesh::spectral::signatures::{
@@ -12,10 +15,10 @@ use spectral_mesh::spectral::signatures::{
 };
 
 use super::distance::FILTER_HELP;
-use super::eigs::{BasisArgs, FIGURE_EXTS, check_outputs, extension, normalized};
-use crate::figure::{Figure, FigureArgs};
+use crate::engine::{self, BasisArgs};
+use crate::figure::{FigureArgs, write_field};
 use crate::input;
-use crate::output::{field_text, write_atomic};
+use crate::output::{FIGURE_EXTS, check_experiment_file, check_outputs, extension, write};
 
 /// Which signature.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -28,6 +31,17 @@ pub enum Kind {
     Adf,
     /// Generalized spectral function G(p,p) = sum_k w(lambda_k) x_k(p)^2 of --filter.
     SpectralFunction,
+}
+
+impl Kind {
+    fn name(self) -> &'static str {
+        match self {
+            Kind::Hks => "hks",
+            Kind::Wks => "wks",
+            Kind::Adf => "adf",
+            Kind::SpectralFunction => "spectralfunction",
+        }
+    }
 }
 
 /// Arguments of `signature`.
@@ -46,17 +60,17 @@ pub struct Args {
     #[arg(long)]
     pub times: Option<String>,
     /// WKS energies (log-eigenvalues): `auto:N` (default auto:16) or a comma-separated
-    /// list (then --sigma is needed).
+    /// list.
     #[arg(long)]
     pub energies: Option<String>,
-    /// WKS bandwidth for an explicit --energies list.
+    /// WKS bandwidth (default: from auto:N, or 0.5 for a list).
     #[arg(long)]
     pub sigma: Option<f64>,
     /// Divide HKS by the heat trace and WKS by its normalization sum.
     #[arg(long)]
     pub scaled: bool,
     /// The filter of the spectral function (default biharmonic).
-    #[arg(long, default_value = "biharmonic", long_help = FILTER_HELP)]
+    #[arg(long, default_value_t = Filter::Biharmonic.to_string(), long_help = FILTER_HELP)]
     pub filter: String,
     /// Which column (time or energy, 0-based) is drawn in .png, .wrl and .ply outputs;
     /// .txt outputs hold every column.
@@ -70,6 +84,10 @@ pub struct Args {
     /// Output file(s): .png, .wrl, .ply or .txt by extension (repeatable).
     #[arg(long, short = 'o', required = true)]
     pub out: Vec<PathBuf>,
+    /// Also write an experiment file that reproduces the drawn column with
+    /// `run FILE.toml`.
+    #[arg(long, value_name = "FILE.toml")]
+    pub save_experiment: Option<PathBuf>,
     /// Overwrite existing outputs.
     #[arg(long, short = 'f')]
     pub force: bool,
@@ -81,6 +99,15 @@ pub struct Args {
 enum ParamList {
     Auto(usize),
     Values(Vec<f64>),
+}
+
+impl ParamList {
+    fn len(&self) -> usize {
+        match self {
+            ParamList::Auto(n) => *n,
+            ParamList::Values(v) => v.len(),
+        }
+    }
 }
 
 fn parse_list(option: &str, text: &str) -> Result<ParamList> {
@@ -110,104 +137,136 @@ fn parse_list(option: &str, text: &str) -> Result<ParamList> {
     Ok(ParamList::Values(v))
 }
 
-fn check_times(times: &[f64]) -> Result<()> {
-    if let Some(t) = times.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
-        bail!("time {t}: times must be positive");
-    }
-    Ok(())
+/// What the columns are made of, as parsed (before the spectrum is known).
+enum Plan {
+    /// HKS or ADF at these times.
+    Times(ParamList),
+    /// WKS at these energies.
+    Energies(ParamList),
+    /// The spectral function of a filter.
+    Filter(Filter),
 }
 
-/// The columns of a signature and their labels.
-pub struct Columns {
-    /// Parameter name (`t`, `e`, `filter`).
-    pub name: &'static str,
-    /// One label per column.
-    pub labels: Vec<String>,
-    /// One `n`-vector per column.
-    pub values: Vec<Vec<f64>>,
+/// The columns of a signature: the parameter's name and one label, one request per
+/// column.
+struct Columns {
+    name: &'static str,
+    labels: Vec<String>,
+    requests: Vec<FieldRequest>,
+    /// WKS bandwidth (all columns).
+    sigma: f64,
+    /// Times or energies (HKS, ADF, WKS).
+    params: Vec<f64>,
 }
 
-fn times_of(args: &Args, basis: &Eigenbasis) -> Result<Vec<f64>> {
-    let times = match (&args.t, &args.times) {
-        (Some(t), _) => vec![*t],
-        (None, Some(spec)) => match parse_list("--times", spec)? {
-            ParamList::Auto(n) => hks_auto_times(basis, n)?,
-            ParamList::Values(v) => v,
-        },
-        (None, None) => vec![0.1],
-    };
-    check_times(&times)?;
-    Ok(times)
-}
-
-/// Computes the requested signature on a (normalised) basis.
-pub fn compute(args: &Args, basis: &Eigenbasis) -> Result<Columns> {
-    let labels = |v: &[f64]| v.iter().map(|x| format!("{x}")).collect::<Vec<_>>();
+fn plan(args: &Args) -> Result<Plan> {
     Ok(match args.kind {
-        Kind::Hks => {
-            let times = times_of(args, basis)?;
-            Columns {
-                name: "t",
-                labels: labels(&times),
-                values: hks(basis, &times, args.scaled),
-            }
-        }
-        Kind::Adf => {
-            let times = times_of(args, basis)?;
-            let values = times
+        Kind::Hks | Kind::Adf => Plan::Times(match (&args.t, &args.times) {
+            (Some(t), _) => ParamList::Values(vec![*t]),
+            (None, Some(spec)) => parse_list("--times", spec)?,
+            (None, None) => ParamList::Values(vec![DEFAULT_SIGNATURE_T]),
+        }),
+        Kind::Wks => Plan::Energies(parse_list(
+            "--energies",
+            args.energies.as_deref().unwrap_or("auto:16"),
+        )?),
+        Kind::SpectralFunction => Plan::Filter(
+            args.filter
+                .parse()
+                .map_err(|e| anyhow::anyhow!("--filter {}: {e}", args.filter))?,
+        ),
+    })
+}
+
+/// The columns' parameters, from the spectrum where `auto:N` asks for it.
+fn columns(args: &Args, plan: Plan, basis: BasisView<'_>) -> Result<Columns> {
+    let k = basis.k();
+    let labels = |v: &[f64]| v.iter().map(|x| format!("{x}")).collect::<Vec<_>>();
+    Ok(match plan {
+        Plan::Times(list) => {
+            let times = match list {
+                ParamList::Auto(n) => hks_auto_times(basis, n)?,
+                ParamList::Values(v) => v,
+            };
+            let requests = times
                 .iter()
-                .map(|&t| auto_diffusion(basis, t))
-                .collect::<Result<Vec<_>, _>>()?;
+                .map(|&t| match args.kind {
+                    Kind::Adf => FieldRequest::Adf { t, k },
+                    _ => FieldRequest::Hks {
+                        t,
+                        scaled: args.scaled,
+                        k,
+                    },
+                })
+                .collect();
             Columns {
                 name: "t",
                 labels: labels(&times),
-                values,
+                requests,
+                sigma: 0.0,
+                params: times,
             }
         }
-        Kind::Wks => {
-            let (energies, sigma) =
-                match parse_list("--energies", args.energies.as_deref().unwrap_or("auto:16"))? {
-                    ParamList::Auto(n) => {
-                        let (e, s) = wks_auto_energies(basis, n)?;
-                        (e, args.sigma.unwrap_or(s))
-                    }
-                    ParamList::Values(v) => match args.sigma {
-                        Some(s) => (v, s),
-                        None => bail!("--energies with a list needs --sigma (the WKS bandwidth)"),
-                    },
-                };
+        Plan::Energies(list) => {
+            let (energies, sigma) = match list {
+                ParamList::Auto(n) => {
+                    let (e, s) = wks_auto_energies(basis, n)?;
+                    (e, args.sigma.unwrap_or(s))
+                }
+                ParamList::Values(v) => (v, args.sigma.unwrap_or(DEFAULT_WKS_SIGMA)),
+            };
+            let requests = energies
+                .iter()
+                .map(|&energy| FieldRequest::Wks {
+                    energy,
+                    sigma,
+                    scaled: args.scaled,
+                    k,
+                })
+                .collect();
             Columns {
                 name: "e",
                 labels: labels(&energies),
-                values: wks(basis, &energies, sigma, args.scaled)?,
+                requests,
+                sigma,
+                params: energies,
             }
         }
-        Kind::SpectralFunction => {
-            let f: Filter = args
-                .filter
-                .parse()
-                .map_err(|e| anyhow::anyhow!("--filter {}: {e}", args.filter))?;
-            let g = spectral_function(basis, &f)
-                .map_err(|e| anyhow::anyhow!("--filter {}: {e}", args.filter))?;
-            Columns {
-                name: "filter",
-                labels: vec![args.filter.clone()],
-                values: vec![g],
+        Plan::Filter(filter) => Columns {
+            name: "filter",
+            labels: vec![args.filter.clone()],
+            requests: vec![FieldRequest::SpectralFunction { filter, k }],
+            sigma: 0.0,
+            params: Vec::new(),
+        },
+    })
+}
+
+/// Every column, computed by the library's signature functions on the basis.
+fn all_columns(args: &Args, cols: &Columns, basis: BasisView<'_>) -> Result<Vec<Vec<f64>>> {
+    Ok(match args.kind {
+        Kind::Hks => hks(basis, &cols.params, args.scaled),
+        Kind::Adf => cols
+            .params
+            .iter()
+            .map(|&t| auto_diffusion(basis, t))
+            .collect::<Result<Vec<_>, _>>()?,
+        Kind::Wks => wks(basis, &cols.params, cols.sigma, args.scaled)?,
+        Kind::SpectralFunction => match &cols.requests[0] {
+            FieldRequest::SpectralFunction { filter, .. } => {
+                vec![spectral_function(basis, filter)?]
             }
-        }
+            _ => Vec::new(),
+        },
     })
 }
 
 /// Several columns as text: a `#` header naming the columns, then one row per vertex.
-pub fn columns_text(kind: &str, cols: &Columns) -> String {
-    let n = cols.values.first().map_or(0, Vec::len);
-    let mut s = format!(
-        "# {kind}, one column per {}: {}\n",
-        cols.name,
-        cols.labels.join(" ")
-    );
+fn columns_text(kind: &str, name: &str, labels: &[String], values: &[Vec<f64>]) -> String {
+    let n = values.first().map_or(0, Vec::len);
+    let mut s = format!("# {kind}, one column per {name}: {}\n", labels.join(" "));
     for i in 0..n {
-        let row: Vec<String> = cols.values.iter().map(|c| format!("{:?}", c[i])).collect();
+        let row: Vec<String> = values.iter().map(|c| format!("{:?}", c[i])).collect();
         s.push_str(&row.join(" "));
         s.push('\n');
     }
@@ -216,68 +275,88 @@ pub fn columns_text(kind: &str, cols: &Columns) -> String {
 
 /// Computes the signature and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
-    let input = input::load(args.mesh.as_deref())?;
-    let mesh = &input.mesh;
+    let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
     check_outputs(&args.out, &FIGURE_EXTS, args.force)?;
+    check_experiment_file(args.save_experiment.as_ref(), args.force)?;
     if args.t.is_some() && !matches!(args.kind, Kind::Hks | Kind::Adf) {
         bail!("--t is for --kind hks or adf");
     }
     if args.energies.is_some() && args.kind != Kind::Wks {
         bail!("--energies is for --kind wks");
     }
-    // Check the filter before the eigenpairs.
-    if args.kind == Kind::SpectralFunction {
-        args.filter
-            .parse::<Filter>()
-            .map_err(|e| anyhow::anyhow!("--filter {}: {e}", args.filter))?;
-    }
-    let tb = args.basis.compute(mesh, None)?;
-    let basis = normalized(&tb.basis, args.no_normalize);
-    let cols = compute(&args, &basis)?;
-    if args.column >= cols.values.len() {
+    // Check the parameters before the eigenpairs.
+    let plan = plan(&args)?;
+    let count = match &plan {
+        Plan::Times(l) | Plan::Energies(l) => l.len(),
+        Plan::Filter(_) => 1,
+    };
+    if args.column >= count {
         bail!(
-            "--column {}: the signature has {} column(s)",
-            args.column,
-            cols.values.len()
+            "--column {}: the signature has {count} column(s)",
+            args.column
         );
     }
-    let kind = format!("{:?}", args.kind).to_ascii_lowercase();
+    args.basis.warn_unrecorded(args.save_experiment.as_ref());
+    let info = input.info;
+    let k = args.basis.k;
+    let an = args.basis.analysis(input.mesh, !args.no_normalize)?;
+    let engine::Solved { basis, seconds, .. } = engine::basis(&an, k, args.basis.cache.as_deref())?;
+    let cols = columns(&args, plan, basis.view(k))?;
+    for r in &cols.requests {
+        r.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;
+    }
+    let kind = args.kind.name();
     println!(
-        "{}: n = {}; {kind} with {} column(s) ({} = {}), k = {} ({}){}, eigenpairs in {:.2} s",
-        input.label(),
-        mesh.n_vertices(),
-        cols.values.len(),
+        "{}: n = {}; {kind} with {} column(s) ({} = {}), k = {k} ({}){}, eigenpairs in {seconds:.2} s",
+        info.label(),
+        an.n(),
+        cols.requests.len(),
         cols.name,
         cols.labels.join(", "),
-        tb.basis.k(),
-        tb.basis.laplacian,
+        an.options().laplacian,
         if args.no_normalize {
             ""
         } else {
             ", unit-area shape"
         },
-        tb.seconds
     );
-    let field = &cols.values[args.column];
-    let (lo, hi) = field
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
+    // The drawn column is the analysis' field of its request.
+    let field = an
+        .field(&cols.requests[args.column])
+        .map_err(|e| match args.kind {
+            Kind::SpectralFunction => anyhow::anyhow!("--filter {}: {e}", args.filter),
+            _ => e.into(),
+        })?;
+    let stats = FieldStats::of(&field.values);
     println!(
-        "column {} ({} = {}): min {lo}, max {hi}",
-        args.column, cols.name, cols.labels[args.column]
+        "column {} ({} = {}): min {}, max {}",
+        args.column, cols.name, cols.labels[args.column], stats.min, stats.max
     );
-    let fig = Figure::new(mesh, field, Vec::new(), &args.figure)?;
-    for o in &args.out {
-        if extension(o).as_deref() == Some("txt") && cols.values.len() > 1 {
-            write_atomic(o, columns_text(&kind, &cols).as_bytes())?;
-        } else if extension(o).as_deref() == Some("txt") {
-            write_atomic(o, field_text(field).as_bytes())?;
-        } else {
-            fig.write_by_extension(o, &args.figure)?;
+    let figure = args.figure.options();
+    let (many, single): (Vec<PathBuf>, Vec<PathBuf>) = args
+        .out
+        .iter()
+        .cloned()
+        .partition(|o| cols.requests.len() > 1 && extension(o).as_deref() == Some("txt"));
+    if !many.is_empty() {
+        let values = all_columns(&args, &cols, basis.view(k))?;
+        let text = columns_text(kind, cols.name, &cols.labels, &values);
+        for o in &many {
+            write(o, text.as_bytes())?;
+            println!("-> {}", o.display());
         }
-        println!("-> {}", o.display());
+    }
+    write_field(an.mesh(), &field, &single, figure)?;
+    if let Some(file) = &args.save_experiment {
+        engine::save_field_experiment(
+            file,
+            &info,
+            &an,
+            &field,
+            args.basis.repair,
+            &figure,
+            args.force,
+        )?;
     }
     Ok(())
 }

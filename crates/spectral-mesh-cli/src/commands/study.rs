@@ -17,10 +17,16 @@ use spectral_mesh::perturb;
 use spectral_mesh::spectral::heat::ScaleNormalization;
 use spectral_mesh_render::plots::plot_curves;
 
-use crate::commands::experiment::{load_mesh, parent_dir};
-use crate::expfile::{parse_laplacian, resolve_mesh, toml_error};
-use crate::output::{prepare_outputs, write_atomic};
+use spectral_mesh::experiments::file::{parent_dir, resolve_mesh, toml_error};
+
+use crate::input;
+use crate::output::{prepare_outputs, write};
 use crate::progress;
+
+/// A discretization name.
+fn parse_laplacian(s: &str) -> Result<Laplacian> {
+    s.parse::<Laplacian>().map_err(|e| anyhow!(e))
+}
 
 /// The studies.
 #[derive(Debug, clap::Subcommand)]
@@ -92,8 +98,8 @@ pub fn run(s: Study) -> Result<()> {
 
 fn run_truncation(a: TruncationArgs) -> Result<()> {
     let spec = a.mesh.as_deref().unwrap_or(TRUNCATION_DEFAULT_MESH);
-    let loaded = load_mesh(Some(spec), false)?;
-    let mesh = &loaded.input.mesh;
+    let input = input::load(Some(spec))?;
+    let mesh = &input.mesh;
     let laplacians = a
         .laplacian
         .iter()
@@ -161,7 +167,7 @@ fn run_truncation(a: TruncationArgs) -> Result<()> {
             row.reference_max
         )?;
     }
-    write_atomic(&paths[0], csv.as_bytes())?;
+    write(&paths[0], csv.as_bytes())?;
     // Markdown: one row per k, one column per (Laplacian, t).
     let mut ks: Vec<usize> = r.rows.iter().map(|x| x.k).collect();
     ks.sort_unstable();
@@ -209,7 +215,7 @@ fn run_truncation(a: TruncationArgs) -> Result<()> {
         }
         md.push('\n');
     }
-    write_atomic(&paths[1], md.as_bytes())?;
+    write(&paths[1], md.as_bytes())?;
     let mut curves = Vec::new();
     for l in &laplacians {
         for &t in &a.t {
@@ -427,16 +433,16 @@ fn build_table(study: &ParsedStudy, ti: usize, base: &Path) -> Result<Vec<StudyM
     for (mi, m) in t.meshes.iter().enumerate() {
         let key = format!("table[{ti}].meshes[{mi}]");
         let path = resolve_mesh(m, base).with_context(|| format!("key '{key}'"))?;
-        let loaded = load_mesh(Some(&path), false).with_context(|| format!("key '{key}'"))?;
-        let mesh = loaded.input.mesh;
+        let mesh = input::load(Some(&path))
+            .with_context(|| format!("key '{key}'"))?
+            .mesh;
         let mut perts = Vec::new();
         for (pi, p) in t.perturbations.iter().enumerate() {
             let pkey = format!("table[{ti}].perturbations[{pi}]");
             let pm = if let Some(spec) = p.strip_prefix("mesh:") {
                 let path = resolve_mesh(spec, base).with_context(|| format!("key '{pkey}'"))?;
-                let other = load_mesh(Some(&path), false)
+                let other = input::load(Some(&path))
                     .with_context(|| format!("key '{pkey}'"))?
-                    .input
                     .mesh;
                 resampled_as(&mesh, other, spec)
             } else {
@@ -532,9 +538,9 @@ fn run_robustness(a: RobustnessArgs) -> Result<()> {
             r.eig_drift_mean
         )?;
     }
-    write_atomic(&paths[0], csv.as_bytes())?;
+    write(&paths[0], csv.as_bytes())?;
     let md = robustness_markdown(&study, &all);
-    write_atomic(&paths[1], md.as_bytes())?;
+    write(&paths[1], md.as_bytes())?;
     // Plots: per table and quantity, relative L2 against the perturbation's number.
     let mut pi = 2;
     for (ti, (t, (laps, qs))) in study.file.table.iter().zip(&study.tables).enumerate() {

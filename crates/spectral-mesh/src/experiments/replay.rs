@@ -11,18 +11,7 @@ use crate::mesh::Mesh;
 /// coordinates bit for bit and the same triangles in the same order (up to blake3
 /// collisions); anything else, even `0.0` versus `-0.0`, changes it.
 pub fn mesh_hash(mesh: &Mesh) -> String {
-    let mut h = blake3::Hasher::new();
-    for p in mesh.positions() {
-        for c in p {
-            h.update(&c.to_le_bytes());
-        }
-    }
-    for t in mesh.triangles() {
-        for &v in t {
-            h.update(&(v as u64).to_le_bytes());
-        }
-    }
-    h.finalize().to_hex().to_string()
+    mesh.content_hash()
 }
 
 #[cfg(test)]

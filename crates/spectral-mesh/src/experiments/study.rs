@@ -224,8 +224,7 @@ pub struct StudyProgress {
 
 /// The vertex of largest x (lowest index on ties).
 pub fn vertex_of_largest_x(mesh: &Mesh) -> usize {
-    let p = mesh.positions();
-    (0..p.len()).fold(0, |best, i| if p[i][0] > p[best][0] { i } else { best })
+    mesh.vertex_of_largest_x()
 }
 
 /// The vertex of `perturbed` whose point on the original surface (through `map`) is

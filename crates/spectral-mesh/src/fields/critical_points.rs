@@ -44,6 +44,8 @@
 //! Vertices no triangle uses are never critical. Several components are handled
 //! naturally: pass the total Euler characteristic (the sum over components) to the checks.
 
+use rayon::prelude::*;
+
 use crate::mesh::Mesh;
 use crate::mesh::topology::{UnionFind, VertexTriangles};
 
@@ -148,11 +150,167 @@ pub fn critical_points_with(
     field: &[f64],
     rule: BoundaryRule,
 ) -> Result<CriticalPoints, CriticalPointsError> {
-    classify_all(mesh, field, rule, true)
+    CriticalPointFinder::new(mesh).find(field, rule)
 }
 
-/// [`critical_points_with`]; `fast` takes the shortcut of [`simple_cycle_changes`] for
-/// links that are one simple cycle (off only to test that both ways agree).
+/// The part of the classification that depends only on the mesh: the link edges of every
+/// vertex and which links are one simple cycle. Build it once per mesh (O(n + m)) and
+/// classify any number of fields with [`CriticalPointFinder::find`]: a field then costs
+/// two comparisons per link edge, spread over the threads (100k vertices: about 1 ms).
+#[derive(Debug, Clone)]
+pub struct CriticalPointFinder {
+    /// `edges[offsets[v]..offsets[v + 1]]`: the link edges of `v`, one per triangle
+    /// around it (ascending triangle index), each the two other corners in the
+    /// triangle's order.
+    offsets: Vec<usize>,
+    edges: Vec<(usize, usize)>,
+    /// True when the link of the vertex is one simple cycle (every interior vertex of a
+    /// manifold mesh): classified from the edges whose ends differ, without ordering.
+    simple: Vec<bool>,
+}
+
+/// Vertices per parallel task of [`CriticalPointFinder::find`].
+const FIND_CHUNK: usize = 4096;
+
+impl CriticalPointFinder {
+    /// The link edges of `mesh` and the simple-cycle test of every link.
+    pub fn new(mesh: &Mesh) -> Self {
+        let n = mesh.n_vertices();
+        let vt = VertexTriangles::new(mesh);
+        let tris = mesh.triangles();
+        let mut offsets = Vec::with_capacity(n + 1);
+        offsets.push(0);
+        let mut edges = Vec::with_capacity(3 * mesh.n_triangles());
+        for v in 0..n {
+            for &t in vt.of(v) {
+                let tri = tris[t];
+                let k = tri.iter().position(|&x| x == v).unwrap_or(0);
+                edges.push((tri[(k + 1) % 3], tri[(k + 2) % 3]));
+            }
+            offsets.push(edges.len());
+        }
+        let simple = (0..n)
+            .into_par_iter()
+            .with_min_len(FIND_CHUNK)
+            .map(|v| is_simple_cycle(&edges[offsets[v]..offsets[v + 1]]))
+            .collect();
+        Self {
+            offsets,
+            edges,
+            simple,
+        }
+    }
+
+    /// Number of vertices of the mesh it was built for.
+    pub fn n_vertices(&self) -> usize {
+        self.simple.len()
+    }
+
+    /// The critical points of `field` (one value per vertex of the mesh the finder was
+    /// built for) under `rule`; vertices are classified in parallel. The result is the
+    /// same as [`critical_points_with`] on the mesh.
+    pub fn find(
+        &self,
+        field: &[f64],
+        rule: BoundaryRule,
+    ) -> Result<CriticalPoints, CriticalPointsError> {
+        self.find_impl(field, rule, true, true)
+    }
+
+    /// [`CriticalPointFinder::find`]; `parallel` spreads the vertices over the threads,
+    /// `fast` takes the shortcut for simple-cycle links (both off only to test that every
+    /// way agrees).
+    fn find_impl(
+        &self,
+        field: &[f64],
+        rule: BoundaryRule,
+        parallel: bool,
+        fast: bool,
+    ) -> Result<CriticalPoints, CriticalPointsError> {
+        let n = self.n_vertices();
+        if field.len() != n {
+            return Err(CriticalPointsError::LengthMismatch {
+                expected: n,
+                got: field.len(),
+            });
+        }
+        // (vertex, kind, open link, non-manifold) of every vertex that is critical or
+        // non-manifold, ascending.
+        let one = |v: usize| -> Option<(usize, Kind, bool, bool)> {
+            let (kind, open, nonman) = self.classify_vertex(v, field, rule, fast)?;
+            (kind != Kind::Regular || nonman).then_some((v, kind, open, nonman))
+        };
+        let found: Vec<(usize, Kind, bool, bool)> = if parallel {
+            (0..n)
+                .into_par_iter()
+                .with_min_len(FIND_CHUNK)
+                .filter_map(one)
+                .collect()
+        } else {
+            (0..n).filter_map(one).collect()
+        };
+        let mut out = CriticalPoints {
+            boundary_rule: rule,
+            ..Default::default()
+        };
+        for (v, kind, open, nonman) in found {
+            if nonman {
+                out.non_manifold.push(v);
+            }
+            if kind != Kind::Regular && open {
+                out.on_boundary.push(v);
+            }
+            match kind {
+                Kind::Regular => {}
+                Kind::Min => out.minima.push(v),
+                Kind::Max => out.maxima.push(v),
+                Kind::Saddle(m) => out.saddles.push((v, m)),
+            }
+        }
+        Ok(out)
+    }
+
+    /// (kind, link is open, non-manifold) of vertex `v`; `None` for a vertex no triangle
+    /// uses.
+    fn classify_vertex(
+        &self,
+        v: usize,
+        field: &[f64],
+        rule: BoundaryRule,
+        fast: bool,
+    ) -> Option<(Kind, bool, bool)> {
+        let edges = &self.edges[self.offsets[v]..self.offsets[v + 1]];
+        if edges.is_empty() {
+            return None;
+        }
+        let fv = field[v];
+        let above = |u: usize| -> bool {
+            match field[u].partial_cmp(&fv) {
+                Some(std::cmp::Ordering::Greater) => true,
+                Some(std::cmp::Ordering::Less) => false,
+                _ => u > v,
+            }
+        };
+        if fast && self.simple[v] {
+            let mut changes = 0;
+            for &(a, b) in edges {
+                changes += usize::from(above(a) != above(b));
+            }
+            return Some((closed_kind(changes, above(edges[0].0)), false, false));
+        }
+        Some(classify(edges, &above, rule))
+    }
+}
+
+/// True when the link edges form one simple cycle (see [`simple_cycle_changes`]).
+fn is_simple_cycle(edges: &[(usize, usize)]) -> bool {
+    simple_cycle_changes(edges, &|_| true).is_some()
+}
+
+/// [`critical_points_with`] without the finder: `fast` takes the shortcut of
+/// [`simple_cycle_changes`] for links that are one simple cycle (off only to test that
+/// both ways agree). The reference the finder is tested against.
+#[cfg(test)]
 fn classify_all(
     mesh: &Mesh,
     field: &[f64],
@@ -537,6 +695,8 @@ mod tests {
             crate::shapes::build_str("irregular-torus:res=3").unwrap(),
             crate::shapes::build_str("sphere:res=3").unwrap(),
             crate::shapes::build_str("disk:res=3").unwrap(),
+            // More vertices than one parallel task takes.
+            crate::shapes::build_str("sphere:res=5").unwrap(),
             fan(7, false),
             two_fans,
         ];
@@ -550,12 +710,24 @@ mod tests {
         let mut shortcut_taken = 0;
         for m in &meshes {
             let n = m.n_vertices();
-            for round in 0..4 {
-                // Rounds 2 and 3 take values from a few levels only: many ties.
+            let finder = CriticalPointFinder::new(m);
+            assert_eq!(finder.n_vertices(), n);
+            assert!(
+                finder
+                    .find(&vec![0.0; n + 1], BoundaryRule::Double)
+                    .is_err()
+            );
+            for round in 0..5 {
+                // Rounds 2 and 3 take values from a few levels only: many ties; round 4
+                // has NaNs (ties broken by index).
                 let f: Vec<f64> = (0..n)
                     .map(|_| {
                         let r = next();
-                        if round >= 2 { (r * 3.0).floor() } else { r }
+                        match round {
+                            2 | 3 => (r * 3.0).floor(),
+                            4 if r < 0.2 => f64::NAN,
+                            _ => r,
+                        }
                     })
                     .collect();
                 for rule in [BoundaryRule::Double, BoundaryRule::LowerLink] {
@@ -567,6 +739,15 @@ mod tests {
                     assert_eq!(fast.on_boundary, slow.on_boundary);
                     assert_eq!(fast.non_manifold, slow.non_manifold);
                     shortcut_taken += fast.minima.len() + fast.maxima.len() + fast.saddles.len();
+                    // The finder, in parallel and serially, with and without the shortcut.
+                    for parallel in [true, false] {
+                        for shortcut in [true, false] {
+                            let got = finder.find_impl(&f, rule, parallel, shortcut).unwrap();
+                            assert_eq!(got, slow, "parallel {parallel} shortcut {shortcut}");
+                        }
+                    }
+                    assert_eq!(finder.find(&f, rule).unwrap(), slow);
+                    assert_eq!(critical_points_with(m, &f, rule).unwrap(), slow);
                 }
             }
         }

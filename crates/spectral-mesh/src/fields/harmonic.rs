@@ -13,6 +13,13 @@
 //! positive definite as soon as every connected component holds a constraint and every
 //! free vertex has a triangle with non-zero area.
 //!
+//! ## Components without a constraint
+//! On a connected component that holds no constraint the map is undetermined up to a
+//! constant (libigl's solver fails with a singular system there). We do not solve there:
+//! the component is reported ([`HarmonicSolver::floating_components`],
+//! [`FloatingComponent`]) and holds the mean of the constraint values, and callers leave
+//! its vertices out of critical-point counts.
+//!
 //! ## Which mass the bi-harmonic map uses
 //! `B^-1` must be cheap and sparse, so the bi-harmonic operator uses a **lumped**
 //! (diagonal) mass: the row sums of the discretization's mass matrix.
@@ -104,19 +111,6 @@ pub enum HarmonicError {
     /// The order is not 1 (harmonic) or 2 (bi-harmonic).
     #[error("order must be 1 (harmonic) or 2 (bi-harmonic), not {0}")]
     BadOrder(u32),
-    /// A connected component holds no constraint, so the map is not determined there.
-    #[error(
-        "connected component {component} ({size} vertices, e.g. vertex {vertex}) has no \
-         constraint: the map is undetermined there; add a constraint on it"
-    )]
-    UnconstrainedComponent {
-        /// Component index (as in `Topology::components`).
-        component: usize,
-        /// Its lowest vertex index.
-        vertex: usize,
-        /// Number of vertices in it.
-        size: usize,
-    },
     /// A free vertex has no stiffness at all (all its triangles have zero area).
     #[error(
         "free vertex {vertex} has no non-degenerate triangle (zero stiffness): the map is \
@@ -509,8 +503,24 @@ pub struct HarmonicSolver {
     order: u32,
     constrained: Vec<usize>,
     free: Vec<usize>,
+    /// Vertices of components that hold no constraint.
+    floating: Vec<usize>,
+    floating_components: Vec<FloatingComponent>,
     q_fi: SparseMatrix,
     chol: SparseCholesky,
+}
+
+/// A connected component that holds no constraint. The map is undetermined there up to a
+/// constant; it is given the mean of the constraint values (the middle of the colour
+/// range), and its vertices are not classified as critical points.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FloatingComponent {
+    /// Component index (as in `Topology::components`).
+    pub component: usize,
+    /// Its lowest vertex index.
+    pub first_vertex: usize,
+    /// Number of vertices in it.
+    pub vertices: usize,
 }
 
 impl HarmonicSolver {
@@ -549,11 +559,14 @@ impl HarmonicSolver {
             }
             is_con[v] = true;
         }
-        check_components(mesh, &is_con)?;
+        let (floating_components, is_floating) = floating_components(mesh, &is_con);
         let mut sorted: Vec<usize> = constrained.to_vec();
         sorted.sort_unstable();
         sorted.dedup();
-        let free: Vec<usize> = (0..n).filter(|&v| used[v] && !is_con[v]).collect();
+        let free: Vec<usize> = (0..n)
+            .filter(|&v| used[v] && !is_con[v] && !is_floating[v])
+            .collect();
+        let floating: Vec<usize> = (0..n).filter(|&v| is_floating[v]).collect();
         let (q, operator) = if order == 1 {
             (ops.stiffness.clone(), "Laplacian")
         } else {
@@ -575,6 +588,8 @@ impl HarmonicSolver {
             order,
             constrained: sorted,
             free,
+            floating,
+            floating_components,
             q_fi,
             chol,
         })
@@ -589,6 +604,11 @@ impl HarmonicSolver {
     /// 1 (harmonic) or 2 (bi-harmonic).
     pub fn order(&self) -> u32 {
         self.order
+    }
+
+    /// The components that hold no constraint (see [`FloatingComponent`]).
+    pub fn floating_components(&self) -> &[FloatingComponent] {
+        &self.floating_components
     }
 
     /// Solves for the values `values[k]` at `constrained_vertices()[k]`; returns `n` values
@@ -634,6 +654,13 @@ impl HarmonicSolver {
             for (j, &v) in self.free.iter().enumerate() {
                 col[v] = rhs[c * nf + j];
             }
+            if !self.floating.is_empty() {
+                let vals = &values[c * ni..(c + 1) * ni];
+                let mean = vals.iter().sum::<f64>() / vals.len().max(1) as f64;
+                for &v in &self.floating {
+                    col[v] = mean;
+                }
+            }
         }
         Ok(out)
     }
@@ -676,8 +703,8 @@ fn check_order(order: u32) -> Result<(), HarmonicError> {
     }
 }
 
-/// Every component must hold a constrained vertex; names the first one that does not.
-fn check_components(mesh: &Mesh, is_con: &[bool]) -> Result<(), HarmonicError> {
+/// The components that hold no constrained vertex, and a per-vertex flag of their vertices.
+fn floating_components(mesh: &Mesh, is_con: &[bool]) -> (Vec<FloatingComponent>, Vec<bool>) {
     let topo = Topology::new(mesh);
     let nc = topo.n_components();
     let mut has = vec![false; nc];
@@ -688,14 +715,20 @@ fn check_components(mesh: &Mesh, is_con: &[bool]) -> Result<(), HarmonicError> {
             first[c] = first[c].min(v);
         }
     }
-    if let Some(c) = (0..nc).find(|&c| !has[c]) {
-        return Err(HarmonicError::UnconstrainedComponent {
+    let list = (0..nc)
+        .filter(|&c| !has[c])
+        .map(|c| FloatingComponent {
             component: c,
-            vertex: first[c],
-            size: topo.components[c].vertices,
-        });
-    }
-    Ok(())
+            first_vertex: first[c],
+            vertices: topo.components[c].vertices,
+        })
+        .collect();
+    let flags = topo
+        .vertex_component
+        .iter()
+        .map(|&c| c < nc && !has[c])
+        .collect();
+    (list, flags)
 }
 
 /// The harmonic (`params.order == 1`) or bi-harmonic (`2`) map with the given constraints:

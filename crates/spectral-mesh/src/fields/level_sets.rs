@@ -20,7 +20,8 @@
 //! Non-finite field values: a triangle with a NaN or infinite corner value is skipped.
 
 use crate::mesh::Mesh;
-use std::collections::HashMap;
+use rayon::prelude::*;
+use std::collections::{HashMap, HashSet};
 
 /// `count` evenly spaced values strictly inside `[min, max]`: the centres of `count`
 /// equal bins, `min + (i + 0.5) (max - min) / count` for `i = 0..count`.
@@ -160,6 +161,131 @@ pub fn extract_level_sets(mesh: &Mesh, field: &[f64], values: &[f64]) -> Vec<Lev
             extract_one(mesh, field, value)
         })
         .collect()
+}
+
+/// The segments of the level sets of `field` for every entry of `values`, without
+/// chaining them: exactly the `segments` of [`extract_level_sets`] (same points, same
+/// order, same duplicates dropped), in one pass over the triangles for all values,
+/// spread over the threads. What a viewer draws; O(m + segments).
+///
+/// Returns one list per value, in the order of `values`. If `field.len()` differs from
+/// the number of vertices, every list is empty.
+pub fn level_set_segments(mesh: &Mesh, field: &[f64], values: &[f64]) -> Vec<Vec<[[f64; 3]; 2]>> {
+    level_set_segments_impl(mesh, field, values, true)
+}
+
+/// Triangles per parallel task of [`level_set_segments`].
+const SEGMENT_CHUNK: usize = 8192;
+
+/// A segment: its two end points.
+type Segment = [[f64; 3]; 2];
+
+/// A segment found in one triangle: (index into `values`, the keys of its two crossings,
+/// the segment).
+type Found = (usize, (Key, Key), Segment);
+
+fn level_set_segments_impl(
+    mesh: &Mesh,
+    field: &[f64],
+    values: &[f64],
+    parallel: bool,
+) -> Vec<Vec<[[f64; 3]; 2]>> {
+    let mut out = vec![Vec::new(); values.len()];
+    if field.len() != mesh.n_vertices() {
+        return out;
+    }
+    // Finite values in ascending order, so that each triangle finds the values it
+    // crosses by two binary searches.
+    let mut order: Vec<usize> = (0..values.len())
+        .filter(|&i| values[i].is_finite())
+        .collect();
+    order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
+    let sorted: Vec<f64> = order.iter().map(|&i| values[i]).collect();
+    // Per vertex, how many of the sorted values are <= its value (u32::MAX when not
+    // finite): a triangle crosses the values c with lo < c <= hi, which are those from
+    // the smallest of its corners' counts to the largest.
+    let count = |f: &f64| -> u32 {
+        if f.is_finite() {
+            sorted.partition_point(|&c| c <= *f) as u32
+        } else {
+            u32::MAX
+        }
+    };
+    let counts: Vec<u32> = if parallel {
+        field
+            .par_iter()
+            .with_min_len(SEGMENT_CHUNK)
+            .map(count)
+            .collect()
+    } else {
+        field.iter().map(count).collect()
+    };
+    let scan = |tris: &[[usize; 3]]| -> Vec<Found> {
+        let mut found = Vec::new();
+        for tri in tris {
+            let c = [counts[tri[0]], counts[tri[1]], counts[tri[2]]];
+            let first = c[0].min(c[1]).min(c[2]);
+            let last = c[0].max(c[1]).max(c[2]);
+            if first == last || last == u32::MAX {
+                continue;
+            }
+            let fv = [field[tri[0]], field[tri[1]], field[tri[2]]];
+            let (first, last) = (first as usize, last as usize);
+            for (&level, &value) in order[first..last].iter().zip(&sorted[first..last]) {
+                if let Some((keys, seg)) = triangle_segment(mesh, field, tri, fv, value) {
+                    found.push((level, keys, seg));
+                }
+            }
+        }
+        found
+    };
+    let tris = mesh.triangles();
+    let pieces: Vec<Vec<Found>> = if parallel {
+        tris.par_chunks(SEGMENT_CHUNK).map(scan).collect()
+    } else {
+        vec![scan(tris)]
+    };
+    // In triangle order per value, keeping the first of segments that join the same two
+    // crossings (as [`extract_level_sets`] does).
+    let mut seen: Vec<HashSet<(Key, Key)>> = vec![HashSet::new(); values.len()];
+    for (level, keys, seg) in pieces.into_iter().flatten() {
+        if seen[level].insert(keys) {
+            out[level].push(seg);
+        }
+    }
+    out
+}
+
+/// The segment of level `value` in triangle `tri` (corner values `fv`), with the keys of
+/// its two crossings (ascending), or `None` when the triangle has none (or only a
+/// zero-length one).
+fn triangle_segment(
+    mesh: &Mesh,
+    field: &[f64],
+    tri: &[usize; 3],
+    fv: [f64; 3],
+    value: f64,
+) -> Option<((Key, Key), Segment)> {
+    let above = [fv[0] >= value, fv[1] >= value, fv[2] >= value];
+    let mut ends: [Option<Crossing>; 2] = [None, None];
+    let mut k = 0;
+    for i in 0..3 {
+        let j = (i + 1) % 3;
+        if above[i] != above[j] && k < 2 {
+            ends[k] = Some(crossing(mesh, field, tri[i], tri[j], value));
+            k += 1;
+        }
+    }
+    let (a, b) = (ends[0]?, ends[1]?);
+    if a.key == b.key {
+        return None;
+    }
+    let keys = if a.key < b.key {
+        (a.key, b.key)
+    } else {
+        (b.key, a.key)
+    };
+    Some((keys, [a.point, b.point]))
 }
 
 fn extract_one(mesh: &Mesh, field: &[f64], value: f64) -> LevelSet {
@@ -495,6 +621,69 @@ mod tests {
         let field = [1.0, 0.0, 0.0, 0.0];
         let ls = extract_level_sets(&mesh, &field, &[1.0]).remove(0);
         assert!(ls.segments.is_empty());
+    }
+
+    /// The one-pass segments, in parallel and serially, are exactly the segments of the
+    /// chained extraction: closed, bordered and duplicated-triangle meshes, fields with
+    /// ties and NaNs, values at vertex values, unsorted and non-finite values.
+    #[test]
+    fn one_pass_segments_equal_the_chained_extraction() {
+        let dup = {
+            // Two triangles on the same three vertices, plus a neighbour.
+            let p = vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 1.0, 0.0],
+            ];
+            Mesh::new(p, vec![[0, 1, 2], [0, 2, 1], [1, 3, 2]]).unwrap()
+        };
+        let meshes = [
+            crate::shapes::build_str("sphere:res=5").unwrap(), // > one parallel task
+            crate::shapes::build_str("disk:res=3").unwrap(),
+            crate::shapes::build_str("irregular-torus:res=2").unwrap(),
+            uv_sphere(1.0, 16, 24),
+            dup,
+        ];
+        let mut state = 99u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as f64 / (1u64 << 31) as f64
+        };
+        let mut total = 0;
+        for m in &meshes {
+            let n = m.n_vertices();
+            for round in 0..4 {
+                let field: Vec<f64> = match round {
+                    0 => m.positions().iter().map(|p| p[2]).collect(),
+                    1 => (0..n).map(|_| (next() * 4.0).floor()).collect(), // ties
+                    2 => (0..n)
+                        .map(|_| if next() < 0.1 { f64::NAN } else { next() })
+                        .collect(),
+                    _ => (0..n).map(|_| next() - 0.5).collect(),
+                };
+                let mut values = level_values(-1.0, 1.0, 9);
+                values.extend([0.0, 1.0, 2.0, f64::NAN, 0.25, -0.5, 1.0]);
+                let chained = extract_level_sets(m, &field, &values);
+                for parallel in [true, false] {
+                    let got = level_set_segments_impl(m, &field, &values, parallel);
+                    assert_eq!(got.len(), values.len());
+                    for (g, ls) in got.iter().zip(&chained) {
+                        assert_eq!(g, &ls.segments, "value {} round {round}", ls.value);
+                        total += g.len();
+                    }
+                }
+            }
+        }
+        assert!(total > 1000);
+        let m = &meshes[3];
+        assert!(
+            level_set_segments(m, &[0.0; 3], &[0.5])
+                .iter()
+                .all(|s| s.is_empty())
+        );
     }
 
     #[test]

@@ -188,21 +188,29 @@ pub fn segment(
     let labels: Vec<usize> = rep.iter_mut().map(|r| label_of_peak[peak[*r]]).collect();
     let n_patches = peaks.len();
 
-    // Genus of each patch.
-    let mut tris_of: Vec<Vec<[usize; 3]>> = vec![Vec::new(); n_patches];
-    for tri in mesh.triangles() {
-        let l = labels[tri[0]];
-        if labels[tri[1]] == l && labels[tri[2]] == l {
-            tris_of[l].push(*tri);
-        }
-    }
-    let patch_genus = tris_of.iter().map(|tris| patch_genus(mesh, tris)).collect();
+    let patch_genus = patch_genera(mesh, &labels, n_patches);
     Ok(Segmentation {
         labels,
         n_patches,
         maxima: peaks,
         patch_genus,
     })
+}
+
+/// The genus of each of the `n_patches` patches of a labelling (`labels[v] < n_patches`,
+/// one per vertex), as in [`Segmentation::patch_genus`]: each patch is the sub-mesh of the
+/// triangles whose three vertices share its label. Labels out of range are ignored.
+pub fn patch_genera(mesh: &Mesh, labels: &[usize], n_patches: usize) -> Vec<Option<i64>> {
+    let mut tris_of: Vec<Vec<[usize; 3]>> = vec![Vec::new(); n_patches];
+    for tri in mesh.triangles() {
+        let Some(&l) = labels.get(tri[0]) else {
+            continue;
+        };
+        if labels.get(tri[1]) == Some(&l) && labels.get(tri[2]) == Some(&l) && l < n_patches {
+            tris_of[l].push(*tri);
+        }
+    }
+    tris_of.iter().map(|tris| patch_genus(mesh, tris)).collect()
 }
 
 fn patch_genus(mesh: &Mesh, tris: &[[usize; 3]]) -> Option<i64> {

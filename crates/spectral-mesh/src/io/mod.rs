@@ -1,4 +1,8 @@
-//! Reading and writing meshes: OFF, OBJ, PLY, STL. Errors name file, line and problem.
+//! Reading and writing meshes: OFF, OBJ, PLY, STL; reading point clouds: text `x y z
+//! [nx ny nz]` files and PLY files without faces. Errors name file, line and problem.
+//!
+//! [`read_input`] reads either (a mesh or a point cloud, by extension and content); see
+//! [`points`](read_points) for the point formats. [`read_mesh`] reads meshes only.
 //!
 //! # Reading
 //! [`read_mesh`] reads a file, [`read_mesh_from_bytes`] a buffer (an upload). The format is
@@ -46,11 +50,13 @@
 //! [`read_field_text`] / [`write_field_text`] (module `field`) read and write one value per
 //! line, bit-exactly, as `numpy.loadtxt` / `numpy.savetxt` do.
 
+mod atomic;
 mod field;
 mod lexer;
 mod obj;
 mod off;
 mod ply;
+mod points;
 mod polygon;
 mod stl;
 
@@ -61,7 +67,12 @@ use std::str::FromStr;
 
 use crate::mesh::Mesh;
 
+pub use atomic::{AtomicWriteError, write_atomic, write_atomic_with};
 pub use field::{field_to_text, read_field, read_field_text, write_field, write_field_text};
+pub use points::{
+    Input, LoadedPoints, PointFormat, read_input, read_input_from_bytes, read_points,
+    read_points_from_bytes,
+};
 pub use polygon::triangulate_polygon;
 
 /// An error while reading or writing a mesh file. Its `Display` is
@@ -366,53 +377,11 @@ fn rename_error(e: IoError, name: &str) -> IoError {
 }
 
 fn atomic_write(path: &Path, name: &str, data: &[u8]) -> Result<(), IoError> {
-    let io = |action: &'static str| {
-        move |source: std::io::Error| IoError::Io {
-            path: name.to_string(),
-            action,
-            source,
-        }
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let file_name = path
-        .file_name()
-        .map(|f| f.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "mesh".to_string());
-    let stamp = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_nanos())
-        .unwrap_or(0);
-    let mut attempt = 0u32;
-    let (tmp, mut file) = loop {
-        let tmp = dir.join(format!(
-            ".{file_name}.tmp-{}-{stamp}-{attempt}",
-            std::process::id()
-        ));
-        match std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)
-        {
-            Ok(f) => break (tmp, f),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempt < 100 => {
-                attempt += 1;
-            }
-            Err(e) => return Err(io("create a temporary file next to")(e)),
-        }
-    };
-    let result = file
-        .write_all(data)
-        .and_then(|()| file.sync_all())
-        .map_err(io("write"));
-    drop(file);
-    let result = result.and_then(|()| std::fs::rename(&tmp, path).map_err(io("rename into")));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    write_atomic(path, data).map_err(|e| IoError::Io {
+        path: name.to_string(),
+        action: e.action,
+        source: e.source,
+    })
 }
 
 /// Writes `mesh` in `format` to any writer (no temporary file). Errors name the format

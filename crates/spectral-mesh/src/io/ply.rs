@@ -170,7 +170,42 @@ fn check_counts(bytes: &[u8]) -> Result<(), (usize, String)> {
     Ok(())
 }
 
+/// What a PLY file holds, before it is turned into a mesh or a point cloud.
+pub(crate) struct PlyData {
+    pub(crate) positions: Vec<[f64; 3]>,
+    /// `nx ny nz` of every vertex, when the vertex element has all three.
+    pub(crate) normals: Option<Vec<[f64; 3]>>,
+    pub(crate) vertex_colors: Option<Vec<[f32; 3]>>,
+    /// `None` when the file has no `face` element.
+    pub(crate) faces: Option<RawFaces>,
+    pub(crate) warnings: Vec<String>,
+}
+
 pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
+    let data = parse(bytes, ctx, true)?;
+    let Some(faces) = data.faces else {
+        return Err(ctx.invalid(None, NO_FACE_ELEMENT));
+    };
+    assemble(
+        ctx,
+        RawMesh {
+            format: MeshFormat::Ply,
+            positions: data.positions,
+            position_lines: None,
+            faces: &faces,
+            index_base: 0,
+            vertex_colors: data.vertex_colors,
+            warnings: data.warnings,
+        },
+    )
+}
+
+const NO_FACE_ELEMENT: &str = "the PLY file has no 'face' element (a point cloud is not a mesh)";
+
+/// Parses the header and the payload: vertices (positions, normals, colours) and, when
+/// there is a `face` element, the faces. With `require_faces`, a file without a `face`
+/// element is refused as soon as the header is known (what the mesh reader does).
+pub(crate) fn parse(bytes: &[u8], ctx: &Ctx, require_faces: bool) -> Result<PlyData, IoError> {
     let (header_lines, binary) = header_info(bytes);
     check_counts(bytes).map_err(|(line, m)| ctx.invalid(Some(line), format!("PLY: {m}")))?;
     let parser = Parser::<DefaultElement>::new();
@@ -232,20 +267,21 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
             ));
         }
     }
-    let Some(fdef) = elements.get("face") else {
-        return Err(ctx.invalid(
-            None,
-            "the PLY file has no 'face' element (a point cloud is not a mesh)",
-        ));
-    };
-    let list_name = ["vertex_indices", "vertex_index"]
-        .into_iter()
-        .find(|k| fdef.properties.contains_key(*k));
-    let Some(list_name) = list_name else {
-        return Err(ctx.invalid(
-            None,
-            "the PLY face element has neither 'vertex_indices' nor 'vertex_index'",
-        ));
+    let list_name = match elements.get("face") {
+        None if require_faces => return Err(ctx.invalid(None, NO_FACE_ELEMENT)),
+        None => None,
+        Some(fdef) => {
+            let list_name = ["vertex_indices", "vertex_index"]
+                .into_iter()
+                .find(|k| fdef.properties.contains_key(*k));
+            let Some(list_name) = list_name else {
+                return Err(ctx.invalid(
+                    None,
+                    "the PLY face element has neither 'vertex_indices' nor 'vertex_index'",
+                ));
+            };
+            Some(list_name)
+        }
     };
     let others: Vec<&str> = elements
         .keys()
@@ -276,6 +312,10 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     let has_color = ["red", "green", "blue"]
         .iter()
         .all(|k| vdef.properties.contains_key(*k));
+    let has_normals = ["nx", "ny", "nz"]
+        .iter()
+        .all(|k| vdef.properties.contains_key(*k));
+    let mut normals = Vec::with_capacity(if has_normals { verts.len() } else { 0 });
     let mut positions = Vec::with_capacity(verts.len());
     let mut colors = Vec::new();
     let mut colors_ok = has_color;
@@ -300,6 +340,28 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
             ));
         }
         positions.push(p);
+        if has_normals {
+            let mut nrm = [0.0; 3];
+            for (d, key) in ["nx", "ny", "nz"].into_iter().enumerate() {
+                nrm[d] = e.get(key).and_then(scalar).ok_or_else(|| {
+                    ctx.invalid(
+                        line_of("vertex", v),
+                        format!("vertex {v}: property '{key}' is missing or not a number"),
+                    )
+                })?;
+            }
+            if let Some(d) = nrm.iter().position(|c| !c.is_finite()) {
+                return Err(ctx.invalid(
+                    line_of("vertex", v),
+                    format!(
+                        "vertex {v} has a non-finite normal component ({} = {})",
+                        ["nx", "ny", "nz"][d],
+                        nrm[d]
+                    ),
+                ));
+            }
+            normals.push(nrm);
+        }
         if colors_ok {
             let c: Vec<Option<f32>> = ["red", "green", "blue"]
                 .iter()
@@ -316,29 +378,30 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     }
     let vertex_colors = (colors_ok && colors.len() == positions.len()).then_some(colors);
 
-    let face_elems = ply.payload.get("face").unwrap_or(&empty);
-    let mut faces = RawFaces::new();
-    for (f, e) in face_elems.iter().enumerate() {
-        let list = e.get(list_name).and_then(index_list).ok_or_else(|| {
-            ctx.invalid(
-                line_of("face", f),
-                format!("face {f}: '{list_name}' is missing or not a list of integers"),
-            )
-        })?;
-        faces.push(&list, line_of("face", f));
-    }
-    assemble(
-        ctx,
-        RawMesh {
-            format: MeshFormat::Ply,
-            positions,
-            position_lines: None,
-            faces: &faces,
-            index_base: 0,
-            vertex_colors,
-            warnings,
-        },
-    )
+    let faces = match list_name {
+        None => None,
+        Some(list_name) => {
+            let face_elems = ply.payload.get("face").unwrap_or(&empty);
+            let mut faces = RawFaces::new();
+            for (f, e) in face_elems.iter().enumerate() {
+                let list = e.get(list_name).and_then(index_list).ok_or_else(|| {
+                    ctx.invalid(
+                        line_of("face", f),
+                        format!("face {f}: '{list_name}' is missing or not a list of integers"),
+                    )
+                })?;
+                faces.push(&list, line_of("face", f));
+            }
+            Some(faces)
+        }
+    };
+    Ok(PlyData {
+        positions,
+        normals: has_normals.then_some(normals),
+        vertex_colors,
+        faces,
+        warnings,
+    })
 }
 
 pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, opts: &WriteOptions) -> std::io::Result<()> {

@@ -341,9 +341,20 @@ fn numeric(
     Ok(values)
 }
 
-impl SparseCholesky {
-    /// Analyses and factors `a` (only its lower triangle is read).
-    pub fn new(a: &SparseMatrix) -> Result<Self, CholeskyError> {
+/// The symbolic analysis of a sparsity pattern (AMD ordering, supernodal structure), kept
+/// to factor several matrices of that pattern: the eigensolver's retries of `S - sigma B`
+/// with larger shifts all have the pattern of `S + B`.
+#[derive(Debug, Clone)]
+pub(crate) struct CholeskyAnalysis {
+    n: usize,
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    layout: Option<Arc<Supernodes>>,
+    pattern: [u64; 2],
+}
+
+impl CholeskyAnalysis {
+    /// Analyses the pattern of `a` (its lower triangle).
+    pub(crate) fn new(a: &SparseMatrix) -> Result<Self, CholeskyError> {
         if a.nrows() != a.ncols() {
             return Err(CholeskyError::NotSquare(a.nrows(), a.ncols()));
         }
@@ -358,19 +369,52 @@ impl SparseCholesky {
             },
         )
         .map_err(|e| CholeskyError::Internal(format!("{e:?}")))?;
-        let values = numeric(&symbolic, a)?;
         let layout = Supernodes::from_symbolic(&symbolic).map(Arc::new);
         Ok(Self {
             n: a.nrows(),
             symbolic: Arc::new(symbolic),
             layout,
-            values,
             pattern: pattern_fingerprint(a),
         })
     }
 
+    /// Factors `a` with this analysis (a fresh analysis when `a` has another pattern). The
+    /// factor is the same, bit for bit, as [`SparseCholesky::new`] of `a`.
+    pub(crate) fn factor(&self, a: &SparseMatrix) -> Result<SparseCholesky, CholeskyError> {
+        if a.nrows() != self.n || a.ncols() != self.n || pattern_fingerprint(a) != self.pattern {
+            return SparseCholesky::new(a);
+        }
+        self.factor_same_pattern(a)
+    }
+
+    fn factor_same_pattern(&self, a: &SparseMatrix) -> Result<SparseCholesky, CholeskyError> {
+        let values = numeric(&self.symbolic, a)?;
+        Ok(SparseCholesky {
+            n: self.n,
+            symbolic: self.symbolic.clone(),
+            layout: self.layout.clone(),
+            values,
+            pattern: self.pattern,
+        })
+    }
+}
+
+impl SparseCholesky {
+    /// Analyses and factors `a` (only its lower triangle is read).
+    pub fn new(a: &SparseMatrix) -> Result<Self, CholeskyError> {
+        CholeskyAnalysis::new(a)?.factor_same_pattern(a)
+    }
+
+    /// Number of values of the factor `L` (its memory is 8 bytes each, plus the
+    /// analysis).
+    pub fn factor_len(&self) -> usize {
+        self.values.len()
+    }
+
     /// Refactors a matrix with the same sparsity pattern, reusing the symbolic analysis
-    /// (falls back to a fresh analysis when the pattern differs).
+    /// (falls back to a fresh analysis when the pattern differs). The result is the same,
+    /// bit for bit, as [`SparseCholesky::new`] of `a`; on error the factor is left as it
+    /// was.
     pub fn refactor(&mut self, a: &SparseMatrix) -> Result<(), CholeskyError> {
         if a.nrows() != a.ncols() || pattern_fingerprint(a) != self.pattern {
             *self = Self::new(a)?;

@@ -5,7 +5,6 @@
 pub mod cholesky;
 pub mod dense_eigen;
 pub mod eigen;
-mod krylov_schur;
 mod scratch;
 pub mod sparse;
 mod timing;
@@ -13,7 +12,9 @@ mod timing;
 pub use cholesky::{CholeskyError, SparseCholesky};
 pub use dense_eigen::{DenseEigenError, dense_generalized_eigen};
 pub use eigen::{
-    EigenProgress, PartialEigen, SparseAlgorithm, SparseEigenError, SparseEigenOptions,
-    b_orthogonality_error, relative_residuals, sparse_generalized_eigen, sym_spmm, sym_spmm_into,
+    ComponentNullSpace, EigenProgress, PartialEigen, ShiftInvert, SparseAlgorithm,
+    SparseEigenError, SparseEigenOptions, b_orthogonality_error, connected_components,
+    default_shift, norm1, relative_residuals, sparse_generalized_eigen,
+    sparse_generalized_eigen_with, sym_spmm, sym_spmm_into,
 };
 pub use sparse::SparseMatrix;

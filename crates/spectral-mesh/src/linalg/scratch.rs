@@ -1,11 +1,17 @@
 //! Per-thread reuse of large temporary buffers. The eigensolver needs several `n x c`
 //! temporaries per step; fresh allocations of that size come back from the system as new,
 //! zeroed pages (page faults), which measured as a tenth of the solver's time.
+//!
+//! Two kinds: a pool of column-major blocks ([`take`], [`give`]), and one row-major buffer
+//! per thread for the sparse products ([`with_row_buffer`]). [`release_all`] frees both on
+//! every thread. This module depends on nothing else of `linalg`.
 
 use std::cell::RefCell;
 
 thread_local! {
     static POOL: RefCell<Vec<Vec<f64>>> = const { RefCell::new(Vec::new()) };
+    /// Row-major copy of the input block of a sparse product on this thread (reused).
+    static ROWS: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
 }
 
 /// Buffers kept per thread at most.
@@ -73,13 +79,38 @@ pub(crate) fn release() {
     });
 }
 
+/// Runs `f` on this thread's row-major buffer, grown to at least `len` values (its first
+/// `len` values are passed; their content is left from earlier use). Kept until
+/// [`release_all`]; the sparse products hold it across a parallel loop.
+pub(crate) fn with_row_buffer<R>(len: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
+    ROWS.with(|cell| {
+        let mut buf = cell.borrow_mut();
+        if buf.len() < len {
+            buf.resize(len, 0.0);
+        }
+        f(&mut buf[..len])
+    })
+}
+
+/// Frees this thread's row buffer (see [`with_row_buffer`]), unless the thread is using
+/// it: a sparse product holds it across a parallel loop, during which the thread may run
+/// the broadcast of another solve's [`release_all`] (two solves side by side, as in a
+/// study).
+fn release_rows() {
+    ROWS.with(|cell| {
+        if let Ok(mut buf) = cell.try_borrow_mut() {
+            *buf = Vec::new();
+        }
+    });
+}
+
 /// Frees the buffers of this thread and of every thread of the rayon pool (the solves
 /// and the row blocks of the dense products run there and keep up to `KEEP_ENTRIES`
 /// values each), and the row-major buffers of the sparse products.
 pub(crate) fn release_all() {
     let both = || {
         release();
-        super::eigen::release_spmm_scratch();
+        release_rows();
     };
     both();
     rayon::broadcast(|_| both());
@@ -118,6 +149,21 @@ mod tests {
                 .iter()
                 .all(|&fresh| fresh)
         );
+    }
+
+    /// Another solve's `release_all` can reach a thread inside a sparse product, which
+    /// holds the row buffer across a parallel loop: the buffer is then left alone, not a
+    /// panic.
+    #[test]
+    fn releasing_a_busy_row_buffer_is_skipped() {
+        ROWS.with(|cell| {
+            let mut busy = cell.borrow_mut();
+            busy.resize(10, 1.0);
+            release_rows();
+            assert_eq!(busy.len(), 10);
+        });
+        release_rows();
+        ROWS.with(|cell| assert_eq!(cell.borrow().capacity(), 0));
     }
 
     #[test]

@@ -35,14 +35,16 @@ pub(super) enum Phase {
     Start,
     /// `B W` and the column norms of a new block before its orthogonalization.
     Norms,
+    /// The known null space: finding the components, projecting blocks against it.
+    Deflate,
 }
 
-const NAMES: [&str; 12] = [
+const NAMES: [&str; 13] = [
     "factor", "op", "local", "gram", "update", "svqb", "eig", "rotate", "estimate", "residual",
-    "start", "norms",
+    "start", "norms", "deflate",
 ];
 
-static TOTALS: [AtomicU64; 12] = [const { AtomicU64::new(0) }; 12];
+static TOTALS: [AtomicU64; 13] = [const { AtomicU64::new(0) }; 13];
 
 fn enabled() -> bool {
     static ON: OnceLock<bool> = OnceLock::new();

@@ -2,10 +2,14 @@
 //!
 //! A [`Mesh`] is the one input type of every operation in this crate. It holds
 //! `n` vertex positions and `m` triangles given as vertex-index triples; connectivity
-//! queries live in [`topology`], checks and repairs in [`validate`].
+//! queries live in [`topology`], checks and repairs in [`validate`]. A [`PointCloud`]
+//! (positions and optional normals, no triangles) is the other input type.
 
+pub mod point_cloud;
 pub mod topology;
 pub mod validate;
+
+pub use point_cloud::{PointCloud, PointCloudError};
 
 use thiserror::Error;
 
@@ -112,6 +116,32 @@ impl Mesh {
     /// Triangles as vertex-index triples, `m` entries.
     pub fn triangles(&self) -> &[[usize; 3]] {
         &self.triangles
+    }
+
+    /// The content hash every face uses to name a mesh: blake3 (64 hex digits) of the
+    /// positions as little-endian `f64` followed by the triangle indices as little-endian
+    /// `u64`. Experiment files record it; the web app's mesh ids are its first 16 digits;
+    /// cached bases are keyed by it.
+    pub fn content_hash(&self) -> String {
+        let mut h = blake3::Hasher::new();
+        for p in &self.positions {
+            for c in p {
+                h.update(&c.to_le_bytes());
+            }
+        }
+        for t in &self.triangles {
+            for &v in t {
+                h.update(&(v as u64).to_le_bytes());
+            }
+        }
+        h.finalize().to_hex().to_string()
+    }
+
+    /// The vertex of largest x (lowest index on ties): the default source and anchor of
+    /// every spectral field (0 for an empty mesh).
+    pub fn vertex_of_largest_x(&self) -> usize {
+        let p = &self.positions;
+        (0..p.len()).fold(0, |best, i| if p[i][0] > p[best][0] { i } else { best })
     }
 
     /// Number of vertices `n`.

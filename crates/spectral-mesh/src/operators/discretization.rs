@@ -4,9 +4,11 @@ use std::fmt;
 use std::str::FromStr;
 
 use super::mass::{MassKind, mass_matrix};
+use super::point_cloud::{PointCloudParams, point_cloud_laplacian};
+use super::robust::{Gluing, RobustError, RobustParams, robust_from_soup};
 use super::stiffness::{cotan_stiffness, uniform_laplacian};
 use crate::linalg::SparseMatrix;
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, PointCloud};
 
 /// A discretization of the Laplace-Beltrami operator as a pair (S, B).
 #[derive(
@@ -25,19 +27,27 @@ pub enum Laplacian {
     MixedVoronoi,
     /// The uniform graph Laplacian with `B = I` (not geometric: a baseline).
     Uniform,
+    /// The robust Laplacian of Sharp and Crane 2020 ([`super::robust`]): tufted cover,
+    /// mollification, intrinsic Delaunay cotangent stiffness with its lumped mass. Works on
+    /// any triangle soup (non-manifold, degenerate, duplicate triangles). On a manifold mesh
+    /// that is intrinsically Delaunay it equals [`Laplacian::VoronoiCot`] up to
+    /// mollification. The same as `robust_laplacian.mesh_laplacian` (default parameters).
+    Robust,
 }
 
 impl Laplacian {
     /// Every discretization, in a stable order.
-    pub const ALL: [Laplacian; 5] = [
+    pub const ALL: [Laplacian; 6] = [
         Laplacian::Cot,
         Laplacian::VoronoiCot,
         Laplacian::Fem,
         Laplacian::MixedVoronoi,
         Laplacian::Uniform,
+        Laplacian::Robust,
     ];
 
-    /// The name users type (`cot`, `voronoi-cot`, `fem`, `mixed-voronoi`, `uniform`).
+    /// The name users type (`cot`, `voronoi-cot`, `fem`, `mixed-voronoi`, `uniform`,
+    /// `robust`).
     pub fn name(self) -> &'static str {
         match self {
             Laplacian::Cot => "cot",
@@ -45,22 +55,36 @@ impl Laplacian {
             Laplacian::Fem => "fem",
             Laplacian::MixedVoronoi => "mixed-voronoi",
             Laplacian::Uniform => "uniform",
+            Laplacian::Robust => "robust",
         }
     }
 
     /// The mass matrix this discretization uses.
+    ///
+    /// For [`Laplacian::Robust`] this is [`MassKind::Barycentric`] in kind only: the lumping
+    /// is done on the intrinsic Delaunay triangulation of the tufted cover, not on the
+    /// input triangles, so `mass_matrix(mesh, MassKind::Barycentric)` is not its mass (use
+    /// [`Operators::new`]).
     pub fn mass_kind(self) -> MassKind {
         match self {
             Laplacian::Cot | Laplacian::Uniform => MassKind::Identity,
-            Laplacian::VoronoiCot => MassKind::Barycentric,
+            Laplacian::VoronoiCot | Laplacian::Robust => MassKind::Barycentric,
             Laplacian::Fem => MassKind::Fem,
             Laplacian::MixedVoronoi => MassKind::MixedVoronoi,
         }
     }
 
-    /// True when the stiffness is the cotangent one.
+    /// True when the stiffness is a cotangent one (on the input triangles, or for
+    /// [`Laplacian::Robust`] on the intrinsic Delaunay triangulation of the tufted cover).
     pub fn is_cotangent(self) -> bool {
         !matches!(self, Laplacian::Uniform)
+    }
+
+    /// True when the discretization is defined on any triangle soup (non-manifold edges
+    /// and vertices, degenerate and duplicate triangles) with a positive semi-definite
+    /// stiffness whose off-diagonal entries are `<= 0`: only [`Laplacian::Robust`].
+    pub fn is_robust(self) -> bool {
+        matches!(self, Laplacian::Robust)
     }
 }
 
@@ -82,11 +106,12 @@ impl FromStr for Laplacian {
                 "linear-fem" | "wfem" => Some(Laplacian::Fem),
                 "mixed" | "meyer" => Some(Laplacian::MixedVoronoi),
                 "graph" | "combinatorial" => Some(Laplacian::Uniform),
+                "tufted" | "intrinsic-delaunay" | "nonmanifold" => Some(Laplacian::Robust),
                 _ => None,
             })
             .ok_or_else(|| {
                 format!(
-                    "unknown Laplacian '{s}': expected one of cot, voronoi-cot, fem, mixed-voronoi, uniform"
+                    "unknown Laplacian '{s}': expected one of cot, voronoi-cot, fem, mixed-voronoi, uniform, robust"
                 )
             })
     }
@@ -104,8 +129,23 @@ pub struct Operators {
 }
 
 impl Operators {
-    /// Assembles (S, B) for `mesh`.
+    /// Assembles (S, B) for `mesh`. [`Laplacian::Robust`] uses the default
+    /// [`RobustParams`] (see [`Operators::robust`] for others).
     pub fn new(mesh: &Mesh, laplacian: Laplacian) -> Self {
+        if laplacian == Laplacian::Robust {
+            let r = robust_from_soup(
+                mesh.positions(),
+                mesh.triangles(),
+                &RobustParams::default(),
+                1.0,
+                Gluing::Angular,
+            );
+            return Self {
+                laplacian,
+                stiffness: r.stiffness,
+                mass: r.mass,
+            };
+        }
         let stiffness = if laplacian.is_cotangent() {
             cotan_stiffness(mesh)
         } else {
@@ -117,6 +157,37 @@ impl Operators {
             stiffness,
             mass,
         }
+    }
+
+    /// The robust pair (S, B) of `mesh` with the given parameters
+    /// ([`super::robust::robust_laplacian`]); `laplacian` is [`Laplacian::Robust`].
+    pub fn robust(mesh: &Mesh, params: &RobustParams) -> Result<Self, RobustError> {
+        params.validate()?;
+        let r = robust_from_soup(
+            mesh.positions(),
+            mesh.triangles(),
+            params,
+            1.0,
+            Gluing::Angular,
+        );
+        Ok(Self {
+            laplacian: Laplacian::Robust,
+            stiffness: r.stiffness,
+            mass: r.mass,
+        })
+    }
+
+    /// The point-cloud Laplacian (S, B) of `cloud`
+    /// ([`super::point_cloud::point_cloud_laplacian`]), `n x n` for `n` points;
+    /// `laplacian` is [`Laplacian::Robust`] (the same pipeline after the local
+    /// triangulations).
+    pub fn from_points(cloud: &PointCloud, params: &PointCloudParams) -> Result<Self, RobustError> {
+        let r = point_cloud_laplacian(cloud, params)?;
+        Ok(Self {
+            laplacian: Laplacian::Robust,
+            stiffness: r.stiffness,
+            mass: r.mass,
+        })
     }
 
     /// Number of vertices.

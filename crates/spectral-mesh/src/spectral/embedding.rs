@@ -1,7 +1,7 @@
 //! Spectral embeddings `p -> (sqrt(w(lambda_k)) x_k(p))_k` (Sect. 5 of the paper): the
 //! Euclidean distance between embedded points is the filtered spectral distance.
 
-use super::Eigenbasis;
+use super::BasisView;
 use super::distances::DistanceError;
 use super::filters::Filter;
 use crate::mesh::{Mesh, MeshError};
@@ -28,12 +28,13 @@ pub enum EmbeddingError {
 /// The spectral embedding: one vector of `min(dims, number of non-zero pairs)` coordinates
 /// per vertex, coordinate `c` = `sqrt(w(lambda)) x(p)` of the `c`-th pair with non-zero
 /// weight (zero eigenvalues and suppressed pairs are skipped), in basis order.
-pub fn spectral_embedding(
-    basis: &Eigenbasis,
+pub fn spectral_embedding<'a>(
+    basis: impl Into<BasisView<'a>>,
     filter: &Filter,
     dims: usize,
 ) -> Result<Vec<Vec<f64>>, EmbeddingError> {
-    let w = filter.weights(&basis.values).map_err(DistanceError::from)?;
+    let basis: BasisView<'a> = basis.into();
+    let w = filter.weights(basis.values).map_err(DistanceError::from)?;
     let n = basis.n;
     let used: Vec<usize> = (0..w.len()).filter(|&j| w[j] > 0.0).take(dims).collect();
     Ok((0..n)
@@ -47,11 +48,12 @@ pub fn spectral_embedding(
 
 /// The mesh with the same triangles whose positions are the first three coordinates of
 /// the spectral embedding (missing coordinates are 0).
-pub fn embedding_mesh(
+pub fn embedding_mesh<'a>(
     mesh: &Mesh,
-    basis: &Eigenbasis,
+    basis: impl Into<BasisView<'a>>,
     filter: &Filter,
 ) -> Result<Mesh, EmbeddingError> {
+    let basis: BasisView<'a> = basis.into();
     if mesh.n_vertices() != basis.n {
         return Err(EmbeddingError::SizeMismatch {
             basis: basis.n,

@@ -35,7 +35,7 @@
 
 use rayon::prelude::*;
 
-use super::Eigenbasis;
+use super::{BasisView, Eigenbasis};
 use crate::linalg::{CholeskyError, SparseCholesky};
 use crate::operators::Operators;
 
@@ -128,26 +128,60 @@ pub fn normalize_basis(basis: &Eigenbasis, norm: ScaleNormalization) -> Eigenbas
     b
 }
 
+/// Rows per parallel task of the column kernels ([`combine_columns`] and the distances').
+pub(crate) const ROW_BLOCK: usize = 4096;
+
+/// Whether a kernel over `n x k` values is worth spreading over the threads.
+pub(crate) fn parallel_worth(n: usize, k: usize) -> bool {
+    n * k > 200_000
+}
+
 /// `y = X c` for the column-major `n x k` matrix `x`, parallel over blocks of rows.
+///
+/// Columns with `c_j = 0` are skipped; the others are added in order, four at a time:
+/// each row's sum stays in a register over the four columns, with the same additions in
+/// the same order as one column at a time, so the same bits, in a third of the time (one
+/// pass over the block of `y` per four columns instead of per column).
 pub(crate) fn combine_columns(x: &[f64], n: usize, c: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; n];
-    const BLOCK: usize = 2048;
+    let used: Vec<(usize, f64)> = c
+        .iter()
+        .copied()
+        .enumerate()
+        .filter(|&(_, cj)| cj != 0.0)
+        .collect();
     let work = |(b, chunk): (usize, &mut [f64])| {
-        let start = b * BLOCK;
+        let start = b * ROW_BLOCK;
         let len = chunk.len();
-        for (j, &cj) in c.iter().enumerate() {
-            if cj != 0.0 {
-                let col = &x[j * n + start..j * n + start + len];
-                for (yi, xi) in chunk.iter_mut().zip(col) {
-                    *yi += cj * xi;
-                }
+        let col = |j: usize| &x[j * n + start..j * n + start + len];
+        let mut groups = used.chunks_exact(4);
+        for g in &mut groups {
+            let (c0, c1, c2, c3) = (g[0].1, g[1].1, g[2].1, g[3].1);
+            let rows = chunk
+                .iter_mut()
+                .zip(col(g[0].0))
+                .zip(col(g[1].0))
+                .zip(col(g[2].0))
+                .zip(col(g[3].0));
+            for ((((yi, &x0), &x1), &x2), &x3) in rows {
+                let mut t = *yi;
+                t += c0 * x0;
+                t += c1 * x1;
+                t += c2 * x2;
+                t += c3 * x3;
+                *yi = t;
+            }
+        }
+        for &(j, cj) in groups.remainder() {
+            for (yi, xi) in chunk.iter_mut().zip(col(j)) {
+                *yi += cj * xi;
             }
         }
     };
-    if n * c.len() > 200_000 {
-        y.par_chunks_mut(BLOCK).enumerate().for_each(work);
+    if parallel_worth(n, c.len()) {
+        y.par_chunks_mut(ROW_BLOCK).enumerate().for_each(work);
     } else {
-        y.chunks_mut(BLOCK).enumerate().for_each(work);
+        y.chunks_mut(ROW_BLOCK).enumerate().for_each(work);
     }
     y
 }
@@ -162,7 +196,7 @@ pub(crate) fn project(x: &[f64], n: usize, g: &[f64]) -> Vec<f64> {
             .map(|(a, b)| a * b)
             .sum()
     };
-    if n * k > 200_000 {
+    if parallel_worth(n, k) {
         (0..k).into_par_iter().map(dotc).collect()
     } else {
         (0..k).map(dotc).collect()
@@ -178,7 +212,7 @@ fn check_time(t: f64) -> Result<(), HeatError> {
 }
 
 /// The row `i` of `X^T M` for the kernel's right factor `M` (B, D or I): `k` entries.
-fn anchor_coefficients(basis: &Eigenbasis, anchor: usize, kind: KernelKind) -> Vec<f64> {
+fn anchor_coefficients(basis: BasisView<'_>, anchor: usize, kind: KernelKind) -> Vec<f64> {
     let n = basis.n;
     let k = basis.k();
     match kind {
@@ -206,12 +240,13 @@ fn anchor_coefficients(basis: &Eigenbasis, anchor: usize, kind: KernelKind) -> V
 /// The basis function `K_t e_anchor` (`n` values) of the truncated kernel of `kind`, in
 /// O(nk). Times are those of the basis as given (no scale normalisation; see
 /// [`HeatSolver`] for that).
-pub fn basis_function(
-    basis: &Eigenbasis,
+pub fn basis_function<'a>(
+    basis: impl Into<BasisView<'a>>,
     anchor: usize,
     t: f64,
     kind: KernelKind,
 ) -> Result<Vec<f64>, HeatError> {
+    let basis: BasisView<'a> = basis.into();
     if anchor >= basis.n {
         return Err(HeatError::VertexOutOfRange {
             vertex: anchor,
@@ -220,20 +255,21 @@ pub fn basis_function(
     }
     check_time(t)?;
     let mut c = anchor_coefficients(basis, anchor, kind);
-    for (cj, l) in c.iter_mut().zip(&basis.values) {
+    for (cj, l) in c.iter_mut().zip(basis.values) {
         *cj *= (-l * t).exp();
     }
-    Ok(combine_columns(&basis.vectors, basis.n, &c))
+    Ok(combine_columns(basis.vectors, basis.n, &c))
 }
 
 /// The diffusion `K_t f` (`n` values) of the signal `f` by the truncated kernel of `kind`,
 /// in O(nk + nnz(B)).
-pub fn diffuse(
-    basis: &Eigenbasis,
+pub fn diffuse<'a>(
+    basis: impl Into<BasisView<'a>>,
     f: &[f64],
     t: f64,
     kind: KernelKind,
 ) -> Result<Vec<f64>, HeatError> {
+    let basis: BasisView<'a> = basis.into();
     if f.len() != basis.n {
         return Err(HeatError::LengthMismatch {
             got: f.len(),
@@ -252,11 +288,11 @@ pub fn diffuse(
             .collect(),
         KernelKind::Standard => f.to_vec(),
     };
-    let mut c = project(&basis.vectors, basis.n, &g);
-    for (cj, l) in c.iter_mut().zip(&basis.values) {
+    let mut c = project(basis.vectors, basis.n, &g);
+    for (cj, l) in c.iter_mut().zip(basis.values) {
         *cj *= (-l * t).exp();
     }
-    Ok(combine_columns(&basis.vectors, basis.n, &c))
+    Ok(combine_columns(basis.vectors, basis.n, &c))
 }
 
 /// A heat-kernel solver: holds a (normalised) basis and the precomputed rows of `X^T M`
@@ -284,7 +320,7 @@ impl HeatSolver {
             .par_chunks_mut(k.max(1))
             .enumerate()
             .for_each(|(i, row)| {
-                row.copy_from_slice(&anchor_coefficients(&b, i, kind));
+                row.copy_from_slice(&anchor_coefficients(b.view(k), i, kind));
             });
         let lumped = b.mass.row_sums();
         Self {
@@ -501,6 +537,40 @@ pub fn sphere_heat_kernel(theta: f64, t: f64, radius: f64, l_max: usize) -> f64 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The four-column kernel gives the bits of one column at a time (zero coefficients
+    /// skipped), for sizes around the block and group sizes, serial and parallel.
+    #[test]
+    fn combine_columns_is_one_column_at_a_time() {
+        let mut state = 7u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.3
+        };
+        for (n, k) in [(5, 3), (100, 9), (ROW_BLOCK + 17, 13), (3 * ROW_BLOCK, 70)] {
+            let x: Vec<f64> = (0..n * k).map(|_| next()).collect();
+            let mut c: Vec<f64> = (0..k).map(|_| next() * 1e3).collect();
+            c[k / 2] = 0.0;
+            c[0] = -0.0;
+            let mut naive = vec![0.0; n];
+            for (j, &cj) in c.iter().enumerate() {
+                if cj != 0.0 {
+                    for i in 0..n {
+                        naive[i] += cj * x[j * n + i];
+                    }
+                }
+            }
+            let got = combine_columns(&x, n, &c);
+            assert!(
+                got.iter()
+                    .zip(&naive)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "n {n} k {k}"
+            );
+        }
+    }
 
     #[test]
     fn sphere_kernel_integrates_to_one_and_matches_small_l() {

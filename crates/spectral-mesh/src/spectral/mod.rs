@@ -8,4 +8,4 @@ pub mod heat;
 pub mod signatures;
 pub mod store;
 
-pub use eigenbasis::Eigenbasis;
+pub use eigenbasis::{BasisView, EigenSolver, Eigenbasis};

@@ -14,7 +14,7 @@
 //!
 //! Every signature is returned as one `n`-vector per time (energy).
 
-use super::Eigenbasis;
+use super::BasisView;
 use super::filters::{Filter, ZERO_EIGENVALUE_EPS};
 
 /// Errors of the signatures.
@@ -28,11 +28,11 @@ pub enum SignatureError {
     InvalidParameter(String),
 }
 
-fn lambda_max(basis: &Eigenbasis) -> f64 {
+fn lambda_max(basis: BasisView<'_>) -> f64 {
     basis.values.iter().fold(0.0f64, |m, v| m.max(v.abs()))
 }
 
-fn first_nonzero(basis: &Eigenbasis) -> Result<(f64, f64), SignatureError> {
+fn first_nonzero(basis: BasisView<'_>) -> Result<(f64, f64), SignatureError> {
     let lmax = lambda_max(basis);
     if !(lmax > 0.0 && lmax.is_finite()) {
         return Err(SignatureError::EmptySpectrum);
@@ -50,7 +50,7 @@ fn first_nonzero(basis: &Eigenbasis) -> Result<(f64, f64), SignatureError> {
 }
 
 /// `sum_k c_k x_k(p)^2` for all p.
-fn weighted_squares(basis: &Eigenbasis, c: &[f64]) -> Vec<f64> {
+fn weighted_squares(basis: BasisView<'_>, c: &[f64]) -> Vec<f64> {
     let n = basis.n;
     let mut g = vec![0.0; n];
     for (j, &cj) in c.iter().enumerate() {
@@ -65,7 +65,8 @@ fn weighted_squares(basis: &Eigenbasis, c: &[f64]) -> Vec<f64> {
 
 /// Heat kernel signature at each time in `times` (one `n`-vector per time); `scaled`
 /// divides by the heat trace.
-pub fn hks(basis: &Eigenbasis, times: &[f64], scaled: bool) -> Vec<Vec<f64>> {
+pub fn hks<'a>(basis: impl Into<BasisView<'a>>, times: &[f64], scaled: bool) -> Vec<Vec<f64>> {
+    let basis: BasisView<'a> = basis.into();
     times
         .iter()
         .map(|&t| {
@@ -84,7 +85,11 @@ pub fn hks(basis: &Eigenbasis, times: &[f64], scaled: bool) -> Vec<Vec<f64>> {
 
 /// pyFM's automatic HKS times: `n_times` values geometrically spaced from
 /// `4 ln 10 / lambda_max` to `4 ln 10 / lambda_1` (ascending).
-pub fn hks_auto_times(basis: &Eigenbasis, n_times: usize) -> Result<Vec<f64>, SignatureError> {
+pub fn hks_auto_times<'a>(
+    basis: impl Into<BasisView<'a>>,
+    n_times: usize,
+) -> Result<Vec<f64>, SignatureError> {
+    let basis: BasisView<'a> = basis.into();
     let (l1, lmax) = first_nonzero(basis)?;
     let c = 4.0 * 10f64.ln();
     Ok(geomspace(c / lmax, c / l1, n_times))
@@ -121,12 +126,13 @@ fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
 
 /// Wave kernel signature at each energy (log-eigenvalue) in `energies` with bandwidth
 /// `sigma` (one `n`-vector per energy); `scaled` divides by `sum_k c_k(e)`.
-pub fn wks(
-    basis: &Eigenbasis,
+pub fn wks<'a>(
+    basis: impl Into<BasisView<'a>>,
     energies: &[f64],
     sigma: f64,
     scaled: bool,
 ) -> Result<Vec<Vec<f64>>, SignatureError> {
+    let basis: BasisView<'a> = basis.into();
     if !(sigma.is_finite() && sigma > 0.0) {
         return Err(SignatureError::InvalidParameter(format!(
             "WKS sigma must be finite and > 0, got {sigma}"
@@ -164,10 +170,11 @@ pub fn wks(
 }
 
 /// pyFM's automatic WKS energies and bandwidth: returns `(energies, sigma)`.
-pub fn wks_auto_energies(
-    basis: &Eigenbasis,
+pub fn wks_auto_energies<'a>(
+    basis: impl Into<BasisView<'a>>,
     n_energies: usize,
 ) -> Result<(Vec<f64>, f64), SignatureError> {
+    let basis: BasisView<'a> = basis.into();
     if n_energies == 0 {
         return Err(SignatureError::InvalidParameter(
             "at least one WKS energy is needed".into(),
@@ -188,9 +195,13 @@ pub fn wks_auto_energies(
 
 /// Auto-diffusion function `G(p,p)` with the diffusion weight `exp(-t s)` (zero
 /// eigenvalues skipped), `n` values.
-pub fn auto_diffusion(basis: &Eigenbasis, t: f64) -> Result<Vec<f64>, SignatureError> {
+pub fn auto_diffusion<'a>(
+    basis: impl Into<BasisView<'a>>,
+    t: f64,
+) -> Result<Vec<f64>, SignatureError> {
+    let basis: BasisView<'a> = basis.into();
     let w = Filter::Diffusion { t }
-        .weights(&basis.values)
+        .weights(basis.values)
         .map_err(|e| SignatureError::InvalidParameter(e.to_string()))?;
     Ok(weighted_squares(basis, &w))
 }

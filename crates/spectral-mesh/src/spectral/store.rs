@@ -12,7 +12,7 @@
 //!   the Laplacian name, `n`, `k`, the mesh hash and the solver parameters.
 
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use npyz::WriterBuilder;
 
@@ -82,20 +82,7 @@ impl BasisMeta {
 /// A content hash of the mesh: BLAKE3 (hex) of the vertex count, the positions as
 /// little-endian f64, the triangle count and the triangles as little-endian u64.
 pub fn mesh_hash(mesh: &Mesh) -> String {
-    let mut h = blake3::Hasher::new();
-    h.update(&(mesh.positions().len() as u64).to_le_bytes());
-    for p in mesh.positions() {
-        for c in p {
-            h.update(&c.to_le_bytes());
-        }
-    }
-    h.update(&(mesh.triangles().len() as u64).to_le_bytes());
-    for t in mesh.triangles() {
-        for &i in t {
-            h.update(&(i as u64).to_le_bytes());
-        }
-    }
-    h.finalize().to_hex().to_string()
+    mesh.content_hash()
 }
 
 fn io_err(path: &Path) -> impl Fn(std::io::Error) -> StoreError + '_ {
@@ -105,8 +92,22 @@ fn io_err(path: &Path) -> impl Fn(std::io::Error) -> StoreError + '_ {
     }
 }
 
-fn npy_f64(data: &[f64], shape: &[u64], fortran: bool) -> std::io::Result<Vec<u8>> {
+/// A little-endian float64 NumPy `.npy` file of `data` with the given shape, in C order
+/// (row-major) or Fortran order (column-major); `numpy.load` reads it.
+pub fn npy_f64(data: &[f64], shape: &[u64], fortran: bool) -> std::io::Result<Vec<u8>> {
     let mut buf = Vec::new();
+    write_npy_f64(&mut buf, data, shape, fortran)?;
+    Ok(buf)
+}
+
+/// Streams [`npy_f64`]'s bytes to `out` (through a buffer: the writer sees large writes).
+fn write_npy_f64(
+    out: &mut impl Write,
+    data: &[f64],
+    shape: &[u64],
+    fortran: bool,
+) -> std::io::Result<()> {
+    let mut buffered = std::io::BufWriter::with_capacity(1 << 20, out);
     {
         let mut w = npyz::WriteOptions::new()
             .default_dtype()
@@ -116,12 +117,12 @@ fn npy_f64(data: &[f64], shape: &[u64], fortran: bool) -> std::io::Result<Vec<u8
             } else {
                 npyz::Order::C
             })
-            .writer(&mut buf)
+            .writer(&mut buffered)
             .begin_nd()?;
         w.extend(data.iter().copied())?;
         w.finish()?;
     }
-    Ok(buf)
+    buffered.flush()
 }
 
 fn npy_i64(data: &[i64]) -> std::io::Result<Vec<u8>> {
@@ -152,8 +153,8 @@ fn npy_u8(data: &[u8]) -> std::io::Result<Vec<u8>> {
     Ok(buf)
 }
 
-/// Writes `basis` to `path` as an `.npz` archive (deflate-compressed; see the module
-/// documentation for the arrays). The file is written to a temporary name and renamed,
+/// Writes `basis` to `path` as an `.npz` archive (the eigenvectors stored, the small
+/// arrays deflated; see the module documentation for the arrays). The file is written to a temporary name and renamed,
 /// so a crash never leaves a truncated archive under `path`.
 pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(), StoreError> {
     let (n, k) = (basis.n, basis.k());
@@ -164,14 +165,13 @@ pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(),
     })?;
     let m = &basis.mass;
     let to_i64 = |v: &[usize]| v.iter().map(|&x| x as i64).collect::<Vec<i64>>();
-    let arrays: Vec<(&str, Vec<u8>)> = vec![
+    // The small arrays are compressed; the eigenvectors (n x k doubles, which deflate
+    // shrinks by only about a fifth at a cost of seconds per 100 MB) are stored and
+    // streamed into the archive without a copy, as NumPy's `savez` stores every array.
+    let small: Vec<(&str, Vec<u8>)> = vec![
         (
             "eigenvalues",
             npy_f64(&basis.values, &[k as u64], false).map_err(&e)?,
-        ),
-        (
-            "eigenvectors",
-            npy_f64(&basis.vectors[..n * k], &[n as u64, k as u64], true).map_err(&e)?,
         ),
         (
             "mass_data",
@@ -189,31 +189,37 @@ pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(),
         ),
         ("meta", npy_u8(&meta_json).map_err(&e)?),
     ];
-    let tmp: PathBuf = {
-        let mut name = path.file_name().unwrap_or_default().to_os_string();
-        name.push(format!(".tmp{}", std::process::id()));
-        path.with_file_name(name)
-    };
-    let result = (|| -> std::io::Result<()> {
-        let file = std::fs::File::create(&tmp)?;
+    crate::io::write_atomic_with(path, |file| {
         let mut zip = zip::ZipWriter::new(std::io::BufWriter::new(file));
-        let opts = zip::write::SimpleFileOptions::default()
+        let deflated = zip::write::SimpleFileOptions::default()
             .compression_method(zip::CompressionMethod::Deflated)
             .large_file(true);
-        for (name, bytes) in &arrays {
-            zip.start_file(format!("{name}.npy"), opts)
+        let stored = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Stored)
+            .large_file(true);
+        let (first, rest) = small.split_at(1);
+        for (name, bytes) in first {
+            zip.start_file(format!("{name}.npy"), deflated)
+                .map_err(std::io::Error::other)?;
+            zip.write_all(bytes)?;
+        }
+        zip.start_file("eigenvectors.npy", stored)
+            .map_err(std::io::Error::other)?;
+        write_npy_f64(
+            &mut zip,
+            &basis.vectors[..n * k],
+            &[n as u64, k as u64],
+            true,
+        )?;
+        for (name, bytes) in rest {
+            zip.start_file(format!("{name}.npy"), deflated)
                 .map_err(std::io::Error::other)?;
             zip.write_all(bytes)?;
         }
         let mut inner = zip.finish().map_err(std::io::Error::other)?;
-        inner.flush()?;
-        Ok(())
-    })();
-    if let Err(err) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e(err));
-    }
-    std::fs::rename(&tmp, path).map_err(&e)
+        inner.flush()
+    })
+    .map_err(|err| e(err.source))
 }
 
 /// Reads an archive written by [`save_npz`] (or by NumPy with the same arrays; the
@@ -438,8 +444,9 @@ pub fn cache_file_name(hash: &str, laplacian: Laplacian, params: &EigenParams) -
 
 /// Returns the basis stored in `cache_dir` for this mesh, discretization and parameters,
 /// or computes it (and stores it there). A stored basis is reused only when the mesh hash,
-/// the Laplacian and every parameter match; anything unreadable is recomputed and
-/// overwritten. The boolean is `true` when the basis came from the cache.
+/// the Laplacian, every parameter and the mass matrix (bit for bit: a basis of the shape
+/// scaled to unit area is not served for the shape as given) match; anything unreadable
+/// or different is recomputed and overwritten. The boolean is `true` when the basis came from the cache.
 pub fn load_or_compute(
     cache_dir: &Path,
     mesh: &Mesh,
@@ -456,6 +463,7 @@ pub fn load_or_compute(
         && meta.params == *params
         && basis.n == ops.n()
         && basis.k() == params.k
+        && basis.mass == ops.mass
     {
         return Ok((basis, true));
     }

@@ -1,51 +1,72 @@
-//! Experiment files (`run FILE.toml`, `--save-experiment FILE.toml`): one experiment with
-//! every parameter written out. The format is documented in `docs/experiment-files.md`.
+//! Experiment files: one run with every parameter written out, replayed by
+//! `spectral-mesh run FILE.toml`. One schema for every face: the CLI's
+//! `--save-experiment`, the web app's download and the Python package write it, and `run`
+//! reads it. The format is documented in `docs/experiment-files.md`.
+//!
+//! A flat TOML table: `experiment` (`harmonic`, `diffusion-basis`, `spectral-distance` —
+//! the paper's three — or `field`), `mesh` and the analysis keys (`mesh_hash`, `repair`,
+//! `laplacian`, `normalize`, `basis_k`, `out`), the paper experiments' own keys (`k`, `t`,
+//! `anchor`, `distance`, `source`, `constraints`, `order`), a `[field]` table holding a
+//! [`FieldRequest`] for `experiment = "field"`, and a `[figure]` table of picture options.
 
 use std::path::{Component, Path, PathBuf};
 
-use anyhow::{Result, anyhow, bail};
 use serde::{Deserialize, Serialize};
-use spectral_mesh::Laplacian;
-use spectral_mesh::fields::harmonic::Constraint;
-use spectral_mesh::spectral::filters::Filter;
-use spectral_mesh_render::Colormap;
-use spectral_mesh_render::raster::View;
 
-use crate::figure::FigureArgs;
+use crate::analysis::{Constraints, DistanceSpec, FieldRequest, Kernel};
+use crate::fields::harmonic::Constraint;
+use crate::operators::Laplacian;
 
 /// The experiments a file can name.
-pub const EXPERIMENTS: [&str; 3] = ["harmonic", "diffusion-basis", "spectral-distance"];
+pub const EXPERIMENTS: [&str; 4] = ["harmonic", "diffusion-basis", "spectral-distance", "field"];
 
-/// Picture options (`[figure]`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// An error in an experiment file: `origin:line: key 'k': problem` where known.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+#[error("{0}")]
+pub struct ExperimentFileError(pub String);
+
+fn key_err(key: &str, msg: impl std::fmt::Display) -> ExperimentFileError {
+    ExperimentFileError(format!("key '{key}': {msg}"))
+}
+
+/// Picture options (`[figure]`), as plain data: the render crate turns them into its
+/// options and checks the names (colour map, view).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FigureFile {
     /// Number of level sets (0 = none).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub levels: Option<usize>,
     /// Colour map name.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub colormap: Option<String>,
     /// View: front, side, top, iso or "AZ,EL".
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub view: Option<String>,
     /// Picture size in pixels.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub size: Option<u32>,
     /// Transparent background.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub transparent: Option<bool>,
     /// Mark critical points.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub critical_points: Option<bool>,
     /// Draw the colour bar.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub colorbar: Option<bool>,
 }
 
 /// An experiment file. Every key but `experiment` and `mesh` is optional on reading (the
-/// command's default applies); saved files write every key.
+/// default applies); saved files write every key that applies.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ExperimentFile {
-    /// harmonic | diffusion-basis | spectral-distance.
+    /// harmonic | diffusion-basis | spectral-distance | field.
     pub experiment: String,
     /// Mesh file (relative to the experiment file's folder, `${VAR}` expanded) or shape.
     pub mesh: String,
-    /// blake3 of the mesh as read (before any repair).
+    /// blake3 of the mesh as read (before any repair), 64 hex digits.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mesh_hash: Option<String>,
     /// Repair the mesh after reading.
@@ -54,15 +75,20 @@ pub struct ExperimentFile {
     /// Discretization.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub laplacian: Option<String>,
-    /// Number of eigenpairs.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub k: Option<usize>,
-    /// Diffusion time.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub t: Option<f64>,
-    /// Scale normalisation to unit area.
+    /// Scale normalisation to unit area (default true).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub normalize: Option<bool>,
+    /// Pairs the eigenbasis was computed with, when more than the `k` used (the first `k`
+    /// pairs of a larger basis): the replay computes the same basis, so the field is the
+    /// same to the last bit.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub basis_k: Option<usize>,
+    /// Number of eigenpairs (diffusion-basis, spectral-distance).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k: Option<usize>,
+    /// Diffusion time (diffusion-basis).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub t: Option<f64>,
     /// Anchor vertex (diffusion-basis).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub anchor: Option<usize>,
@@ -72,15 +98,19 @@ pub struct ExperimentFile {
     /// Source vertex (spectral-distance).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub source: Option<usize>,
-    /// Constraint counts `[2, 4, 6]` or explicit `[{ vertex = 3, value = 0.0 }, ...]`.
+    /// Constraint counts `[2, 4, 6]` or explicit `[{ vertex = 3, value = 0.0 }, ...]`
+    /// (harmonic).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub constraints: Option<toml::Value>,
-    /// 1 = harmonic, 2 = bi-harmonic.
+    /// 1 = harmonic, 2 = bi-harmonic (harmonic).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub order: Option<u32>,
     /// Output folder (relative to the experiment file's folder).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub out: Option<String>,
+    /// The field (experiment = "field").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub field: Option<FieldRequest>,
     /// Picture options.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub figure: Option<FigureFile>,
@@ -88,15 +118,15 @@ pub struct ExperimentFile {
 
 /// The harmonic constraints of a file.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Constraints {
+pub enum HarmonicConstraints {
     /// Default constraint counts, one map each.
     Counts(Vec<usize>),
     /// One map with these constraints.
     Explicit(Vec<Constraint>),
 }
 
-/// Turns a TOML (de)serialization error into one naming the key of the offending line.
-pub fn toml_error(e: &toml::de::Error, text: &str, origin: &str) -> anyhow::Error {
+/// Turns a TOML error into one naming the line and the key of the offending line.
+pub fn toml_error(e: &toml::de::Error, text: &str, origin: &str) -> ExperimentFileError {
     let msg = e.message().trim().to_string();
     if let Some(span) = e.span() {
         let start = span.start.min(text.len());
@@ -109,18 +139,17 @@ pub fn toml_error(e: &toml::de::Error, text: &str, origin: &str) -> anyhow::Erro
             .map(|k| k.trim().trim_matches('"'))
             .filter(|k| !k.is_empty() && line.contains('=') && !k.starts_with('['))
         {
-            let table = current_table(text, line_no);
-            let full = match table {
+            let full = match current_table(text, line_no) {
                 Some(t) => format!("{t}.{key}"),
                 None => key.to_string(),
             };
             if !msg.contains(&format!("`{key}`")) {
-                return anyhow!("{origin}:{line_no}: key '{full}': {msg}");
+                return ExperimentFileError(format!("{origin}:{line_no}: key '{full}': {msg}"));
             }
         }
-        return anyhow!("{origin}:{line_no}: {msg}");
+        return ExperimentFileError(format!("{origin}:{line_no}: {msg}"));
     }
-    anyhow!("{origin}: {msg}")
+    ExperimentFileError(format!("{origin}: {msg}"))
 }
 
 /// The `[table]` header in force at 1-based line `line_no`, if any.
@@ -135,20 +164,48 @@ fn current_table(text: &str, line_no: usize) -> Option<String> {
     t
 }
 
-fn key_err(key: &str, msg: impl std::fmt::Display) -> anyhow::Error {
-    anyhow!("key '{key}': {msg}")
-}
-
 impl ExperimentFile {
+    /// A file for `experiment` on `mesh` with nothing else set.
+    pub fn new(experiment: &str, mesh: &str) -> Self {
+        Self {
+            experiment: experiment.into(),
+            mesh: mesh.into(),
+            mesh_hash: None,
+            repair: None,
+            laplacian: None,
+            normalize: None,
+            basis_k: None,
+            k: None,
+            t: None,
+            anchor: None,
+            distance: None,
+            source: None,
+            constraints: None,
+            order: None,
+            out: None,
+            field: None,
+            figure: None,
+        }
+    }
+
+    /// The file of one field: `experiment = "field"` with the request in `[field]`.
+    pub fn for_field(mesh: &str, request: FieldRequest) -> Self {
+        Self {
+            field: Some(request),
+            ..Self::new("field", mesh)
+        }
+    }
+
     /// Parses and validates a file's text; `origin` names it in errors.
-    pub fn parse(text: &str, origin: &str) -> Result<Self> {
+    pub fn parse(text: &str, origin: &str) -> Result<Self, ExperimentFileError> {
         let f: ExperimentFile = toml::from_str(text).map_err(|e| toml_error(&e, text, origin))?;
-        f.validate().map_err(|e| anyhow!("{origin}: {e}"))?;
+        f.validate()
+            .map_err(|e| ExperimentFileError(format!("{origin}: {e}")))?;
         Ok(f)
     }
 
     /// Checks every value, and that every key applies to the experiment; errors name the key.
-    pub fn validate(&self) -> Result<()> {
+    pub fn validate(&self) -> Result<(), ExperimentFileError> {
         let exp = self.experiment.as_str();
         if !EXPERIMENTS.contains(&exp) {
             return Err(key_err(
@@ -158,18 +215,20 @@ impl ExperimentFile {
         }
         let applies: &[&str] = match exp {
             "harmonic" => &["constraints", "order"],
-            "diffusion-basis" => &["k", "t", "anchor", "normalize"],
-            _ => &["k", "distance", "source", "normalize"],
+            "diffusion-basis" => &["k", "t", "anchor", "basis_k"],
+            "spectral-distance" => &["k", "distance", "source", "basis_k"],
+            _ => &["field", "basis_k"],
         };
         let present = [
             ("k", self.k.is_some()),
             ("t", self.t.is_some()),
             ("anchor", self.anchor.is_some()),
-            ("normalize", self.normalize.is_some()),
             ("distance", self.distance.is_some()),
             ("source", self.source.is_some()),
             ("constraints", self.constraints.is_some()),
             ("order", self.order.is_some()),
+            ("field", self.field.is_some()),
+            ("basis_k", self.basis_k.is_some()),
         ];
         for (key, set) in present {
             if set && !applies.contains(&key) {
@@ -181,6 +240,12 @@ impl ExperimentFile {
                     ),
                 ));
             }
+        }
+        if exp == "field" && self.field.is_none() {
+            return Err(key_err(
+                "field",
+                "experiment = \"field\" needs a [field] table with a kind (e.g. kind = \"heat\")",
+            ));
         }
         if self.mesh.trim().is_empty() {
             return Err(key_err("mesh", "is empty"));
@@ -214,30 +279,91 @@ impl ExperimentFile {
             ));
         }
         if let Some(d) = &self.distance {
-            parse_distance(d).map_err(|e| key_err("distance", e))?;
+            d.parse::<DistanceSpec>()
+                .map_err(|e| key_err("distance", e))?;
         }
-        self.constraints()?;
+        if exp == "harmonic" {
+            self.harmonic_constraints()?;
+        }
+        if let Some(r) = self.request() {
+            r.validate().map_err(|e| {
+                if exp == "field" {
+                    ExperimentFileError(format!("key 'field.{e}"))
+                } else {
+                    ExperimentFileError(format!("key '{e}"))
+                }
+            })?;
+            if let (Some(bk), Some(k)) = (self.basis_k, r.eigenpairs())
+                && bk < k
+            {
+                return Err(key_err(
+                    "basis_k",
+                    format!("{bk}: must be at least the k used ({k})"),
+                ));
+            }
+        }
         if let Some(o) = &self.out
             && o.trim().is_empty()
         {
             return Err(key_err("out", "is empty"));
         }
-        self.figure_args()?;
+        if let Some(f) = &self.figure {
+            if let Some(l) = f.levels
+                && l > 1000
+            {
+                return Err(key_err("figure.levels", format!("{l}: at most 1000")));
+            }
+            if let Some(s) = f.size
+                && !(16..=8192).contains(&s)
+            {
+                return Err(key_err("figure.size", format!("{s}: must be 16..8192")));
+            }
+        }
         Ok(())
     }
 
     /// The Laplacian (default fem).
-    pub fn laplacian(&self) -> Result<Laplacian> {
+    pub fn laplacian(&self) -> Result<Laplacian, ExperimentFileError> {
         match &self.laplacian {
             None => Ok(Laplacian::Fem),
-            Some(s) => parse_laplacian(s).map_err(|e| key_err("laplacian", e)),
+            Some(s) => s.parse::<Laplacian>().map_err(|e| key_err("laplacian", e)),
+        }
+    }
+
+    /// Scale normalisation (default true).
+    pub fn normalize(&self) -> bool {
+        self.normalize.unwrap_or(true)
+    }
+
+    /// The field request of a `diffusion-basis`, `spectral-distance` or `field` file
+    /// (`None` for `harmonic`, the paper's several maps). Unparsable keys give `None`;
+    /// [`ExperimentFile::validate`] reports them.
+    pub fn request(&self) -> Option<FieldRequest> {
+        let k = self.k.unwrap_or(crate::analysis::request::DEFAULT_K);
+        match self.experiment.as_str() {
+            "diffusion-basis" => Some(FieldRequest::Heat {
+                anchor: self.anchor,
+                t: self.t.unwrap_or(crate::analysis::request::DEFAULT_HEAT_T),
+                kernel: Kernel::Wfem,
+                k,
+            }),
+            "spectral-distance" => Some(FieldRequest::Distance {
+                source: self.source,
+                distance: match &self.distance {
+                    Some(d) => d.parse().ok()?,
+                    None => DistanceSpec::default(),
+                },
+                k,
+            }),
+            "field" => self.field.clone(),
+            _ => None,
         }
     }
 
     /// The harmonic constraints (default counts 2, 4, 6).
-    pub fn constraints(&self) -> Result<Constraints> {
+    pub fn harmonic_constraints(&self) -> Result<HarmonicConstraints, ExperimentFileError> {
         let Some(v) = &self.constraints else {
-            return Ok(Constraints::Counts(vec![2, 4, 6]));
+            return Ok(HarmonicConstraints::Counts(vec![2, 4, 6]));
         };
         let arr = v.as_array().ok_or_else(|| {
             key_err(
@@ -260,7 +386,7 @@ impl ExperimentFile {
                 }
                 counts.push(c as usize);
             }
-            return Ok(Constraints::Counts(counts));
+            return Ok(HarmonicConstraints::Counts(counts));
         }
         let mut list = Vec::new();
         for (i, x) in arr.iter().enumerate() {
@@ -288,50 +414,38 @@ impl ExperimentFile {
                 value,
             });
         }
-        Ok(Constraints::Explicit(list))
+        Ok(HarmonicConstraints::Explicit(list))
     }
 
-    /// The picture options (defaults for missing keys).
-    pub fn figure_args(&self) -> Result<FigureArgs> {
-        let mut a = FigureArgs::default();
-        let Some(f) = &self.figure else {
-            return Ok(a);
-        };
-        if let Some(l) = f.levels {
-            if l > 1000 {
-                return Err(key_err("figure.levels", format!("{l}: at most 1000")));
-            }
-            a.levels = l;
-        }
-        if let Some(c) = &f.colormap {
-            a.colormap = c
-                .parse::<Colormap>()
-                .map_err(|e| key_err("figure.colormap", e))?;
-        }
-        if let Some(v) = &f.view {
-            a.view = v.parse::<View>().map_err(|e| key_err("figure.view", e))?;
-        }
-        if let Some(s) = f.size {
-            if !(16..=8192).contains(&s) {
-                return Err(key_err("figure.size", format!("{s}: must be 16..8192")));
-            }
-            a.size = s;
-        }
-        if let Some(t) = f.transparent {
-            a.transparent = t;
-        }
-        if let Some(c) = f.critical_points {
-            a.no_critical_points = !c;
-        }
-        if let Some(c) = f.colorbar {
-            a.no_colorbar = !c;
-        }
-        Ok(a)
+    /// Sets `constraints` from the harmonic experiment's counts or explicit list.
+    pub fn set_harmonic_constraints(&mut self, c: &HarmonicConstraints) {
+        self.constraints = Some(match c {
+            HarmonicConstraints::Explicit(list) => toml::Value::Array(
+                list.iter()
+                    .map(|c| {
+                        toml::Value::Table(
+                            [
+                                ("vertex".to_string(), toml::Value::Integer(c.vertex as i64)),
+                                ("value".to_string(), toml::Value::Float(c.value)),
+                            ]
+                            .into_iter()
+                            .collect(),
+                        )
+                    })
+                    .collect(),
+            ),
+            HarmonicConstraints::Counts(counts) => toml::Value::Array(
+                counts
+                    .iter()
+                    .map(|&c| toml::Value::Integer(c as i64))
+                    .collect(),
+            ),
+        });
     }
 
     /// The file as TOML text, with a header comment.
-    pub fn to_toml(&self) -> Result<String> {
-        let body = toml::to_string(self)?;
+    pub fn to_toml(&self) -> Result<String, ExperimentFileError> {
+        let body = toml::to_string(self).map_err(|e| ExperimentFileError(e.to_string()))?;
         Ok(format!(
             "# spectral-mesh experiment file: replay with `spectral-mesh run FILE.toml`.\n\
              # Relative paths are relative to this file's folder; see docs/experiment-files.md.\n{body}"
@@ -339,74 +453,17 @@ impl ExperimentFile {
     }
 }
 
-/// Every key of a figure, written out.
-pub fn figure_file(a: &FigureArgs) -> FigureFile {
-    FigureFile {
-        levels: Some(a.levels),
-        colormap: Some(a.colormap.to_string()),
-        view: Some(view_name(a.view)),
-        size: Some(a.size),
-        transparent: Some(a.transparent),
-        critical_points: Some(!a.no_critical_points),
-        colorbar: Some(!a.no_colorbar),
-    }
-}
-
-/// The text form of a view that parses back to it.
-pub fn view_name(v: View) -> String {
-    match v {
-        View::Front => "front".into(),
-        View::Side => "side".into(),
-        View::Top => "top".into(),
-        View::Iso => "iso".into(),
-        View::Angles {
-            azimuth_deg,
-            elevation_deg,
-        } => format!("{azimuth_deg:?},{elevation_deg:?}"),
-    }
-}
-
-/// Parses a Laplacian name.
-pub fn parse_laplacian(s: &str) -> Result<Laplacian> {
-    Laplacian::ALL
-        .into_iter()
-        .find(|l| l.name() == s)
-        .ok_or_else(|| {
-            anyhow!(
-                "'{s}' is not one of {}",
-                Laplacian::ALL.map(|l| l.name()).join(", ")
-            )
-        })
-}
-
-/// A distance spec: a filter, or the wFEM diffusion distance `wfem-diffusion[:t=T]` (eq. 15).
-pub enum DistanceSpec {
-    /// A filter `w(lambda)`.
-    Filter(Filter),
-    /// The wFEM diffusion distance of eq. 15 at time t.
-    Wfem(f64),
-}
-
-/// Parses `--distance` / `distance`.
-pub fn parse_distance(s: &str) -> Result<DistanceSpec> {
-    if let Some(rest) = s.strip_prefix("wfem-diffusion") {
-        let t = rest.trim_start_matches(':').trim_start_matches("t=").trim();
-        let t = if t.is_empty() {
-            0.5
-        } else {
-            t.parse::<f64>()
-                .map_err(|_| anyhow!("{s}: bad time '{t}'"))?
-        };
-        if !(t.is_finite() && t > 0.0) {
-            bail!("{s}: the time must be a positive number");
+impl From<&Constraints> for HarmonicConstraints {
+    fn from(c: &Constraints) -> Self {
+        match c {
+            Constraints::Preset(n) => HarmonicConstraints::Counts(vec![*n]),
+            Constraints::List(l) => HarmonicConstraints::Explicit(l.clone()),
         }
-        return Ok(DistanceSpec::Wfem(t));
     }
-    Ok(DistanceSpec::Filter(s.parse::<Filter>()?))
 }
 
 /// Expands `${VAR}` (and `$VAR`) from the environment; an unset variable is an error.
-pub fn expand_env(s: &str) -> Result<String> {
+pub fn expand_env(s: &str) -> Result<String, ExperimentFileError> {
     let mut out = String::new();
     let mut rest = s;
     while let Some(i) = rest.find('$') {
@@ -415,7 +472,7 @@ pub fn expand_env(s: &str) -> Result<String> {
         let (name, tail) = if let Some(b) = after.strip_prefix('{') {
             let end = b
                 .find('}')
-                .ok_or_else(|| anyhow!("{s}: unclosed ${{ in a path"))?;
+                .ok_or_else(|| ExperimentFileError(format!("{s}: unclosed ${{ in a path")))?;
             (&b[..end], &b[end + 1..])
         } else {
             let end = after
@@ -426,8 +483,9 @@ pub fn expand_env(s: &str) -> Result<String> {
         if name.is_empty() {
             out.push('$');
         } else {
-            let v = std::env::var(name)
-                .map_err(|_| anyhow!("{s}: environment variable {name} is not set"))?;
+            let v = std::env::var(name).map_err(|_| {
+                ExperimentFileError(format!("{s}: environment variable {name} is not set"))
+            })?;
             out.push_str(&v);
         }
         rest = tail;
@@ -439,7 +497,7 @@ pub fn expand_env(s: &str) -> Result<String> {
 /// Resolves a mesh entry of a file in folder `base`: `${VAR}` expanded; an existing file
 /// (absolute, or relative to `base`) gives its path, anything else is returned as is (a
 /// shape spec, or a missing file that the loader will report).
-pub fn resolve_mesh(entry: &str, base: &Path) -> Result<String> {
+pub fn resolve_mesh(entry: &str, base: &Path) -> Result<String, ExperimentFileError> {
     let e = expand_env(entry)?;
     let p = Path::new(&e);
     if p.is_absolute() {
@@ -486,12 +544,22 @@ pub fn relative_path(target: &Path, base: &Path) -> PathBuf {
     r
 }
 
+/// The folder of `file` (`.` for a bare name).
+pub fn parent_dir(file: &Path) -> PathBuf {
+    match file.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn err(text: &str) -> String {
-        format!("{:#}", ExperimentFile::parse(text, "f.toml").unwrap_err())
+        ExperimentFile::parse(text, "f.toml")
+            .unwrap_err()
+            .to_string()
     }
 
     #[test]
@@ -508,11 +576,10 @@ mod tests {
             ("order = 2\n", "key 'order'"),
             ("anchor = 1.5\n", "key 'anchor'"),
             ("[figure]\nsize = 3\n", "key 'figure.size'"),
-            ("[figure]\nview = \"up\"\n", "key 'figure.view'"),
-            ("[figure]\ncolormap = \"jet\"\n", "key 'figure.colormap'"),
             ("[figure]\nlevels = \"many\"\n", "key 'figure.levels'"),
             ("[figure]\nshiny = true\n", "shiny"),
             ("mesh_hash = \"abc\"\n", "key 'mesh_hash'"),
+            ("basis_k = 5\nk = 10\n", "key 'basis_k'"),
         ] {
             let e = err(&format!("{base}{extra}"));
             assert!(e.contains(key), "{extra:?}: {e}");
@@ -528,10 +595,6 @@ mod tests {
                 "constraints = [{ vertex = -1, value = 0.0 }]\n",
                 "constraints[0]",
             ),
-            (
-                "constraints = [{ vertex = 1, val = 0.0 }]\n",
-                "constraints[0]",
-            ),
             ("constraints = \"2\"\n", "key 'constraints'"),
             ("order = 3\n", "key 'order'"),
             ("t = 0.5\n", "key 't'"),
@@ -542,56 +605,46 @@ mod tests {
         let d = "experiment = \"spectral-distance\"\nmesh = \"x\"\n";
         let e = err(&format!("{d}distance = \"diffusion:t=-1\"\n"));
         assert!(e.contains("key 'distance'"), "{e}");
+        let f = "experiment = \"field\"\nmesh = \"x\"\n";
+        assert!(err(f).contains("key 'field'"));
+        let e = err(&format!("{f}[field]\nkind = \"heat\"\nt = -2.0\n"));
+        assert!(e.contains("key 'field.t"), "{e}");
+        let e = err(&format!("{f}[field]\nkind = \"heat\"\nsource = 2\n"));
+        assert!(e.contains("source"), "{e}");
+        let e = err(&format!("{f}k = 3\n[field]\nkind = \"heat\"\n"));
+        assert!(e.contains("key 'k'"), "{e}");
     }
 
     #[test]
-    fn a_full_file_round_trips() {
-        let f = ExperimentFile {
-            experiment: "harmonic".into(),
-            mesh: "3torus".into(),
-            mesh_hash: Some("0".repeat(64)),
-            repair: Some(false),
-            laplacian: Some("voronoi-cot".into()),
-            k: None,
-            t: None,
-            normalize: None,
-            anchor: None,
-            distance: None,
-            source: None,
-            constraints: Some(toml::Value::Array(vec![toml::Value::Table(
-                [
-                    ("vertex".to_string(), toml::Value::Integer(3)),
-                    ("value".to_string(), toml::Value::Float(0.1)),
-                ]
-                .into_iter()
-                .collect(),
-            )])),
-            order: Some(2),
-            out: Some("out".into()),
-            figure: Some(figure_file(&FigureArgs {
-                view: View::Angles {
-                    azimuth_deg: 10.5,
-                    elevation_deg: -3.0,
-                },
-                ..FigureArgs::default()
-            })),
-        };
+    fn field_files_round_trip_and_map_to_requests() {
+        let req: FieldRequest = serde_json::from_str(
+            r#"{"kind": "distance", "source": 4, "distance": "wfem-diffusion:t=0.25", "k": 30}"#,
+        )
+        .unwrap();
+        let mut f = ExperimentFile::for_field("sphere:res=2", req.clone());
+        f.basis_k = Some(60);
+        f.normalize = Some(false);
+        f.figure = Some(FigureFile {
+            levels: Some(7),
+            ..Default::default()
+        });
         let text = f.to_toml().unwrap();
         let g = ExperimentFile::parse(&text, "x").unwrap();
         assert_eq!(f, g);
+        assert_eq!(g.request(), Some(req));
+        let paper = ExperimentFile::parse(
+            "experiment = \"diffusion-basis\"\nmesh = \"x\"\nt = 0.25\n",
+            "p",
+        )
+        .unwrap();
         assert_eq!(
-            g.constraints().unwrap(),
-            Constraints::Explicit(vec![Constraint {
-                vertex: 3,
-                value: 0.1
-            }])
-        );
-        assert_eq!(
-            g.figure_args().unwrap().view,
-            View::Angles {
-                azimuth_deg: 10.5,
-                elevation_deg: -3.0
-            }
+            paper.request(),
+            Some(FieldRequest::Heat {
+                anchor: None,
+                t: 0.25,
+                kernel: Kernel::Wfem,
+                k: 100
+            })
         );
     }
 
@@ -605,11 +658,6 @@ mod tests {
             relative_path(Path::new("/a/b/m.off"), Path::new("/a/b")),
             PathBuf::from("m.off")
         );
-        env_expansion();
-    }
-
-    fn env_expansion() {
-        // HOME is set in any test environment; an unset name is an error naming it.
         let home = std::env::var("HOME").unwrap();
         assert_eq!(expand_env("${HOME}/x").unwrap(), format!("{home}/x"));
         assert_eq!(expand_env("$HOME/x").unwrap(), format!("{home}/x"));

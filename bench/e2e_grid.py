@@ -1,0 +1,288 @@
+#!/usr/bin/env python3
+"""End-to-end benchmark: every spectral command of the `spectral-mesh` CLI, whole process
+(mesh file in, outputs written), against the SciPy + CHOLMOD script that reads the same OFF
+file, computes the same eigenpairs and writes the same .npz (bench/eigs_scipy.py --cholmod
+--save). Also the share of each command's process that is not its eigensolve.
+
+Standard library only; reuses bench/eigs_grid.py's helpers. Every run is one process, in a
+fresh output folder; within a cell (mesh, k) the routes alternate (scipy, eigs, heat, ...,
+scipy, eigs, ...). Each run appends one JSON line to --out (timestamp, load average before
+and after, wall seconds and peak RSS from wait4, the eigensolve seconds the command
+printed, the solver's phase timings); the markdown tables are rewritten to --table after
+each cell.
+
+Usually started through bench/e2e_grid.sh, which builds the CLI and the venv:
+    bench/e2e_grid.sh                                   # 25k, 100k, 400k x k = 50, 200, 500
+    bench/e2e_grid.sh --sizes 25k --ks 500 --runs 1
+    bench/e2e_grid.py --render-only --out results.jsonl --table table.md
+"""
+import argparse
+import datetime
+import json
+import os
+import re
+import shlex
+import shutil
+import signal
+import statistics
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import eigs_grid as eg  # noqa: E402
+
+ROOT = eg.ROOT
+
+# The commands and what each writes (OUT is a fresh folder per run).
+COMMANDS = {
+    "eigs": ["eigs", "MESH", "-k", "K", "-o", "OUT/basis.npz"],
+    "heat": ["heat", "MESH", "-k", "K", "-o", "OUT/heat.txt", "-o", "OUT/heat.png"],
+    "distance": ["distance", "MESH", "-k", "K", "-o", "OUT/d.txt", "-o", "OUT/d.png"],
+    "signature": ["signature", "MESH", "-k", "K", "-o", "OUT/hks.txt", "-o", "OUT/hks.png"],
+    "segment": ["segment", "MESH", "-k", "K", "-o", "OUT/labels.txt", "-o", "OUT/labels.png"],
+    "embed": ["embed", "MESH", "-k", "K", "-o", "OUT/embedded.off", "--coords", "OUT/c.txt"],
+    "experiment": ["experiment", "spectral-distance", "MESH", "-k", "K", "-o", "OUT/exp"],
+}
+ROUTES = ("scipy",) + tuple(COMMANDS)
+SOLVE = re.compile(r"eigenpairs in ([0-9.]+) s")
+PHASES = re.compile(r"eig timings \(s\): (.*)")
+
+
+def route_command(route, mesh, k, out, a):
+    if route == "scipy":
+        return [str(a.python), str(ROOT / "bench" / "eigs_scipy.py"), str(mesh), str(k),
+                "--mass", a.laplacian, "--cholmod", "--save", str(out / "basis.npz")]
+    subst = {"MESH": str(mesh), "K": str(k)}
+    args = [subst.get(x, x.replace("OUT", str(out))) for x in COMMANDS[route]]
+    return [str(a.cli)] + args + ["--laplacian", a.laplacian]
+
+
+def measure(route, label, mesh, vertices, k, run, a):
+    out = Path(tempfile.mkdtemp(prefix="e2e-", dir=a.work_dir))
+    cmd = route_command(route, mesh, k, out, a)
+    before = eg.loadavg()
+    started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    # The runs inherit the environment: our solver's phase timings on, and SciPy's BLAS
+    # threads as --scipy-blas-threads says (set for every route; our binary has no BLAS).
+    env = {"SPECTRAL_MESH_EIG_TIMINGS": "1"}
+    if a.scipy_blas_threads > 0:
+        env["OPENBLAS_NUM_THREADS"] = str(a.scipy_blas_threads)
+    saved = {key: os.environ.get(key) for key in env}
+    os.environ.update(env)
+    try:
+        status, code, stdout, stderr, wall, maxrss = eg.run_once(cmd, a.timeout)
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                del os.environ[key]
+            else:
+                os.environ[key] = value
+    written = sum(f.stat().st_size for f in out.rglob("*") if f.is_file())
+    shutil.rmtree(out, ignore_errors=True)
+    reason = None
+    if status == "timeout":
+        reason = f"killed after {a.timeout:g} s"
+    elif code != 0:
+        last = stderr.strip().splitlines()[-1:] or [""]
+        status, reason = "failed", f"exit code {code}" + (f": {last[0][:200]}" if last[0] else "")
+    solve = None
+    if route == "scipy":
+        keys = eg.parse_line(stdout)
+        solve = keys.get("seconds")
+    else:
+        m = SOLVE.search(stdout)
+        solve = float(m.group(1)) if m else None
+    phases = {}
+    m = PHASES.search(stderr)
+    if m:
+        for key, value in eg.KEY_VALUE.findall(m.group(1)):
+            phases[key] = float(value)
+    record = {
+        "time": started, "mesh": label, "mesh_path": str(mesh), "vertices": vertices,
+        "k": k, "route": route, "run": run, "status": status, "reason": reason,
+        "exit_code": code, "laplacian": a.laplacian, "wall_seconds": round(wall, 3),
+        "wait4_maxrss_mib": round(maxrss, 1) if maxrss is not None else None,
+        "solve_seconds": solve, "solver_phases": phases,
+        "phase_sum_seconds": round(sum(phases.values()), 3) if phases else None,
+        "bytes_written": written, "scipy_blas_threads": a.scipy_blas_threads,
+        "loadavg_before": before, "loadavg_after": eg.loadavg(), "command": shlex.join(cmd),
+    }
+    if status != "ok":
+        record["stdout_tail"] = stdout[-2000:]
+        record["stderr_tail"] = stderr[-2000:]
+    with open(a.out, "a") as f:
+        f.write(json.dumps(record) + "\n")
+    shown = f"{wall:.2f} s (solve {solve})" if status == "ok" else f"{status} ({reason})"
+    print(f"[{started}] load {' '.join(before or [])} | {label} k={k} {route} run {run}: "
+          f"{shown}", file=sys.stderr)
+    return record
+
+
+def run_cell(label, mesh, vertices, k, a):
+    records = []
+    active = list(a.routes)
+    runs = a.runs_large if vertices and vertices > a.large else a.runs
+    for run in range(1, runs + 1):
+        for route in list(active):
+            rec = measure(route, label, mesh, vertices, k, run, a)
+            records.append(rec)
+            slow = rec["status"] == "ok" and rec["wall_seconds"] > a.slow_seconds
+            if rec["status"] != "ok" or slow:
+                active.remove(route)
+        if not active:
+            break
+    return records
+
+
+def median_of(records, key):
+    xs = [r[key] for r in records if r["status"] == "ok" and r.get(key) is not None]
+    return statistics.median(xs) if xs else None
+
+
+def render_table(records, a, command):
+    routes = [r for r in ROUTES if any(rec["route"] == r for rec in records)]
+    ours = [r for r in routes if r != "scipy"]
+    cells = {}
+    for rec in records:
+        cells.setdefault((rec["mesh"], rec["k"]), {}).setdefault(rec["route"], []).append(rec)
+    loads = [float(rec["loadavg_before"][0]) for rec in records if rec.get("loadavg_before")]
+    times = [rec["time"] for rec in records]
+    lines = [
+        "# End-to-end: each spectral command against SciPy + CHOLMOD writing the same .npz",
+        "",
+        f"- command: `{command}`",
+        f"- machine: {eg.machine_text()}",
+        f"- commit: {eg.git_text()}; Laplacian: {a.laplacian}; SciPy's OpenBLAS threads: "
+        + ", ".join(sorted({str(r.get("scipy_blas_threads") or "default") for r in records})),
+    ]
+    if times:
+        lines.append(f"- runs: {min(times)} to {max(times)}, {len(records)} processes; "
+                     f"1-min load average before a run: {min(loads):.2f} to {max(loads):.2f}")
+    lines += [
+        "- whole process, wall seconds (mesh file in, outputs written), median "
+        "(number of runs), and in brackets SciPy's median over the command's; commands: "
+        + "; ".join(f"{r} = `spectral-mesh {' '.join(COMMANDS[r])}`" for r in ours)
+        + "; scipy = `eigs_scipy.py MESH K --cholmod --save OUT/basis.npz`",
+        "",
+    ]
+    head = ["mesh", "n", "k"] + [f"{r} (s)" for r in routes]
+    lines.append("| " + " | ".join(head) + " |")
+    lines.append("| " + " | ".join(["---"] + ["---:"] * (len(head) - 1)) + " |")
+    for (mesh, k), by in cells.items():
+        n = next(rec.get("vertices") for recs in by.values() for rec in recs)
+        scipy = median_of(by.get("scipy", []), "wall_seconds")
+        row = [f"`{mesh}`", str(n), str(k)]
+        for r in routes:
+            recs = by.get(r, [])
+            med = median_of(recs, "wall_seconds")
+            count = sum(1 for x in recs if x["status"] == "ok")
+            if med is None:
+                row.append("failed" if recs else "-")
+                continue
+            text = f"{eg.fmt_seconds(med)} ({count})"
+            if r != "scipy" and scipy:
+                text += f" **[{scipy / med:.2f}x]**"
+            row.append(text)
+        lines.append("| " + " | ".join(row) + " |")
+    lines += ["", "Peak RSS (MiB, whole process, largest over the runs):", ""]
+    lines.append("| " + " | ".join(["mesh", "k"] + routes) + " |")
+    lines.append("| " + " | ".join(["---", "---:"] + ["---:"] * len(routes)) + " |")
+    for (mesh, k), by in cells.items():
+        row = [f"`{mesh}`", str(k)]
+        for r in routes:
+            xs = [x["wait4_maxrss_mib"] for x in by.get(r, []) if x["status"] == "ok"]
+            row.append(f"{max(xs):.0f}" if xs else "-")
+        lines.append("| " + " | ".join(row) + " |")
+    lines += ["", "Whole process over the eigensolve (the seconds the command prints as "
+              "`eigenpairs in`), medians of the per-run ratios:", ""]
+    lines.append("| " + " | ".join(["mesh", "k"] + ours) + " |")
+    lines.append("| " + " | ".join(["---", "---:"] + ["---:"] * len(ours)) + " |")
+    for (mesh, k), by in cells.items():
+        row = [f"`{mesh}`", str(k)]
+        for r in ours:
+            xs = [x["wall_seconds"] / x["solve_seconds"] for x in by.get(r, [])
+                  if x["status"] == "ok" and x.get("solve_seconds")]
+            row.append(f"{statistics.median(xs):.3f}" if xs else "-")
+        lines.append("| " + " | ".join(row) + " |")
+    reasons = sorted({f"{rec['mesh']} k={rec['k']} {rec['route']}: {rec['status']} "
+                      f"({rec['reason']})" for rec in records if rec["status"] != "ok"})
+    if reasons:
+        lines += ["", "Runs that did not finish (details in the JSONL):", ""]
+        lines += [f"- {r}" for r in reasons]
+    return "\n".join(lines) + "\n"
+
+
+def parse_args(argv):
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sizes", default="25k,100k,400k",
+                    help="comma list of sizes (" + ", ".join(
+                        f"{s}: {v}" for s, v in eg.SIZE_SPECS.items()) + ") or shape specs")
+    ap.add_argument("--mesh", action="append", default=[], help="extra OFF file or shape")
+    ap.add_argument("--ks", default="50,200,500")
+    ap.add_argument("--runs", type=int, default=3, help="runs per route and cell")
+    ap.add_argument("--large", type=int, default=300000,
+                    help="meshes above this many vertices get --runs-large runs")
+    ap.add_argument("--runs-large", type=int, default=1)
+    ap.add_argument("--routes", default=",".join(ROUTES))
+    ap.add_argument("--laplacian", default="fem", choices=["fem", "voronoi-cot", "cot"])
+    ap.add_argument("--timeout", type=float, default=3600.0)
+    ap.add_argument("--slow-seconds", type=float, default=300.0,
+                    help="a route whose run took longer runs only once in its cell")
+    ap.add_argument("--scipy-blas-threads", type=int, default=1,
+                    help="OPENBLAS_NUM_THREADS of the runs (0: leave it unset). On this "
+                         "shared 2-core machine under load, NumPy's OpenBLAS threads "
+                         "spin-wait: eigsh at 25k, k = 50 took 17-26 s with them and 4.7 s "
+                         "with one thread in the same conditions")
+    ap.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "e2e_grid.jsonl")
+    ap.add_argument("--table", type=Path, default=ROOT / "bench" / "results" / "e2e_grid.md")
+    ap.add_argument("--python", type=Path, help="python of the bench venv")
+    ap.add_argument("--cli", type=Path, help="the spectral-mesh binary")
+    ap.add_argument("--mesh-dir", type=Path, default=ROOT / "bench" / "meshes")
+    ap.add_argument("--work-dir", type=Path, default=None,
+                    help="where the per-run output folders go (default: the system's tmp)")
+    ap.add_argument("--render-only", action="store_true")
+    a = ap.parse_args(argv)
+    a.routes = [r for r in a.routes.split(",") if r]
+    unknown = [r for r in a.routes if r not in ROUTES]
+    if unknown:
+        ap.error(f"unknown routes {unknown}; known: {', '.join(ROUTES)}")
+    a.ks = [int(k) for k in a.ks.split(",") if k]
+    if not a.render_only:
+        if not (a.cli and a.cli.is_file()):
+            ap.error("--cli: the spectral-mesh binary is needed")
+        if "scipy" in a.routes and not (a.python and a.python.is_file()):
+            ap.error("--python: the bench venv's python is needed for the SciPy route")
+    return a
+
+
+def main(argv=None):
+    a = parse_args(sys.argv[1:] if argv is None else argv)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+    command = os.environ.get("E2E_GRID_COMMAND") or shlex.join(
+        ["bench/e2e_grid.py"] + (sys.argv[1:] if argv is None else argv))
+    a.out.parent.mkdir(parents=True, exist_ok=True)
+    a.table.parent.mkdir(parents=True, exist_ok=True)
+    if a.render_only:
+        records = [json.loads(ln) for ln in a.out.read_text().splitlines() if ln.strip()]
+        a.table.write_text(render_table(records, a, command))
+        print(a.table.read_text())
+        return 0
+    entries = [s for s in a.sizes.split(",") if s] + a.mesh
+    meshes = [eg.resolve_mesh(e, a.mesh_dir, a.cli) for e in entries]
+    meshes = [(label, path, eg.off_vertex_count(path)) for label, path in meshes]
+    records = []
+    for label, path, vertices in meshes:
+        for k in a.ks:
+            records += run_cell(label, path, vertices, k, a)
+            a.table.write_text(render_table(records, a, command))
+    table = render_table(records, a, command)
+    a.table.write_text(table)
+    print(table)
+    print(f"raw runs appended to {a.out}; table in {a.table}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

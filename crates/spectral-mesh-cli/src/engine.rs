@@ -1,0 +1,225 @@
+//! The command line's side of the one engine: the options every spectral command shares
+//! (`-k`, `--laplacian`, `--tolerance`, `--cache`, `--repair`), the [`Analysis`] they
+//! build, its eigenbasis with a progress bar (or from the cache), and the experiment file
+//! a field command saves.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use spectral_mesh::analysis::request::DEFAULT_K;
+use spectral_mesh::analysis::{Analysis, AnalysisOptions, Field, FieldRequest};
+use spectral_mesh::experiments::file::ExperimentFile;
+use spectral_mesh::linalg::EigenProgress;
+use spectral_mesh::spectral::Eigenbasis;
+use spectral_mesh::spectral::eigenbasis::EigenParams;
+use spectral_mesh::spectral::store::load_or_compute;
+use spectral_mesh::{CancelToken, Laplacian, Mesh};
+use spectral_mesh_render::figure::FigureOptions;
+
+use crate::input::MeshInfo;
+use crate::output::save_experiment;
+use crate::progress::EigenBar;
+
+/// How to compute the eigenbasis a command works on (defaults: the library's).
+#[derive(Debug, Clone, clap::Args)]
+pub struct BasisArgs {
+    /// Number of eigenpairs (the smallest eigenvalues).
+    #[arg(long, short = 'k', default_value_t = DEFAULT_K)]
+    pub k: usize,
+    /// Discretization: cot, voronoi-cot, fem, mixed-voronoi, uniform.
+    #[arg(long, default_value_t = AnalysisOptions::default().laplacian)]
+    pub laplacian: Laplacian,
+    /// Target relative residual of every eigenpair.
+    #[arg(long, default_value_t = EigenParams::default().tolerance)]
+    pub tolerance: f64,
+    /// Keep computed bases in this folder and reuse them (keyed by the mesh, the
+    /// discretization, the normalisation and the parameters).
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
+    /// Repair the mesh first (see `info --repair`).
+    #[arg(long)]
+    pub repair: bool,
+}
+
+impl BasisArgs {
+    /// The analysis options: these, the shape scaled to unit area when `normalize`, zero
+    /// Dirichlet conditions on `dirichlet`.
+    pub fn options(
+        &self,
+        normalize: bool,
+        dirichlet: Option<Vec<usize>>,
+    ) -> Result<AnalysisOptions> {
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            bail!("--tolerance {}: must be a positive number", self.tolerance);
+        }
+        Ok(AnalysisOptions {
+            laplacian: self.laplacian,
+            normalize,
+            eigen: EigenParams {
+                tolerance: self.tolerance,
+                dirichlet,
+                ..EigenParams::default()
+            },
+        })
+    }
+
+    /// Refuses `-k` out of range for a mesh of `n` vertices, before any work.
+    pub fn check_k(&self, n: usize) -> Result<()> {
+        if self.k == 0 {
+            bail!("-k 0: at least one eigenpair is needed");
+        }
+        if self.k > n {
+            bail!("-k {}: the mesh has only {n} vertices", self.k);
+        }
+        Ok(())
+    }
+
+    /// The analysis of `mesh` with these options (`-k` is checked against the mesh when
+    /// a request needs the eigenbasis).
+    pub fn analysis(&self, mesh: Mesh, normalize: bool) -> Result<Analysis> {
+        Ok(Analysis::new(mesh, self.options(normalize, None)?))
+    }
+
+    /// Warns when an option cannot be recorded in an experiment file.
+    pub fn warn_unrecorded(&self, file: Option<&PathBuf>) {
+        if file.is_some() && self.tolerance != EigenParams::default().tolerance {
+            eprintln!(
+                "warning: --tolerance is not recorded in experiment files; the replay uses the default {}",
+                EigenParams::default().tolerance
+            );
+        }
+    }
+}
+
+/// The cache folder of an analysis: `DIR` for the shape as given, `DIR/unit-area` for the
+/// shape scaled to unit area (the two bases differ).
+fn cache_dir(dir: &Path, normalize: bool) -> PathBuf {
+    if normalize {
+        dir.join("unit-area")
+    } else {
+        dir.to_path_buf()
+    }
+}
+
+/// A basis computed (or loaded) for a command.
+pub struct Solved {
+    /// The basis (at least the pairs asked for).
+    pub basis: Arc<Eigenbasis>,
+    /// Wall seconds it took.
+    pub seconds: f64,
+    /// `max |X^T B X - I|` as the solver reported it, when it was computed now.
+    pub orthogonality: Option<f64>,
+}
+
+/// A basis of at least `k` pairs on `an`, from the cache folder when given (computed and
+/// stored there otherwise), with a progress bar.
+pub fn basis(an: &Analysis, k: usize, cache: Option<&Path>) -> Result<Solved> {
+    let t0 = Instant::now();
+    let bar = EigenBar::new(k);
+    let mut orthogonality = None;
+    let mut report = |p: EigenProgress| {
+        if let EigenProgress::Finished {
+            orthogonality_error,
+            ..
+        } = p
+        {
+            orthogonality = Some(orthogonality_error);
+        }
+        bar.update(p);
+    };
+    if let Some(dir) = cache
+        && an.held_k() < k
+    {
+        let params = EigenParams {
+            k,
+            ..an.options().eigen.clone()
+        };
+        let (b, hit) = load_or_compute(
+            &cache_dir(dir, an.options().normalize),
+            an.mesh(),
+            an.operators(),
+            &params,
+            &mut report,
+        )
+        .with_context(|| format!("--cache {}", dir.display()))?;
+        an.set_basis(b)?;
+        println!(
+            "eigenbasis {} cache {}",
+            if hit {
+                "loaded from"
+            } else {
+                "computed and stored in"
+            },
+            dir.display()
+        );
+    }
+    let basis = an.basis(k, &mut report, &CancelToken::new())?;
+    bar.finish();
+    Ok(Solved {
+        basis,
+        seconds: t0.elapsed().as_secs_f64(),
+        orthogonality,
+    })
+}
+
+/// The field of `request` on `an`, its eigenbasis first from [`basis`]; returns the field
+/// and the seconds the eigenbasis took (0 when none is needed).
+pub fn field(an: &Analysis, request: &FieldRequest, cache: Option<&Path>) -> Result<(Field, f64)> {
+    request.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;
+    let seconds = match request.eigenpairs() {
+        Some(k) => basis(an, k, cache)?.seconds,
+        None => 0.0,
+    };
+    Ok((an.field(request)?, seconds))
+}
+
+/// Refuses a vertex index out of range before any work, naming the option.
+pub fn check_vertex(v: usize, n: usize, option: &str) -> Result<()> {
+    if v >= n {
+        bail!("{option} {v}: the mesh has only {n} vertices");
+    }
+    Ok(())
+}
+
+/// The analysis keys of an experiment file for `an` on the mesh of `info`, saved at
+/// `file`: mesh, its hash as read, repair, discretization, normalisation, picture options.
+pub fn experiment_file(
+    experiment: &str,
+    file: &Path,
+    info: &MeshInfo,
+    an: &Analysis,
+    repair: bool,
+    figure: &FigureOptions,
+) -> ExperimentFile {
+    ExperimentFile {
+        mesh_hash: Some(info.hash(an.mesh())),
+        repair: Some(repair),
+        laplacian: Some(an.options().laplacian.name().into()),
+        normalize: Some(an.options().normalize),
+        figure: Some(figure.to_file()),
+        ..ExperimentFile::new(experiment, &info.entry(file))
+    }
+}
+
+/// Saves `field` as an `experiment = "field"` file at `file`: `run FILE` computes the same
+/// field (the same pairs: `basis_k` is written when the basis held more than the `k`
+/// used) and writes `KIND.wrl`, `KIND.png`, `KIND.txt` and `summary.json` next to it.
+pub fn save_field_experiment(
+    file: &Path,
+    info: &MeshInfo,
+    an: &Analysis,
+    field: &Field,
+    repair: bool,
+    figure: &FigureOptions,
+    force: bool,
+) -> Result<()> {
+    let mut f = experiment_file("field", file, info, an, repair, figure);
+    f.field = Some(field.request.clone());
+    f.basis_k = match (field.k, field.basis_k) {
+        (Some(k), Some(bk)) if bk > k => Some(bk),
+        _ => None,
+    };
+    save_experiment(file, &f, force)
+}

@@ -1,0 +1,228 @@
+//! The answer to a field request: the analysis' field, its critical points and level
+//! sets, packed as the page reads them (see the crate documentation for the layout).
+
+use std::time::Instant;
+
+use serde::Serialize;
+use spectral_mesh::analysis::{Analysis, AnalysisError, CriticalReport, Field, FieldRequest};
+use spectral_mesh::fields::harmonic::{Constraint, FloatingComponent};
+use spectral_mesh::fields::level_sets::{level_set_segments, level_values};
+
+/// Where the server time of one field went, in milliseconds.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Timing {
+    /// The field (`Analysis::field_if_ready`).
+    pub field: f64,
+    /// Critical points and the Euler check.
+    pub critical: f64,
+    /// Level-set segments.
+    pub levels: f64,
+    /// Everything before the encoding of the reply.
+    pub total: f64,
+}
+
+/// The JSON header of a field reply: what a page needs to label and draw the field.
+#[derive(Debug, Clone, Serialize)]
+pub struct FieldHeader {
+    /// Vertices (the number of f32 values that follow the header).
+    pub n: usize,
+    /// The request kind.
+    pub kind: &'static str,
+    /// The request with every default resolved (source or anchor filled in): sending it
+    /// back gives the same field.
+    pub request: FieldRequest,
+    /// The resolved source or anchor, if the kind has one.
+    pub source: Option<usize>,
+    /// Vertices to mark: source or anchor, constrained vertices, segment maxima.
+    pub marks: Vec<usize>,
+    /// Resolved constraints of a harmonic map (empty otherwise).
+    pub constraints: Vec<Constraint>,
+    /// Components a harmonic map left unconstrained (constant, left out of `critical`).
+    pub floating: Vec<FloatingComponent>,
+    /// Discretization.
+    pub laplacian: &'static str,
+    /// True when the field is that of the shape scaled to unit area.
+    pub normalized: bool,
+    /// Eigenpairs used (`null` when no basis was used).
+    pub k: Option<usize>,
+    /// Eigenpairs the basis held (the first `k` were used).
+    pub basis_k: Option<usize>,
+    /// The largest eigenvalue used (`lambda_{k-1}`, of the normalised operators when
+    /// `normalized`).
+    pub lambda_max: Option<f64>,
+    /// True when the values are patch labels (segmentation): no level sets, no critical
+    /// points.
+    pub categorical: bool,
+    /// Smallest value.
+    pub min: f64,
+    /// Largest value.
+    pub max: f64,
+    /// The iso-values of the level sets, ascending.
+    pub levels: Vec<f64>,
+    /// Segments per level set, in the order of `levels`.
+    pub level_counts: Vec<u32>,
+    /// Critical points with the Euler check (`null` for categorical fields).
+    pub critical: Option<CriticalReport>,
+    /// Server time.
+    pub timing_ms: Timing,
+}
+
+/// A field with everything the page draws.
+#[derive(Debug, Clone)]
+pub struct FieldReply {
+    /// The analysis' field (f64 values, resolved request, marks).
+    pub field: Field,
+    /// The header.
+    pub header: FieldHeader,
+    /// Level-set segments, `x1 y1 z1 x2 y2 z2` each, level after level.
+    pub segments: Vec<f32>,
+}
+
+/// The reply to `request` on `analysis` with `levels` level sets, from the held basis
+/// only: `Ok(None)` when the request needs more eigenpairs than are held.
+pub fn field_reply(
+    analysis: &Analysis,
+    request: &FieldRequest,
+    levels: usize,
+) -> Result<Option<FieldReply>, AnalysisError> {
+    let start = Instant::now();
+    let Some(field) = analysis.field_if_ready(request)? else {
+        return Ok(None);
+    };
+    let t_field = start.elapsed();
+    let (min, max) = field
+        .values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    let categorical = field.labels.is_some();
+    let critical = if categorical {
+        None
+    } else {
+        Some(analysis.field_critical_points(&field)?)
+    };
+    let t_critical = start.elapsed();
+    let isos = if categorical {
+        Vec::new()
+    } else {
+        level_values(min, max, levels)
+    };
+    let sets = level_set_segments(analysis.mesh(), &field.values, &isos);
+    let total: usize = sets.iter().map(Vec::len).sum();
+    let mut segments = Vec::with_capacity(6 * total);
+    let mut level_counts = Vec::with_capacity(sets.len());
+    for set in &sets {
+        level_counts.push(set.len() as u32);
+        for seg in set {
+            for p in seg {
+                segments.extend(p.iter().map(|&x| x as f32));
+            }
+        }
+    }
+    let t_levels = start.elapsed();
+    let lambda_max = match (field.k, analysis.held_basis()) {
+        (Some(k), Some(b)) if k >= 1 && k <= b.k() => Some(b.values[k - 1]),
+        _ => None,
+    };
+    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+    let header = FieldHeader {
+        n: field.values.len(),
+        kind: field.request.kind(),
+        request: field.request.clone(),
+        source: field.request.source(),
+        marks: field.marks.clone(),
+        constraints: field.constraints.clone(),
+        floating: field.floating.clone(),
+        laplacian: analysis.options().laplacian.name(),
+        normalized: field.normalized,
+        k: field.k,
+        basis_k: field.basis_k,
+        lambda_max,
+        categorical,
+        min,
+        max,
+        levels: isos,
+        level_counts,
+        critical,
+        timing_ms: Timing {
+            field: ms(t_field),
+            critical: ms(t_critical - t_field),
+            levels: ms(t_levels - t_critical),
+            total: ms(start.elapsed()),
+        },
+    };
+    Ok(Some(FieldReply {
+        field,
+        header,
+        segments,
+    }))
+}
+
+impl FieldReply {
+    /// The binary reply: `u32 header_len`, the JSON header padded with spaces to a
+    /// multiple of 4 bytes, `f32 values[n]`, `f32 segments[6 * total]`, little-endian.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, serde_json::Error> {
+        let mut head = serde_json::to_vec(&self.header)?;
+        while !head.len().is_multiple_of(4) {
+            head.push(b' ');
+        }
+        let values = &self.field.values;
+        let mut buf = Vec::with_capacity(4 + head.len() + 4 * (values.len() + self.segments.len()));
+        buf.extend_from_slice(&(head.len() as u32).to_le_bytes());
+        buf.extend_from_slice(&head);
+        for v in values {
+            buf.extend_from_slice(&(*v as f32).to_le_bytes());
+        }
+        for v in &self.segments {
+            buf.extend_from_slice(&v.to_le_bytes());
+        }
+        Ok(buf)
+    }
+}
+
+/// The parts of a binary field reply.
+#[derive(Debug, Clone)]
+pub struct ParsedReply {
+    /// The JSON header.
+    pub header: serde_json::Value,
+    /// `n` values.
+    pub values: Vec<f32>,
+    /// Level-set segment coordinates, 6 per segment.
+    pub segments: Vec<f32>,
+}
+
+/// Reads a binary field reply (for tests and clients written in Rust).
+pub fn parse_reply(body: &[u8]) -> Result<ParsedReply, String> {
+    let word = |i: usize| -> Result<[u8; 4], String> {
+        body.get(i..i + 4)
+            .and_then(|b| b.try_into().ok())
+            .ok_or_else(|| format!("the reply ends at byte {}", body.len()))
+    };
+    let hl = u32::from_le_bytes(word(0)?) as usize;
+    let head = body
+        .get(4..4 + hl)
+        .ok_or("the reply is shorter than its header")?;
+    let header: serde_json::Value =
+        serde_json::from_slice(head).map_err(|e| format!("header: {e}"))?;
+    let n = header["n"].as_u64().ok_or("the header has no n")? as usize;
+    let rest = &body[4 + hl..];
+    if !rest.len().is_multiple_of(4) || rest.len() < 4 * n {
+        return Err(format!(
+            "{} bytes after the header for n = {n} values",
+            rest.len()
+        ));
+    }
+    let floats: Vec<f32> = rest
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    let segments = floats[n..].to_vec();
+    let mut values = floats;
+    values.truncate(n);
+    Ok(ParsedReply {
+        header,
+        values,
+        segments,
+    })
+}

@@ -1,0 +1,588 @@
+//! An analysis: one shape, its operators for one discretization, the factorization, an
+//! eigenbasis that grows with `k`, and the heat and harmonic solvers, answering any
+//! [`FieldRequest`] (geometry-central's pattern: factor once, answer many queries).
+//!
+//! Every face (CLI, web app, Python, batch) builds an [`Analysis`] and asks it for fields;
+//! no face computes a field itself, so they all give the same numbers for the same
+//! parameters.
+//!
+//! # Scale normalisation
+//!
+//! With [`AnalysisOptions::normalize`] (the default) the shape is analysed as if scaled to
+//! total mass 1 (unit area for the area-based masses; `n` for the identity mass of `cot`
+//! and `uniform`): the operators are `(S, B / A)` with `A = 1^T B 1`, so eigenvalues are
+//! `lambda * A`, eigenvectors `x * sqrt(A)`, and every time `t` is a time on the unit-area
+//! shape. The cotangent stiffness is scale-invariant, so nothing else changes. Without it
+//! the shape is used as given (what `eigs` saves, comparable to SciPy on the raw operators).
+//!
+//! # Threads
+//!
+//! An `Analysis` is `Send + Sync`: fields are computed from a snapshot of the held basis
+//! without holding a lock, so a web server can answer field requests while a larger basis
+//! is being computed.
+
+mod eval;
+pub mod request;
+
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock, RwLock};
+
+pub use request::{
+    Constraints, DistanceSpec, FieldRequest, Kernel, RequestError, Signal, SignatureSpec,
+};
+
+use crate::cancel::CancelToken;
+use crate::fields::critical_points::{
+    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError,
+};
+use crate::fields::harmonic::{Constraint, FloatingComponent, HarmonicError, HarmonicSolver};
+use crate::fields::segmentation::SegmentationError;
+use crate::linalg::EigenProgress;
+use crate::mesh::Mesh;
+use crate::mesh::topology::Topology;
+use crate::operators::{Laplacian, Operators};
+use crate::spectral::Eigenbasis;
+use crate::spectral::distances::DistanceError;
+use crate::spectral::eigenbasis::{EigenError, EigenParams, EigenSolver};
+use crate::spectral::heat::HeatError;
+use crate::spectral::signatures::SignatureError;
+
+/// How an analysis is set up. `Default` is the paper's: linear FEM, unit-area times, the
+/// eigensolver's defaults.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AnalysisOptions {
+    /// The discretization (default fem).
+    pub laplacian: Laplacian,
+    /// Analyse the shape scaled to unit total mass (default `true`; see the module
+    /// documentation).
+    pub normalize: bool,
+    /// Eigensolver parameters (tolerance, seed, method, Dirichlet vertices); `k` is ignored
+    /// (each request names its own).
+    pub eigen: EigenParams,
+}
+
+impl Default for AnalysisOptions {
+    fn default() -> Self {
+        Self {
+            laplacian: Laplacian::Fem,
+            normalize: true,
+            eigen: EigenParams::default(),
+        }
+    }
+}
+
+/// Errors of an analysis, each saying what to change.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum AnalysisError {
+    /// A request parameter is out of range.
+    #[error(transparent)]
+    Request(#[from] RequestError),
+    /// A vertex index is out of range.
+    #[error("{key} {vertex} is out of range: the mesh has {n} vertices")]
+    VertexOutOfRange {
+        /// The key naming it (`source`, `anchor`, `vertex`, ...).
+        key: &'static str,
+        /// The index given.
+        vertex: usize,
+        /// Vertices.
+        n: usize,
+    },
+    /// More eigenpairs than vertices.
+    #[error("k = {k} eigenpairs asked for, but the mesh has only {n} vertices")]
+    TooManyPairs {
+        /// Pairs asked for.
+        k: usize,
+        /// Vertices.
+        n: usize,
+    },
+    /// A per-vertex input has the wrong length.
+    #[error("{key} has {got} values but the mesh has {n} vertices")]
+    LengthMismatch {
+        /// The key.
+        key: &'static str,
+        /// Values given.
+        got: usize,
+        /// Vertices.
+        n: usize,
+    },
+    /// The eigenbasis could not be computed.
+    #[error(transparent)]
+    Eigen(#[from] EigenError),
+    /// A harmonic map could not be computed.
+    #[error(transparent)]
+    Harmonic(#[from] HarmonicError),
+    /// A heat kernel quantity could not be computed.
+    #[error(transparent)]
+    Heat(#[from] HeatError),
+    /// A distance or filter could not be computed.
+    #[error(transparent)]
+    Distance(#[from] DistanceError),
+    /// A signature could not be computed.
+    #[error(transparent)]
+    Signature(#[from] SignatureError),
+    /// A segmentation could not be computed.
+    #[error(transparent)]
+    Segmentation(#[from] SegmentationError),
+    /// Critical points could not be classified.
+    #[error(transparent)]
+    CriticalPoints(#[from] CriticalPointsError),
+    /// The held basis has fewer pairs than the request uses.
+    #[error("the request uses k = {k} eigenpairs but the basis holds {held}")]
+    BasisTooSmall {
+        /// Pairs the request uses.
+        k: usize,
+        /// Pairs held.
+        held: usize,
+    },
+    /// A spectral request reached evaluation without a basis (an internal error).
+    #[error("internal error: a spectral field was evaluated without an eigenbasis")]
+    NoBasis,
+    /// The field came out with non-finite values.
+    #[error(
+        "the {kind} field has non-finite values (at vertex {vertex}): try a larger t, fewer pairs or another filter"
+    )]
+    NonFinite {
+        /// The request kind.
+        kind: &'static str,
+        /// First vertex with a non-finite value.
+        vertex: usize,
+    },
+}
+
+/// A computed field and what a face needs to show or save it.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Field {
+    /// One value per vertex (`n` values).
+    pub values: Vec<f64>,
+    /// The request with every default resolved (the source or anchor filled in): saving
+    /// this replays the same field.
+    pub request: FieldRequest,
+    /// Vertices to mark: the source or anchor, or the constrained vertices.
+    pub marks: Vec<usize>,
+    /// The resolved constraints of a harmonic map (empty otherwise).
+    pub constraints: Vec<Constraint>,
+    /// Components of a harmonic map that hold no constraint (they hold the mean of the
+    /// constraint values; see [`FloatingComponent`]).
+    pub floating: Vec<FloatingComponent>,
+    /// Patch labels of a segmentation (`n` entries), `None` otherwise.
+    pub labels: Option<Vec<usize>>,
+    /// Eigenpairs used (`None` when no basis was used).
+    pub k: Option<usize>,
+    /// Eigenpairs the basis held when the field was computed (the first `k` were used).
+    pub basis_k: Option<usize>,
+    /// True when the values are those of the shape scaled to unit area.
+    pub normalized: bool,
+}
+
+/// An analysis (see the module documentation).
+pub struct Analysis {
+    mesh: Arc<Mesh>,
+    options: AnalysisOptions,
+    /// `1^T B 1` of the operators as assembled (before normalisation).
+    input_mass: f64,
+    ops: Arc<Operators>,
+    topology: OnceLock<Topology>,
+    /// The link edges of every vertex, for critical points (built on first use).
+    critical: OnceLock<CriticalPointFinder>,
+    solver: Mutex<EigenSolver>,
+    held: RwLock<Option<Arc<Eigenbasis>>>,
+    /// `B X` of the held basis, computed on first use by the wFEM distance.
+    bx: Mutex<Option<BxCache>>,
+    /// The last few harmonic solvers: (order, constrained vertices ascending, solver).
+    harmonic: Mutex<Vec<HarmonicEntry>>,
+}
+
+/// The basis `B X` was computed from, and `B X`.
+type BxCache = (Arc<Eigenbasis>, Arc<Vec<f64>>);
+/// (order, constrained vertices ascending, solver).
+type HarmonicEntry = (u32, Vec<usize>, Arc<HarmonicSolver>);
+
+/// Harmonic solvers kept per analysis (each holds a factorization).
+const HARMONIC_CACHE: usize = 4;
+
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    // A panic elsewhere while holding the lock leaves plain data behind; keep serving.
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+impl std::fmt::Debug for Analysis {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Analysis")
+            .field("n", &self.mesh.n_vertices())
+            .field("options", &self.options)
+            .field("held_k", &self.held_basis().map(|b| b.k()))
+            .finish()
+    }
+}
+
+impl Analysis {
+    /// Assembles the operators of `mesh` for `options` (cheap: O(n)); nothing is factored
+    /// until a request needs it.
+    pub fn new(mesh: impl Into<Arc<Mesh>>, options: AnalysisOptions) -> Self {
+        let mesh = mesh.into();
+        let ops = Operators::new(&mesh, options.laplacian);
+        Self::with_operators(mesh, ops, options)
+    }
+
+    /// An analysis over operators built elsewhere (e.g. a robust or point-cloud Laplacian
+    /// of the same vertices). `ops` must be `n x n` for the mesh's `n` vertices.
+    pub fn with_operators(
+        mesh: impl Into<Arc<Mesh>>,
+        mut ops: Operators,
+        options: AnalysisOptions,
+    ) -> Self {
+        let mesh = mesh.into();
+        let input_mass: f64 = ops.mass.values().iter().sum();
+        if options.normalize && input_mass > 0.0 && input_mass.is_finite() {
+            ops.mass = ops.mass.add_scaled(1.0 / input_mass, &ops.mass, 0.0);
+        }
+        let ops = Arc::new(ops);
+        let solver = EigenSolver::new(ops.clone(), options.eigen.clone());
+        Self {
+            mesh,
+            options,
+            input_mass,
+            ops,
+            topology: OnceLock::new(),
+            critical: OnceLock::new(),
+            solver: Mutex::new(solver),
+            held: RwLock::new(None),
+            bx: Mutex::new(None),
+            harmonic: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// The shape.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// The shape, shared.
+    pub fn mesh_arc(&self) -> &Arc<Mesh> {
+        &self.mesh
+    }
+
+    /// The options.
+    pub fn options(&self) -> &AnalysisOptions {
+        &self.options
+    }
+
+    /// The operators in use: `(S, B)`, or `(S, B / A)` when normalizing.
+    pub fn operators(&self) -> &Operators {
+        &self.ops
+    }
+
+    /// `A = 1^T B 1` of the mass as assembled (the area for area-based masses): the
+    /// factor of the normalisation.
+    pub fn input_total_mass(&self) -> f64 {
+        self.input_mass
+    }
+
+    /// Number of vertices.
+    pub fn n(&self) -> usize {
+        self.mesh.n_vertices()
+    }
+
+    /// The connectivity (computed on first use).
+    pub fn topology(&self) -> &Topology {
+        self.topology.get_or_init(|| Topology::new(&self.mesh))
+    }
+
+    /// The default source or anchor: the vertex of largest x (lowest index on ties).
+    pub fn default_source(&self) -> usize {
+        self.mesh.vertex_of_largest_x()
+    }
+
+    /// The basis held, if any (no lock is held on return).
+    pub fn held_basis(&self) -> Option<Arc<Eigenbasis>> {
+        self.held.read().unwrap_or_else(|p| p.into_inner()).clone()
+    }
+
+    /// Eigenpairs held (0 when none).
+    pub fn held_k(&self) -> usize {
+        self.held_basis().map_or(0, |b| b.k())
+    }
+
+    /// How many times the shifted pencil was factored for eigenbases (a counter).
+    pub fn factorizations(&self) -> usize {
+        lock(&self.solver).factorizations()
+    }
+
+    /// A basis of at least `k` pairs: the held one when it has enough, else `k` pairs
+    /// computed (reusing the factorization; see [`EigenSolver`]).
+    pub fn basis(
+        &self,
+        k: usize,
+        progress: &mut dyn FnMut(EigenProgress),
+        cancel: &CancelToken,
+    ) -> Result<Arc<Eigenbasis>, AnalysisError> {
+        let n = self.n();
+        if k == 0 {
+            return Err(EigenError::Zero.into());
+        }
+        if k > n {
+            return Err(AnalysisError::TooManyPairs { k, n });
+        }
+        if let Some(b) = self.held_basis()
+            && b.k() >= k
+        {
+            return Ok(b);
+        }
+        let b = lock(&self.solver).solve(k, progress, cancel)?;
+        *self.held.write().unwrap_or_else(|p| p.into_inner()) = Some(b.clone());
+        Ok(b)
+    }
+
+    /// Installs a basis computed elsewhere (e.g. loaded from a saved `.npz` of the same
+    /// mesh, discretization and normalisation). It must have `n` vertices.
+    pub fn set_basis(&self, basis: Eigenbasis) -> Result<(), AnalysisError> {
+        if basis.n != self.n() {
+            return Err(AnalysisError::LengthMismatch {
+                key: "basis",
+                got: basis.n,
+                n: self.n(),
+            });
+        }
+        *self.held.write().unwrap_or_else(|p| p.into_inner()) = Some(Arc::new(basis));
+        Ok(())
+    }
+
+    /// The field of `request`, computing the eigenbasis first when the held one is too
+    /// small (no progress report; see [`Analysis::field_with`]).
+    pub fn field(&self, request: &FieldRequest) -> Result<Field, AnalysisError> {
+        self.field_with(request, &mut |_| {}, &CancelToken::new())
+    }
+
+    /// [`Analysis::field`] with progress and cancellation of the eigenbasis computation.
+    pub fn field_with(
+        &self,
+        request: &FieldRequest,
+        progress: &mut dyn FnMut(EigenProgress),
+        cancel: &CancelToken,
+    ) -> Result<Field, AnalysisError> {
+        request.validate()?;
+        let basis = match request.eigenpairs() {
+            Some(k) => Some(self.basis(k, progress, cancel)?),
+            None => None,
+        };
+        eval::evaluate(self, request, basis.as_deref())
+    }
+
+    /// The field of `request` from the held basis only: `Ok(None)` when the request needs
+    /// more pairs than are held (the web app's fast path: it never waits for a solve).
+    pub fn field_if_ready(&self, request: &FieldRequest) -> Result<Option<Field>, AnalysisError> {
+        request.validate()?;
+        let basis = match request.eigenpairs() {
+            Some(k) => {
+                if k > self.n() {
+                    return Err(AnalysisError::TooManyPairs { k, n: self.n() });
+                }
+                match self.held_basis().filter(|b| b.k() >= k) {
+                    Some(b) => Some(b),
+                    None => return Ok(None),
+                }
+            }
+            None => None,
+        };
+        eval::evaluate(self, request, basis.as_deref()).map(Some)
+    }
+
+    /// The values a diffusion of `signal` starts from (`n` entries): the given values, the
+    /// ball's indicator or the impulse. Vertices and lengths are checked as by
+    /// [`Analysis::field`].
+    pub fn signal(&self, signal: &Signal) -> Result<Vec<f64>, AnalysisError> {
+        eval::signal_values(self, signal).map(|(f, _)| f)
+    }
+
+    /// `1^T B f` with the analysis' mass (normalised when normalizing).
+    pub fn mass_of(&self, f: &[f64]) -> f64 {
+        self.ops.mass.mul_vec(f).iter().sum()
+    }
+
+    /// The critical points of per-vertex values on this mesh, with the Euler check of its
+    /// topology.
+    pub fn critical_points(&self, values: &[f64]) -> Result<CriticalReport, AnalysisError> {
+        let cp = self.find_critical_points(values)?;
+        Ok(CriticalReport::new(cp, self.topology(), &[]))
+    }
+
+    /// The critical points of a computed field: the components a harmonic map left
+    /// unconstrained are left out (their constant values have no critical points).
+    pub fn field_critical_points(&self, field: &Field) -> Result<CriticalReport, AnalysisError> {
+        let cp = self.find_critical_points(&field.values)?;
+        let excluded: Vec<usize> = field.floating.iter().map(|c| c.component).collect();
+        Ok(CriticalReport::new(cp, self.topology(), &excluded))
+    }
+
+    /// The critical points of `values`, with the link edges built once per analysis.
+    fn find_critical_points(&self, values: &[f64]) -> Result<CriticalPoints, AnalysisError> {
+        Ok(self
+            .critical
+            .get_or_init(|| CriticalPointFinder::new(&self.mesh))
+            .find(values, BoundaryRule::default())?)
+    }
+
+    /// `B X` of `basis` (cached for the held basis).
+    pub(crate) fn bx(&self, basis: &Eigenbasis) -> Arc<Vec<f64>> {
+        let mut g = lock(&self.bx);
+        if let Some((b, bx)) = &*g
+            && std::ptr::eq(b.as_ref(), basis)
+        {
+            return bx.clone();
+        }
+        let bx = Arc::new(crate::spectral::distances::mass_times_vectors(basis));
+        if let Some(held) = self.held_basis()
+            && std::ptr::eq(held.as_ref(), basis)
+        {
+            *g = Some((held, bx.clone()));
+        }
+        bx
+    }
+
+    /// A harmonic solver for the constrained vertices `vertices` (ascending, no repeats),
+    /// from the cache or factored now.
+    pub(crate) fn harmonic_solver(
+        &self,
+        order: u32,
+        vertices: &[usize],
+    ) -> Result<Arc<HarmonicSolver>, AnalysisError> {
+        {
+            let mut g = lock(&self.harmonic);
+            if let Some(i) = g.iter().position(|(o, v, _)| *o == order && v == vertices) {
+                let entry = g.remove(i);
+                let s = entry.2.clone();
+                g.push(entry);
+                return Ok(s);
+            }
+        }
+        let s = Arc::new(HarmonicSolver::with_operators(
+            &self.mesh, &self.ops, vertices, order,
+        )?);
+        let mut g = lock(&self.harmonic);
+        if g.len() >= HARMONIC_CACHE {
+            g.remove(0);
+        }
+        g.push((order, vertices.to_vec(), s.clone()));
+        Ok(s)
+    }
+}
+
+/// Critical points with the Euler characteristic check, as every face reports them.
+///
+/// Components left out (those of a harmonic map that hold no constraint, see
+/// [`crate::fields::harmonic::FloatingComponent`]) contribute neither critical points nor
+/// Euler characteristic; every other component is checked on its own as well.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct CriticalReport {
+    /// The critical points (those of left-out components removed).
+    pub points: CriticalPoints,
+    /// Minima.
+    pub minima: usize,
+    /// Maxima.
+    pub maxima: usize,
+    /// Saddles counted with multiplicity.
+    pub saddles: usize,
+    /// Euler characteristic of the components counted.
+    pub chi: i64,
+    /// True when the check is doubled across the boundary (bordered surfaces).
+    pub doubled: bool,
+    /// Left side of the check (`m - s + M`, or its doubled form).
+    pub lhs: i64,
+    /// Right side (`chi` or `2 chi`).
+    pub rhs: i64,
+    /// `lhs == rhs`, and the check holds on every component counted.
+    pub holds: bool,
+    /// The check in words.
+    pub formula: &'static str,
+    /// The check on each component counted.
+    pub components: Vec<ComponentCheck>,
+    /// Components left out of the counts.
+    pub excluded_components: Vec<usize>,
+}
+
+/// The Euler check on one connected component.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ComponentCheck {
+    /// Component index (as in `Topology::components`).
+    pub component: usize,
+    /// Its Euler characteristic.
+    pub chi: i64,
+    /// Left side of the check.
+    pub lhs: i64,
+    /// Right side.
+    pub rhs: i64,
+    /// `lhs == rhs`.
+    pub holds: bool,
+}
+
+impl CriticalReport {
+    /// The report of `cp` on a mesh of topology `topo`, leaving out the components
+    /// `excluded`.
+    pub fn new(cp: CriticalPoints, topo: &Topology, excluded: &[usize]) -> Self {
+        let nc = topo.n_components();
+        let counted = |v: usize| {
+            let c = topo.vertex_component.get(v).copied().unwrap_or(usize::MAX);
+            c < nc && !excluded.contains(&c)
+        };
+        let mut cp = cp;
+        cp.minima.retain(|&v| counted(v));
+        cp.maxima.retain(|&v| counted(v));
+        cp.saddles.retain(|&(v, _)| counted(v));
+        cp.on_boundary.retain(|&v| counted(v));
+        cp.non_manifold.retain(|&v| counted(v));
+        let included: Vec<usize> = (0..nc).filter(|c| !excluded.contains(c)).collect();
+        let doubled = included.iter().any(|&c| !topo.components[c].closed);
+        // Doubled across the boundary: interior points count twice, boundary ones once.
+        let weight = |v: usize| -> i64 {
+            if doubled && cp.on_boundary.binary_search(&v).is_err() {
+                2
+            } else {
+                1
+            }
+        };
+        let mut lhs_c = vec![0i64; nc];
+        for &v in cp.minima.iter().chain(&cp.maxima) {
+            lhs_c[topo.vertex_component[v]] += weight(v);
+        }
+        for &(v, m) in &cp.saddles {
+            lhs_c[topo.vertex_component[v]] -= weight(v) * m as i64;
+        }
+        let factor = if doubled { 2 } else { 1 };
+        let components: Vec<ComponentCheck> = included
+            .iter()
+            .map(|&c| {
+                let chi = topo.components[c].euler_characteristic;
+                ComponentCheck {
+                    component: c,
+                    chi,
+                    lhs: lhs_c[c],
+                    rhs: factor * chi,
+                    holds: lhs_c[c] == factor * chi,
+                }
+            })
+            .collect();
+        let chi: i64 = components.iter().map(|c| c.chi).sum();
+        let lhs: i64 = components.iter().map(|c| c.lhs).sum();
+        let rhs = factor * chi;
+        Self {
+            minima: cp.minima.len(),
+            maxima: cp.maxima.len(),
+            saddles: cp.saddle_count(),
+            points: cp,
+            chi,
+            doubled,
+            lhs,
+            rhs,
+            holds: lhs == rhs && components.iter().all(|c| c.holds),
+            formula: if doubled {
+                "doubled across the boundary: 2(m_i - s_i + M_i) + (m_b - s_b + M_b) = 2 chi"
+            } else {
+                "m - s + M = chi"
+            },
+            components,
+            excluded_components: excluded.to_vec(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,265 @@
+use super::*;
+use crate::fields::harmonic::{ConstraintSpec, harmonic_map_with_operators};
+use crate::shapes::build_str;
+use crate::spectral::distances::{distances_from, wfem_diffusion_distances_from};
+use crate::spectral::filters::Filter;
+use crate::spectral::heat::{HeatSolver, KernelKind, ScaleNormalization, normalize_basis};
+
+fn analysis(shape: &str, normalize: bool) -> Analysis {
+    Analysis::new(
+        build_str(shape).unwrap(),
+        AnalysisOptions {
+            normalize,
+            ..Default::default()
+        },
+    )
+}
+
+fn close(a: &[f64], b: &[f64], rel: f64) {
+    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+    let err = a
+        .iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    assert!(
+        err <= rel * scale,
+        "max difference {err} against scale {scale}"
+    );
+}
+
+#[test]
+fn unit_area_fields_equal_the_normalised_basis_path() {
+    // The analysis normalises the operators; the earlier path normalised the basis.
+    let an = analysis("sphere:res=3", true);
+    let raw = analysis("sphere:res=3", false);
+    let k = 30;
+    let rb = raw
+        .basis(k, &mut |_| {}, &CancelToken::new())
+        .unwrap()
+        .as_ref()
+        .clone();
+    let src = an.default_source();
+    let heat = an
+        .field(&FieldRequest::Heat {
+            anchor: None,
+            t: 0.01,
+            kernel: Kernel::Wfem,
+            k,
+        })
+        .unwrap();
+    let old = HeatSolver::new(&rb, KernelKind::Wfem, ScaleNormalization::UnitArea)
+        .basis_function(src, 0.01)
+        .unwrap();
+    close(&heat.values, &old, 1e-9);
+    assert_eq!(heat.marks, vec![src]);
+    assert_eq!(heat.request.source(), Some(src));
+
+    let d = an.field(&FieldRequest::default_with_k(k)).unwrap();
+    let nb = normalize_basis(&rb, ScaleNormalization::UnitArea);
+    close(
+        &d.values,
+        &distances_from(&nb, src, &Filter::Biharmonic).unwrap(),
+        1e-9,
+    );
+    let w = an
+        .field(&FieldRequest::Distance {
+            source: Some(7),
+            distance: DistanceSpec::WfemDiffusion { t: 0.05 },
+            k,
+        })
+        .unwrap();
+    close(
+        &w.values,
+        &wfem_diffusion_distances_from(&nb, 7, 0.05).unwrap(),
+        1e-9,
+    );
+    assert!(d.normalized && !raw.options().normalize);
+}
+
+#[test]
+fn a_larger_k_gives_the_pairs_of_a_direct_solve() {
+    // Large enough for the sparse path (a factorization), small enough to be quick.
+    let grown = analysis("sphere:res=4", true);
+    let c = CancelToken::new();
+    let b100 = grown.basis(40, &mut |_| {}, &c).unwrap();
+    assert_eq!(b100.k(), 40);
+    let b200 = grown.basis(80, &mut |_| {}, &c).unwrap();
+    let direct = analysis("sphere:res=4", true)
+        .basis(80, &mut |_| {}, &c)
+        .unwrap();
+    assert_eq!(b200.values, direct.values);
+    assert_eq!(b200.vectors, direct.vectors);
+    // The factorization of the first solve served the second (a counter, not a timer).
+    assert_eq!(grown.factorizations(), 1);
+    // Fewer pairs reuse the held basis: no new solve.
+    let again = grown.basis(10, &mut |_| {}, &c).unwrap();
+    assert!(Arc::ptr_eq(&again, &b200));
+}
+
+#[test]
+fn fewer_pairs_use_the_prefix_of_the_held_basis() {
+    let an = analysis("sphere:res=3", true);
+    let c = CancelToken::new();
+    let b = an.basis(40, &mut |_| {}, &c).unwrap();
+    let req = FieldRequest::default_with_k(20);
+    let f = an.field_if_ready(&req).unwrap().unwrap();
+    assert_eq!((f.k, f.basis_k), (Some(20), Some(40)));
+    close(
+        &f.values,
+        &distances_from(b.view(20), an.default_source(), &Filter::Biharmonic).unwrap(),
+        0.0,
+    );
+    // Not enough pairs held: the fast path says so instead of solving.
+    assert!(
+        an.field_if_ready(&FieldRequest::default_with_k(41))
+            .unwrap()
+            .is_none()
+    );
+}
+
+#[test]
+fn harmonic_requests_match_the_library_and_reuse_the_factor() {
+    let an = analysis("3torus", true);
+    let req = FieldRequest::Harmonic {
+        constraints: Constraints::Preset(4),
+        order: 1,
+    };
+    let f = an.field(&req).unwrap();
+    let list = ConstraintSpec::Extremes(4).resolve(an.mesh()).unwrap();
+    let want = harmonic_map_with_operators(an.mesh(), an.operators(), &list, 1).unwrap();
+    assert_eq!(f.values, want);
+    assert_eq!(f.constraints, list);
+    assert_eq!(f.k, None);
+    // New values on the same vertices reuse the cached solver.
+    let moved: Vec<Constraint> = list
+        .iter()
+        .map(|c| Constraint {
+            vertex: c.vertex,
+            value: 2.0 * c.value,
+        })
+        .collect();
+    let g = an
+        .field(&FieldRequest::Harmonic {
+            constraints: Constraints::List(moved),
+            order: 1,
+        })
+        .unwrap();
+    close(
+        &g.values,
+        &f.values.iter().map(|v| 2.0 * v).collect::<Vec<_>>(),
+        1e-12,
+    );
+    assert_eq!(lock(&an.harmonic).len(), 1);
+}
+
+#[test]
+fn every_kind_gives_a_finite_field_of_n_values() {
+    // Not a sphere: its signatures are constant by symmetry.
+    let an = analysis("3torus", true);
+    let n = an.n();
+    let reqs: Vec<FieldRequest> = vec![
+        serde_json::from_str(r#"{"kind": "heat", "k": 30}"#).unwrap(),
+        serde_json::from_str(
+            r#"{"kind": "diffusion", "signal": {"ball": {"vertex": 3, "radius": 0.5}}, "k": 30}"#,
+        )
+        .unwrap(),
+        serde_json::from_str(r#"{"kind": "distance", "distance": "commute", "k": 30}"#).unwrap(),
+        serde_json::from_str(r#"{"kind": "spectral-function", "k": 30}"#).unwrap(),
+        serde_json::from_str(r#"{"kind": "hks", "k": 30}"#).unwrap(),
+        serde_json::from_str(r#"{"kind": "wks", "energy": 3.0, "k": 30}"#).unwrap(),
+        serde_json::from_str(r#"{"kind": "adf", "k": 30}"#).unwrap(),
+        serde_json::from_str(r#"{"kind": "segmentation", "k": 30}"#).unwrap(),
+        serde_json::from_str(r#"{"kind": "embedding", "k": 30}"#).unwrap(),
+        serde_json::from_str(r#"{"kind": "eigenfunction", "k": 30}"#).unwrap(),
+        serde_json::from_str(r#"{"kind": "green", "k": 30}"#).unwrap(),
+        serde_json::from_str(r#"{"kind": "harmonic", "order": 2}"#).unwrap(),
+    ];
+    for r in reqs {
+        let f = an.field(&r).unwrap();
+        assert_eq!(f.values.len(), n, "{}", r.kind());
+        assert!(f.values.iter().all(|v| v.is_finite()), "{}", r.kind());
+        assert!(
+            f.values.iter().any(|v| *v != f.values[0]),
+            "{} is constant",
+            r.kind()
+        );
+    }
+    let seg = an
+        .field(&FieldRequest::Segmentation {
+            signature: SignatureSpec::Values((0..n).map(|i| (i % 7) as f64).collect()),
+            persistence: 0.0,
+            k: 30,
+        })
+        .unwrap();
+    assert!(seg.labels.is_some() && seg.k.is_none());
+}
+
+#[test]
+fn errors_name_what_is_wrong() {
+    let an = analysis("sphere:res=1", true);
+    let n = an.n();
+    let e = an
+        .field(&FieldRequest::Distance {
+            source: Some(n),
+            distance: DistanceSpec::default(),
+            k: 5,
+        })
+        .unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with(&format!("source {n} is out of range")),
+        "{e}"
+    );
+    let e = an.field(&FieldRequest::default_with_k(n + 1)).unwrap_err();
+    assert!(matches!(e, AnalysisError::TooManyPairs { .. }), "{e}");
+    let e = an
+        .field(&FieldRequest::Diffusion {
+            signal: Signal::Values(vec![1.0; 3]),
+            t: 0.1,
+            kernel: Kernel::Wfem,
+            k: 5,
+        })
+        .unwrap_err();
+    assert!(e.to_string().contains("signal has 3 values"), "{e}");
+}
+
+#[test]
+fn a_component_without_constraints_floats_and_is_left_out_of_the_critical_points() {
+    // Two disjoint tori; the preset constraints (min x, max x) both fall on the first.
+    let t = build_str("torus:res=2").unwrap();
+    let (p, f) = (t.positions().to_vec(), t.triangles().to_vec());
+    let n0 = p.len();
+    let mut pos = p.clone();
+    pos.extend(p.iter().map(|q| [q[0] - 10.0, q[1], q[2]]));
+    let mut tris = f.clone();
+    tris.extend(f.iter().map(|t| [t[0] + n0, t[1] + n0, t[2] + n0]));
+    let an = Analysis::new(Mesh::new(pos, tris).unwrap(), AnalysisOptions::default());
+    let field = an.field(&FieldRequest::Harmonic {
+        constraints: Constraints::List(vec![
+            Constraint {
+                vertex: 0,
+                value: 0.0,
+            },
+            Constraint {
+                vertex: 7,
+                value: 1.0,
+            },
+        ]),
+        order: 1,
+    });
+    let field = field.unwrap();
+    assert_eq!(field.floating.len(), 1);
+    assert_eq!(field.floating[0].first_vertex, n0);
+    assert!(field.values[n0..].iter().all(|&v| v == 0.5));
+    let all = an.critical_points(&field.values).unwrap();
+    let rep = an.field_critical_points(&field).unwrap();
+    assert_eq!(rep.excluded_components, vec![field.floating[0].component]);
+    assert!(rep.points.minima.iter().all(|&v| v < n0));
+    assert!(rep.points.maxima.iter().all(|&v| v < n0));
+    assert!(rep.points.saddles.iter().all(|&(v, _)| v < n0));
+    // The constrained torus alone: m - s + M = 0.
+    assert_eq!(rep.components.len(), 1);
+    assert!(rep.holds && rep.chi == 0, "{rep:?}");
+    // Counting the constant torus too would add its symbolic-perturbation extrema.
+    assert!(all.minima + all.maxima > rep.minima + rep.maxima);
+}

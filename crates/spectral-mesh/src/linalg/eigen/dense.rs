@@ -1,0 +1,124 @@
+//! Dense helpers of the eigensolver: Gram products `A^T B`, row-split matrix products
+//! and the small symmetric eigenproblems, all with a fixed split of the rows so that the
+//! results do not depend on the number of threads.
+
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par};
+
+use super::types::SparseEigenError;
+
+pub(super) fn view(x: &[f64], n: usize, c: usize) -> MatRef<'_, f64> {
+    MatRef::from_column_major_slice(&x[..n * c], n, c)
+}
+
+/// Rows per leaf of the parallel splits (fixed: results do not depend on the thread count).
+pub(super) const LEAF_ROWS: usize = 4096;
+
+/// `B^T A` for row blocks, split recursively over rows and summed in a fixed order.
+/// (Computing `(B^T A)^T` rather than `A^T B` lets the kernel read the wide `A` in place
+/// and pack only the narrow `B`: measured 25-40% faster for `A` of 150-1000 columns
+/// and `B` of 8-16.)
+fn gram_rec(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let n = a.nrows();
+    if n <= LEAF_ROWS {
+        let mut g = Mat::<f64>::zeros(b.ncols(), a.ncols());
+        matmul(g.as_mut(), Accum::Replace, b.transpose(), a, 1.0, Par::Seq);
+        return g;
+    }
+    let mid = (n / 2).next_multiple_of(64).min(n);
+    let (a0, a1) = a.split_at_row(mid);
+    let (b0, b1) = b.split_at_row(mid);
+    let (mut g0, g1) = rayon::join(|| gram_rec(a0, b0), || gram_rec(a1, b1));
+    g0 += g1;
+    g0
+}
+
+/// `A^T B` for column-major `A` (`n x a`) and `B` (`n x b`).
+pub(super) fn gram(a: &[f64], b: &[f64], n: usize, ca: usize, cb: usize) -> Mat<f64> {
+    if n == 0 || ca == 0 || cb == 0 {
+        return Mat::<f64>::zeros(ca, cb);
+    }
+    gram_rec(view(a, n, ca), view(b, n, cb))
+        .transpose()
+        .to_owned()
+}
+
+/// Rows per leaf of [`matmul_rows`]: products with a thin right-hand side (`W -= V C`)
+/// ran about 25% faster with 1024-row leaves than with 4096 (cache-sized blocks of `V`).
+const PRODUCT_LEAF_ROWS: usize = 1024;
+
+/// `dst (+)= alpha * lhs * rhs`, split recursively over the rows of `dst` and `lhs`.
+pub(super) fn matmul_rows(
+    dst: faer::MatMut<'_, f64>,
+    accum: Accum,
+    lhs: MatRef<'_, f64>,
+    rhs: MatRef<'_, f64>,
+    alpha: f64,
+) {
+    let n = dst.nrows();
+    if n <= PRODUCT_LEAF_ROWS {
+        matmul(dst, accum, lhs, rhs, alpha, Par::Seq);
+        return;
+    }
+    let mid = (n / 2).next_multiple_of(64).min(n);
+    let (d0, d1) = dst.split_at_row_mut(mid);
+    let (l0, l1) = lhs.split_at_row(mid);
+    rayon::join(
+        || matmul_rows(d0, accum, l0, rhs, alpha),
+        || matmul_rows(d1, accum, l1, rhs, alpha),
+    );
+}
+
+/// `W -= V C` (`V`: `n x m`, `C`: `m x c`, `W`: `n x c`).
+pub(super) fn sub_product(w: &mut [f64], v: &[f64], c: MatRef<'_, f64>, n: usize) {
+    let (m, cc) = (c.nrows(), c.ncols());
+    if m == 0 || cc == 0 || n == 0 {
+        return;
+    }
+    let wm = faer::MatMut::from_column_major_slice_mut(&mut w[..n * cc], n, cc);
+    matmul_rows(wm, Accum::Add, view(v, n, m), c, -1.0);
+}
+
+/// `V C` as a new column-major buffer (`n x c`).
+pub(super) fn product(v: &[f64], c: MatRef<'_, f64>, n: usize) -> Vec<f64> {
+    let (m, cc) = (c.nrows(), c.ncols());
+    let mut out = vec![0.0; n * cc];
+    if m == 0 || cc == 0 || n == 0 {
+        return out;
+    }
+    let om = faer::MatMut::from_column_major_slice_mut(&mut out, n, cc);
+    matmul_rows(om, Accum::Replace, view(v, n, m), c, 1.0);
+    out
+}
+
+/// The dense symmetric eigen-decomposition of `h` (ascending; lower triangle read).
+/// Sequential: the projected matrices are small and fine-grained parallelism costs more
+/// than it gains on a shared machine.
+pub(super) fn sym_eig(h: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), SparseEigenError> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::evd;
+    let n = h.nrows();
+    let mut u = Mat::<f64>::zeros(n, n);
+    let mut d = faer::diag::Diag::<f64>::zeros(n);
+    let par = Par::Seq;
+    let mut mem = MemBuffer::new(evd::self_adjoint_evd_scratch::<f64>(
+        n,
+        evd::ComputeEigenvectors::Yes,
+        par,
+        Default::default(),
+    ));
+    evd::self_adjoint_evd(
+        h,
+        d.as_mut(),
+        Some(u.as_mut()),
+        par,
+        MemStack::new(&mut mem),
+        Default::default(),
+    )
+    .map_err(|_| SparseEigenError::NonFinite)?;
+    let vals: Vec<f64> = (0..n).map(|i| d[i]).collect();
+    if vals.iter().any(|v| !v.is_finite()) {
+        return Err(SparseEigenError::NonFinite);
+    }
+    Ok((vals, u))
+}

@@ -1,0 +1,484 @@
+//! The sparse generalized symmetric eigensolver: the `k` smallest pairs of
+//! `S x = lambda B x` with `S` symmetric positive semi-definite and `B` symmetric positive
+//! definite (sparse, diagonal or the identity).
+//!
+//! `K = S - sigma B` with a small negative shift `sigma` (so `K` is positive definite even
+//! though `S` is singular) is factored once by sparse Cholesky. Two iterations use it:
+//!
+//! - **Block Krylov-Schur** (the default, [`SparseAlgorithm::KrylovSchur`], in
+//!   `krylov_schur/`): thick-restart block Lanczos on `K^-1 B`, see that module.
+//! - **Block Davidson** ([`SparseAlgorithm::Davidson`], the earlier method, kept for
+//!   comparison, in `davidson.rs`).
+//!
+//! Both iterations stop only when the first `k` pairs have converged **and** a Ritz value
+//! lies clearly above the `k`-th, so a cluster of (near-)repeated eigenvalues cut by `k`
+//! is resolved completely before `k` pairs are returned. All heavy dense work
+//! (orthogonalization, Rayleigh-Ritz, Ritz vectors) is BLAS-3 through faer's matrix
+//! product, split over rows.
+//!
+//! # Layout
+//!
+//! Each file depends only on the ones above it in this list (no cycle):
+//!
+//! - `types.rs`: options, the choice of iteration, progress reports, errors;
+//! - `dense.rs`: Gram products, row-split matrix products, small symmetric eigenproblems;
+//! - `kernels.rs`: the symmetric sparse product, norms, residuals, the orthogonality check
+//!   (its row buffer lives in `linalg/scratch.rs`);
+//! - `result.rs`: [`PartialEigen`] and its packaging;
+//! - `rng.rs`: the deterministic random numbers of the start blocks;
+//! - `shift_invert.rs`: [`ShiftInvert`], the factored `S - sigma B` (built once, reused
+//!   by every solve of the same pencil);
+//! - `deflation.rs`: [`ComponentNullSpace`], the indicators of the connected components,
+//!   deflated exactly (any number of components);
+//! - `davidson.rs` and `krylov_schur/` (the iteration in `mod.rs`, the block
+//!   orthonormalization in `orthonormalize.rs`): the two iterations;
+//! - this file: the driver (checks, shift, factorization, sizes, fallback).
+
+mod davidson;
+mod deflation;
+mod dense;
+mod kernels;
+mod krylov_schur;
+mod result;
+mod rng;
+mod shift_invert;
+mod types;
+
+pub use deflation::{ComponentNullSpace, connected_components};
+pub use kernels::{b_orthogonality_error, norm1, relative_residuals, sym_spmm, sym_spmm_into};
+pub use result::PartialEigen;
+pub use shift_invert::{ShiftInvert, default_shift};
+pub use types::{EigenProgress, SparseAlgorithm, SparseEigenError, SparseEigenOptions};
+
+use super::{SparseMatrix, scratch};
+use crate::cancel::CancelToken;
+use rng::Rng;
+use shift_invert::check_sizes;
+use types::check;
+
+/// The `k` smallest pairs of `S x = lambda B x` by block Krylov-Schur (default) or block
+/// Davidson on the shift-inverted pencil (see the module documentation). `S` must be
+/// symmetric positive semi-definite and `B` symmetric positive definite, both `n x n`.
+/// Works for any `1 <= k <= n` (the search space is capped at `n`), but for small `n` or
+/// `k` close to `n` the dense path is faster.
+///
+/// Factors `S - sigma B` itself (see [`ShiftInvert::new`]) and frees the factor before the
+/// eigenvectors are copied out; [`sparse_generalized_eigen_with`] takes a factor built
+/// once for several solves.
+pub fn sparse_generalized_eigen(
+    s: &SparseMatrix,
+    b: &SparseMatrix,
+    opts: &SparseEigenOptions,
+    progress: &mut dyn FnMut(EigenProgress),
+) -> Result<PartialEigen, SparseEigenError> {
+    sparse_generalized_eigen_with(s, b, opts, None, progress, &CancelToken::new())
+}
+
+/// [`sparse_generalized_eigen`] with an optional factor of `S - sigma B` built beforehand
+/// by [`ShiftInvert::new`] from the same `S` and `B` (then `opts.shift` is not used):
+/// the result is, bit for bit, the one [`sparse_generalized_eigen`] gives with the shift
+/// of that factor, so one factor serves every `k` and a larger `k` costs only a fresh
+/// iteration. `None`: the factor is built here and freed before the eigenvectors are
+/// copied out of the basis (lower peak memory).
+///
+/// `cancel` stops the solve with [`SparseEigenError::Cancelled`]: it is checked before
+/// and after the factorization (which cannot be interrupted: 2.0-2.7 s at 411k mesh
+/// vertices), after the solves of each block (0.2-0.4 s at 411k), at each restart and
+/// between the row blocks of its rotation, and between the blocks of the final checks.
+pub fn sparse_generalized_eigen_with(
+    s: &SparseMatrix,
+    b: &SparseMatrix,
+    opts: &SparseEigenOptions,
+    factor: Option<&ShiftInvert>,
+    progress: &mut dyn FnMut(EigenProgress),
+    cancel: &CancelToken,
+) -> Result<PartialEigen, SparseEigenError> {
+    let n = check_sizes(s, b)?;
+    let k = opts.k;
+    if k == 0 || k > n {
+        return Err(SparseEigenError::Invalid(format!(
+            "asked for k = {k} pairs of an n = {n} problem"
+        )));
+    }
+    let tol = opts.effective_tolerance();
+    let (sn, bn) = (norm1(s), norm1(b));
+    if !sn.is_finite() || !bn.is_finite() {
+        return Err(SparseEigenError::NonFinite);
+    }
+    check(cancel)?;
+    // The known null space (component indicators), deflated by Krylov-Schur.
+    let krylov = opts.algorithm == SparseAlgorithm::KrylovSchur;
+    let null = if opts.deflate && krylov {
+        super::timing::timed(super::timing::Phase::Deflate, || {
+            ComponentNullSpace::find(s, b, tol)
+        })?
+    } else {
+        ComponentNullSpace::none(n)
+    };
+    let nz = null.count();
+    if k <= nz {
+        // The first k indicators are the answer: nothing to factor nor iterate.
+        let shift = factor.map_or_else(
+            || shift_invert::first_shift(b, opts.shift, (sn, bn)),
+            |f| f.shift(),
+        );
+        return indicators_only(&null, k, b, shift, progress, cancel);
+    }
+    let mut owned = None;
+    let factor = match factor {
+        Some(f) if f.n() != n => {
+            return Err(SparseEigenError::Invalid(format!(
+                "the factorization is of size {} but the problem is {n} x {n}",
+                f.n()
+            )));
+        }
+        Some(f) => f,
+        None => owned.insert(ShiftInvert::with_norms(
+            s,
+            b,
+            opts.shift,
+            (sn, bn),
+            progress,
+        )?),
+    };
+    let (chol, shift) = (factor.cholesky(), factor.shift());
+    check(cancel)?;
+
+    // The random start of every iteration (and of a rerun) comes from the same seed.
+    let start_rng = || Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
+
+    if krylov {
+        // The iteration finds the k - nz pairs after the deflated null space, in a space
+        // of dimension n - nz.
+        let (k, dim) = (k - nz, n - nz);
+        let bs = if opts.block_size > 0 {
+            opts.block_size
+        } else {
+            // Measured on a 38k-vertex mesh: 8 for k = 50, 16 for k = 200 (larger blocks
+            // need more solves, smaller ones give thin, slow matrix products).
+            (k / 12).clamp(8, 16)
+        }
+        .min(dim);
+        let max_basis = if opts.max_basis > 0 {
+            opts.max_basis.max(k + 2 * bs)
+        } else {
+            // 2k up to k = 300, then k + 300: measured at k = 500 on 26k vertices, a
+            // basis of 750-850 needed fewer solves and less time than 1000 (6.5-6.8 s
+            // against 8.1 s) and less memory. At least k + 70: for k = 50 a basis of
+            // 120 took the same time as 150 (256 solves against 248, at 38k to 411k
+            // vertices) and 130 MiB less at 411k.
+            (2 * k).min(k + 300).max(k + 70).max(k + 4 * bs)
+        }
+        .min(dim);
+        let pb = krylov_schur::Problem {
+            s,
+            b,
+            chol,
+            shift,
+            k,
+            tol,
+            sn,
+            bn,
+            cancel,
+            deflation: (nz > 0).then_some(&null),
+            dim,
+        };
+        let mut sizes = krylov_schur::Sizes {
+            block: bs,
+            max_basis,
+            max_restarts: if opts.max_iterations > 0 {
+                opts.max_iterations
+            } else {
+                100 + 10 * k.div_ceil(bs)
+            },
+            // Locking pays from about k = 100 (restarts then rotate hundreds of converged
+            // vectors); at k = 50 it saved no measurable time on 26k-38k vertices, and its
+            // temporaries of varying sizes raised the peak memory by 25-30 MiB on bunny00.
+            lock: !opts.ks_plain && k >= 100,
+            local: !opts.ks_plain,
+        };
+        let mut rng = start_rng();
+        let mut out = krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
+        if !opts.ks_plain && matches!(out, Err(SparseEigenError::NoConvergence { .. })) {
+            // A locked pair is never revisited, and the single full pass trusts the
+            // Krylov relation: before reporting a failure, run once more as the plain
+            // iteration (no locking, two full Gram-Schmidt passes).
+            sizes.lock = false;
+            sizes.local = false;
+            let mut rng = start_rng();
+            out = krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
+        }
+        scratch::release_all();
+        // A factor built here goes before the eigenvectors are copied out of the basis
+        // (see `Converged`): the copy can then reuse its memory.
+        drop(owned);
+        let null = (nz > 0).then_some(&null);
+        return out.and_then(|pairs| pairs.finish(b, null, progress, cancel));
+    }
+
+    davidson::davidson(
+        s,
+        b,
+        chol,
+        shift,
+        opts,
+        (tol, sn, bn),
+        start_rng(),
+        progress,
+        cancel,
+    )
+}
+
+/// The first `k <= null.count()` indicators as the result (eigenvalues 0).
+fn indicators_only(
+    null: &ComponentNullSpace,
+    k: usize,
+    b: &SparseMatrix,
+    shift: f64,
+    progress: &mut dyn FnMut(EigenProgress),
+    cancel: &CancelToken,
+) -> Result<PartialEigen, SparseEigenError> {
+    let n = b.ncols();
+    let mut vectors = vec![0.0; n * k];
+    for (i, col) in vectors.chunks_mut(n).enumerate() {
+        null.write_indicator(i, col);
+    }
+    let residuals = (0..k).map(|i| null.residual(i)).collect();
+    result::package(
+        b,
+        (vec![0.0; k], vectors, residuals),
+        0,
+        0,
+        shift,
+        progress,
+        cancel,
+    )
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::linalg::dense_generalized_eigen;
+
+    /// A path graph's Laplacian with a diagonal mass of three different values.
+    pub(crate) fn path_laplacian(n: usize) -> (SparseMatrix, SparseMatrix) {
+        let mut t = Vec::new();
+        let mut tb = Vec::new();
+        for i in 0..n {
+            if i + 1 < n {
+                t.push((i, i, 1.0));
+                t.push((i + 1, i + 1, 1.0));
+                t.push((i, i + 1, -1.0));
+                t.push((i + 1, i, -1.0));
+            }
+            tb.push((i, i, 1.0 + (i % 3) as f64 * 0.5));
+        }
+        (
+            SparseMatrix::from_triplets(n, n, &t),
+            SparseMatrix::from_triplets(n, n, &tb),
+        )
+    }
+
+    #[test]
+    fn matches_dense_on_a_path_graph() {
+        let (s, b) = path_laplacian(300);
+        let (vals, _) = dense_generalized_eigen(&s, &b).unwrap();
+        let opts = SparseEigenOptions {
+            k: 20,
+            ..Default::default()
+        };
+        let r = sparse_generalized_eigen(&s, &b, &opts, &mut |_| {}).unwrap();
+        for j in 0..20 {
+            assert!(
+                (r.values[j] - vals[j]).abs() <= 1e-9 * vals[19],
+                "{j}: {} vs {}",
+                r.values[j],
+                vals[j]
+            );
+        }
+        assert!(r.residuals.iter().all(|&x| x <= 1e-10));
+        assert!(r.orthogonality_error < 1e-10);
+    }
+
+    #[test]
+    fn whole_spectrum_when_k_equals_n() {
+        let (s, b) = path_laplacian(40);
+        let (vals, _) = dense_generalized_eigen(&s, &b).unwrap();
+        let opts = SparseEigenOptions {
+            k: 40,
+            ..Default::default()
+        };
+        let r = sparse_generalized_eigen(&s, &b, &opts, &mut |_| {}).unwrap();
+        for j in 0..40 {
+            assert!((r.values[j] - vals[j]).abs() <= 1e-9 * vals[39]);
+        }
+    }
+
+    #[test]
+    fn bad_sizes_are_errors() {
+        let (s, b) = path_laplacian(10);
+        let opts = SparseEigenOptions {
+            k: 11,
+            ..Default::default()
+        };
+        assert!(matches!(
+            sparse_generalized_eigen(&s, &b, &opts, &mut |_| {}),
+            Err(SparseEigenError::Invalid(_))
+        ));
+    }
+
+    fn same_bits(a: &PartialEigen, b: &PartialEigen) {
+        assert_eq!(a.values, b.values);
+        assert_eq!(a.vectors, b.vectors);
+        assert_eq!(a.residuals, b.residuals);
+        assert_eq!((a.iterations, a.solves), (b.iterations, b.solves));
+        assert_eq!(a.shift, b.shift);
+    }
+
+    /// A factor built beforehand serves several `k` without a new factorization and gives
+    /// the bits of the solve that factors for itself.
+    #[test]
+    fn a_given_factor_gives_the_same_bits() {
+        let (s, b) = path_laplacian(300);
+        let f = ShiftInvert::new(&s, &b, None, &mut |_| {}).unwrap();
+        assert_eq!(f.shift(), default_shift(&s, &b));
+        assert_eq!(f.n(), 300);
+        for k in [20, 35] {
+            let opts = SparseEigenOptions {
+                k,
+                ..Default::default()
+            };
+            let own = sparse_generalized_eigen(&s, &b, &opts, &mut |_| {}).unwrap();
+            let mut factored = 0;
+            let given = sparse_generalized_eigen_with(
+                &s,
+                &b,
+                &opts,
+                Some(&f),
+                &mut |e| {
+                    if matches!(e, EigenProgress::Factorization { .. }) {
+                        factored += 1;
+                    }
+                },
+                &CancelToken::new(),
+            )
+            .unwrap();
+            assert_eq!(factored, 0);
+            same_bits(&own, &given);
+        }
+        // A factor of another size is refused.
+        let none = CancelToken::new();
+        let (s2, b2) = path_laplacian(100);
+        let opts = SparseEigenOptions {
+            k: 5,
+            ..Default::default()
+        };
+        assert!(matches!(
+            sparse_generalized_eigen_with(&s2, &b2, &opts, Some(&f), &mut |_| {}, &none),
+            Err(SparseEigenError::Invalid(_))
+        ));
+    }
+
+    /// `ShiftInvert::refactor` (same patterns, new values: the analysis is reused) gives
+    /// the factor, shift and eigenpairs of a fresh `ShiftInvert::new`.
+    #[test]
+    fn refactor_equals_a_fresh_factor() {
+        let (s, b) = path_laplacian(300);
+        let mut f = ShiftInvert::new(&s, &b, None, &mut |_| {}).unwrap();
+        let s2 = s.add_scaled(2.0, &s, 0.0);
+        let b2 = b.add_scaled(1.5, &b, 0.0);
+        f.refactor(&s2, &b2, None, &mut |_| {}).unwrap();
+        let fresh = ShiftInvert::new(&s2, &b2, None, &mut |_| {}).unwrap();
+        assert_eq!(f.shift(), fresh.shift());
+        assert_ne!(f.shift(), default_shift(&s, &b));
+        let opts = SparseEigenOptions {
+            k: 12,
+            ..Default::default()
+        };
+        let none = CancelToken::new();
+        let a =
+            sparse_generalized_eigen_with(&s2, &b2, &opts, Some(&f), &mut |_| {}, &none).unwrap();
+        let c = sparse_generalized_eigen_with(&s2, &b2, &opts, Some(&fresh), &mut |_| {}, &none)
+            .unwrap();
+        same_bits(&a, &c);
+    }
+
+    /// When `S - sigma B` is not positive definite the shift grows 100-fold, and the
+    /// analysis of the first attempt is reused (same pattern).
+    #[test]
+    fn a_failed_factorization_is_retried_with_a_larger_shift() {
+        let n = 10;
+        // B = I, so the default shift is -0.01 / n = -1e-3; S has an eigenvalue -2e-3.
+        let mut t: Vec<(usize, usize, f64)> = (1..n).map(|i| (i, i, 1.0)).collect();
+        t.push((0, 0, -2e-3));
+        let s = SparseMatrix::from_triplets(n, n, &t);
+        let b = SparseMatrix::from_triplets(n, n, &(0..n).map(|i| (i, i, 1.0)).collect::<Vec<_>>());
+        let auto = default_shift(&s, &b);
+        assert!((auto + 1e-3).abs() < 1e-15);
+        let mut shifts = Vec::new();
+        let f = ShiftInvert::new(&s, &b, None, &mut |e| {
+            if let EigenProgress::Factorization { shift, .. } = e {
+                shifts.push(shift);
+            }
+        })
+        .unwrap();
+        assert_eq!(shifts, vec![auto, auto * 100.0]);
+        assert_eq!(f.shift(), auto * 100.0);
+        // K = S + 0.1 I: K^-1 e_0 = e_0 / 0.098.
+        let mut x = vec![0.0; n];
+        x[0] = 1.0;
+        f.cholesky().solve_in_place(&mut x);
+        assert!((x[0] - 1.0 / 0.098).abs() < 1e-12);
+    }
+
+    /// A token set before the solve stops it before the factorization; one set from
+    /// another thread 50 ms into a long solve stops it with `Cancelled` (the wait is
+    /// bounded generously; no assertion on speed).
+    #[test]
+    fn a_solve_is_cancelled() {
+        use crate::operators::{Laplacian, Operators};
+        let ops = Operators::new(
+            &crate::shapes::build_str("sphere:res=5").unwrap(), // 10242 vertices
+            Laplacian::Fem,
+        );
+        let opts = SparseEigenOptions {
+            k: 300,
+            ..Default::default()
+        };
+        let early = CancelToken::new();
+        early.cancel();
+        let mut events = 0;
+        let r = sparse_generalized_eigen_with(
+            &ops.stiffness,
+            &ops.mass,
+            &opts,
+            None,
+            &mut |_| events += 1,
+            &early,
+        );
+        assert!(matches!(r, Err(SparseEigenError::Cancelled)));
+        assert_eq!(events, 0, "nothing was factored");
+
+        let token = CancelToken::new();
+        let remote = token.clone();
+        let (tx, rx) = std::sync::mpsc::channel();
+        let worker = std::thread::spawn(move || {
+            let r = sparse_generalized_eigen_with(
+                &ops.stiffness,
+                &ops.mass,
+                &opts,
+                None,
+                &mut |_| {},
+                &token,
+            );
+            let _ = tx.send(r.map(|p| p.values.len()));
+        });
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        remote.cancel();
+        let r = rx
+            .recv_timeout(std::time::Duration::from_secs(120))
+            .expect("the cancelled solve returns");
+        assert_eq!(r, Err(SparseEigenError::Cancelled));
+        worker.join().unwrap();
+    }
+}
