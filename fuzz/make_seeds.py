@@ -5,8 +5,9 @@ Sources: the small real meshes of /work/shared/meshes (copied as they are, so th
 formatting, comments and edge counts are kept), pieces of the larger ones (their first
 faces, renumbered, so colours, polygons and large coordinates are represented), the
 same pieces written as OBJ, PLY (ASCII, binary both byte orders) and STL (ASCII and
-binary), the heads of the point clouds in /work/shared/points (for the PLY reader now,
-for a point-cloud reader later), and hand-made edge cases. Standard library only.
+binary), the heads of the point clouds in /work/shared/points (read_points, and the
+PLY ones for read_ply_ascii), the experiment files and request bodies of
+docs/experiment-files.md, and hand-made edge cases. Standard library only.
 
     python3 fuzz/make_seeds.py [--meshes DIR] [--points DIR]
 
@@ -377,13 +378,16 @@ def main():
         put("read_ply_ascii", k + ".ply", t)
     for k, t in stl.items():
         put("read_stl_ascii", k + ".stl", t)
-    # Point clouds: the first lines of each file (a PLY point cloud is refused as a mesh).
+    # Point clouds: the first lines of each file, behind read_points' name byte (0 = p.xyz,
+    # 1 = p.pts, 4 = p.ply, 6 = no extension; see fuzz_targets/read_points.rs). A PLY point
+    # cloud is refused as a mesh: also a read_ply_ascii seed.
     if os.path.isdir(args.points):
         for name in sorted(os.listdir(args.points)):
             path = os.path.join(args.points, name)
             if name.endswith(".xyz"):
                 head = b"".join(open(path, "rb").readlines()[:40])
-                put("points", name, head)
+                put("read_points", name, b"\x00" + head)
+                put("read_points", name + "-noext", b"\x06" + head)
             elif name.endswith(".ply"):
                 raw = open(path, "rb").read()
                 end = raw.index(b"end_header\n") + len(b"end_header\n")
@@ -393,8 +397,76 @@ def main():
                 lines = [("element vertex 40" if l.startswith("element vertex") else l)
                          for l in header.splitlines()]
                 head = ("\n".join(lines) + "\n").encode() + raw[end:end + 40 * size]
-                put("points", name, head)
+                put("read_points", name, b"\x04" + head)
                 put("read_ply_ascii", "points-" + name, head)
+    hand_points = {
+        "pts-count": (1, "3\n0 0 0\n1 0 0\n0 1 0\n"),
+        "pts-count-wrong": (1, "4\n0 0 0\n1 0 0\n"),
+        "header-normals": (0, "x y z nx ny nz\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 0\n"),
+        "zero-normals": (0, "0 0 0 0 0 0\n1 0 0 0 0 0\n"),
+        "csv": (3, "# comment\n0,0,0\n1;2;3\n4\t5\t6  # end\r\n"),
+        "ragged": (2, "0 0 0\n1 2 3 4 5 6\n"),
+        "four-values": (2, "0 0 0 1\n"),
+        "nan": (0, "0 0 nan\n"),
+        "inf-normal": (0, "0 0 0 0 0 inf\n"),
+        "extremes": (0, "1.7976931348623157e308 -5e-324 -0\n"),
+        "not-utf8": (0, b"0 0 0\n\xff\xfe 1 2\n"),
+        "empty": (0, ""),
+        "comments-only": (0, "# nothing\n\n"),
+        "ply-vertex-only": (4, "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
+                               "property float y\nproperty float z\nend_header\n0 0 0\n1 1 1\n"),
+        "ply-zero-faces": (6, "ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\n"
+                              "property double y\nproperty double z\nproperty double nx\n"
+                              "property double ny\nproperty double nz\nelement face 0\n"
+                              "property list uchar int vertex_indices\nend_header\n1 2 3 0 0 1\n"),
+        "ply-with-face": (4, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                             "property float y\nproperty float z\nelement face 1\n"
+                             "property list uchar int vertex_indices\nend_header\n"
+                             "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+        "off-as-points-name": (0, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+        "points-as-off-name": (8, "0 0 0\n1 0 0\n0 1 0\n"),
+    }
+    for k, (b, t) in hand_points.items():
+        t = t.encode() if isinstance(t, str) else t
+        put("read_points", k, bytes([b]) + t)
+    # pipeline_points: pick byte (neighbours 2 + low 4 bits, 0x10 normals from the cloud,
+    # union = bits 5-6), then point_cloud_bytes.
+    def point_cloud_bytes(pick, scale, pts, normals=None):
+        b = struct.pack("<BbBB", pick, scale, (len(pts) - 1) % 64, 1 if normals else 0)
+        for i, p in enumerate(pts):
+            b += struct.pack("<3b", *p)
+            if normals:
+                b += struct.pack("<3b", *normals[i])
+        return b
+    import math
+    sphere = []
+    for i in range(40):
+        z = 1 - 2 * (i + 0.5) / 40
+        r = math.sqrt(1 - z * z)
+        a = i * math.pi * (3 - math.sqrt(5))
+        sphere.append((round(100 * r * math.cos(a)), round(100 * r * math.sin(a)), round(100 * z)))
+    octa = [(9, 0, 0), (-9, 0, 0), (0, 9, 0), (0, -9, 0), (0, 0, 9), (0, 0, -9)]
+    cube = [(x, y, z) for x in (0, 9) for y in (0, 9) for z in (0, 9)]
+    grid = [(x, y, 0) for x in range(4) for y in range(4)]
+    clouds = {
+        "sphere": (0x0c, 0, sphere, None),
+        "sphere-normals": (0x1c, 30, sphere, sphere),
+        "sphere-multiplicity": (0x4c, 0, sphere, None),
+        "sphere-interleaved": (0x6c, -30, sphere, None),
+        "octahedron": (0x04, 0, octa, None),
+        "cube-consensus-only": (0x26, 0, cube, None),
+        "grid-coplanar": (0x06, 1, grid, None),
+        "line": (0x02, 0, [(i, i, i) for i in range(6)], None),
+        "coincident": (0x03, 0, [(1, 1, 1)] * 5, None),
+        "two-points": (0x00, 0, [(0, 0, 0), (1, 0, 0)], None),
+        "one-point": (0x00, 0, [(0, 0, 0)], None),
+        "duplicates": (0x08, 0, octa + octa[:3], None),
+        "zero-normals": (0x14, 0, octa, [(0, 0, 0)] * 6),
+        "huge-scale": (0x08, 100, sphere[:20], None),
+        "tiny-scale": (0x08, -100, sphere[:20], None),
+    }
+    for k, (pick, scale, pts, nr) in clouds.items():
+        put("pipeline_points", k, point_cloud_bytes(pick, scale, pts, nr))
     # Hand-made meshes for validate_repair and pipeline_eigen (see arbitrary_mesh).
     tet = [(0, 0, 0), (9, 0, 0), (0, 9, 0), (0, 0, 9)]
     tet_t = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)]
@@ -494,6 +566,74 @@ def main():
     members = basis_members(4, 2)
     members[5] = npy([2 ** 62, 2 ** 62], "q", (2,))
     put("basis_npz", "huge-mass-shape", b"NPYSEP".join(members))
+    # Field requests: byte 0 (even) = JSON, 1 (odd) = TOML.
+    requests_json = [
+        '{"kind": "distance"}',
+        '{"kind": "distance", "source": 3, "distance": "diffusion:t=0.1", "k": 20}',
+        '{"kind": "distance", "distance": "wfem-diffusion:t=0.5"}',
+        '{"kind": "heat", "anchor": 40, "t": 0.05, "kernel": "voronoi-cot", "k": 20}',
+        '{"kind": "diffusion", "signal": {"values": [0, 1, 0.5]}, "t": 1e-3}',
+        '{"kind": "diffusion", "signal": {"ball": {"vertex": 2, "radius": 0.25}}}',
+        '{"kind": "diffusion", "signal": {"impulse": 7}, "kernel": "standard"}',
+        '{"kind": "harmonic", "constraints": 4, "order": 2}',
+        '{"kind": "harmonic", "constraints": [{"vertex": 0, "value": 0}, {"vertex": 5, "value": 1.5}]}',
+        '{"kind": "spectral-function", "filter": "custom-w:exp(-s*t)/s;t=0.1"}',
+        '{"kind": "hks", "t": 0.1, "scaled": true}',
+        '{"kind": "wks", "energy": 2.5, "sigma": 0.5}',
+        '{"kind": "adf", "t": 0.2, "k": 30}',
+        '{"kind": "segmentation", "signature": "wks:e=1,sigma=0.5", "persistence": 0.1}',
+        '{"kind": "segmentation", "signature": [0.5, 1, 2]}',
+        '{"kind": "segmentation", "signature": "spectral-function:mix:a=0.3,t=0.7"}',
+        '{"kind": "embedding", "filter": "commute", "component": 2, "k": 50}',
+        '{"kind": "eigenfunction", "index": 3, "k": 10}',
+        '{"kind": "green", "source": 1, "filter": "biharmonic"}',
+        '{"kind": "heat", "anchor": 18446744073709551615}',
+        '{"kind": "heat", "t": 1e308, "k": 0}',
+        '{"kind": "heat", "extra": 1}',
+        '{"kind": "eigenfunction", "index": 10, "k": 10}',
+    ]
+    for k, t in enumerate(requests_json):
+        put("field_request", f"json-{k:02}", b"\x00" + t.encode())
+    requests_toml = [
+        'kind = "heat"\nanchor = 40\nt = 0.05\nkernel = "wfem"\nk = 20\n',
+        'kind = "harmonic"\nconstraints = [{ vertex = 12, value = 0.0 }, { vertex = 873, value = 1.0 }]\n',
+        'kind = "diffusion"\nt = 0.5\n[signal]\nvalues = [1.0, 2.0, nan]\n',
+        'kind = "diffusion"\n[signal.ball]\nvertex = 1\nradius = inf\n',
+        'kind = "wks"\nenergy = -1e-300\nsigma = 1e300\n',
+        'kind = "segmentation"\nsignature = "hks:t=0.1"\npersistence = 0.0\n',
+        'kind = "distance"\nsource = 9223372036854775807\n',
+    ]
+    for k, t in enumerate(requests_toml):
+        put("field_request", f"toml-{k:02}", b"\x01" + t.encode())
+    h = "b65de4a870692d7b6461dff27d69139c2c29876bb9eadf3decb9bb25d108d3fc"
+    experiments = {
+        "diffusion-basis": f'experiment = "diffusion-basis"\nmesh = "sphere:res=2"\nmesh_hash = "{h}"\n'
+                           'repair = false\nlaplacian = "fem"\nnormalize = true\nk = 20\nt = 0.1\n'
+                           'anchor = 40\nout = "../direct"\n\n[figure]\nlevels = 10\ncolormap = "viridis"\n'
+                           'view = "front"\nsize = 200\ntransparent = false\ncritical_points = true\n'
+                           'colorbar = true\n',
+        "field-heat": f'experiment = "field"\nmesh = "sphere:res=2"\nmesh_hash = "{h}"\nrepair = false\n'
+                      'laplacian = "fem"\nnormalize = true\n\n[field]\nkind = "heat"\nanchor = 40\n'
+                      't = 0.05\nkernel = "wfem"\nk = 20\n',
+        "field-embedding": 'experiment = "field"\nmesh = "${SPECTRAL_MESH_SHARED_MESHES}/bunny00.off"\n'
+                           'basis_k = 80\n\n[field]\nkind = "embedding"\nfilter = "commute"\n'
+                           'component = 2\nk = 50\n',
+        "harmonic": 'experiment = "harmonic"\nmesh = "../meshes/bunny.off"\nlaplacian = "cot"\norder = 1\n'
+                    'constraints = [{ vertex = 12, value = 0.0 }, { vertex = 873, value = 1.0 }]\n'
+                    'out = "bunny-harmonic"\n',
+        "harmonic-counts": 'experiment = "harmonic"\nmesh = "torus:res=1"\nconstraints = [2, 4, 6]\norder = 2\n',
+        "spectral-distance": 'experiment = "spectral-distance"\nmesh = "m.off"\nk = 50\n'
+                             'distance = "wfem-diffusion:t=0.5"\nsource = 3\nbasis_k = 60\n',
+        "bad-key": 'experiment = "harmonic"\nmesh = "x"\nk = 3\n',
+        "bad-type": 'experiment = "field"\nmesh = "x"\n[field]\nkind = "heat"\nt = "soon"\n',
+        "unknown": 'experiment = "nope"\nmesh = "x"\n',
+        "no-field": 'experiment = "field"\nmesh = "x"\n',
+        "basis-k-small": 'experiment = "spectral-distance"\nmesh = "x"\nk = 50\nbasis_k = 10\n',
+        "figure-size": 'experiment = "field"\nmesh = "x"\n[field]\nkind = "hks"\n[figure]\nsize = 1\n',
+        "syntax": 'experiment = "field\nmesh = \n',
+    }
+    for k, t in experiments.items():
+        put("experiment_file", k, t)
     total = 0
     for root, _, files in os.walk(OUT):
         for f in files:

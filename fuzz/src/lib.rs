@@ -37,31 +37,38 @@ fn line_count(bytes: &[u8]) -> usize {
 /// line that exists), an `Ok` mesh is valid, with colours for every vertex in `[0, 1]`.
 pub fn check_loaded(bytes: &[u8], name: &str, r: &Result<LoadedMesh, IoError>) {
     match r {
-        Ok(l) => {
-            check_mesh(&l.mesh);
-            if let Some(c) = &l.vertex_colors {
-                assert_eq!(c.len(), l.mesh.n_vertices(), "one colour per vertex");
-                assert!(
-                    c.iter().flatten().all(|x| (0.0..=1.0).contains(x)),
-                    "colour outside [0, 1]"
-                );
-            }
-        }
-        Err(e) => {
-            let text = e.to_string();
-            assert!(
-                text.starts_with(name),
-                "error does not name the input: {text}"
-            );
-            assert_eq!(e.path(), name);
-            if let Some(line) = e.line() {
-                assert!(
-                    line >= 1 && line <= line_count(bytes) + 1,
-                    "error names line {line} of a {}-line input: {text}",
-                    line_count(bytes)
-                );
-            }
-        }
+        Ok(l) => check_loaded_mesh(l),
+        Err(e) => check_error(bytes, name, e),
+    }
+}
+
+/// A mesh a reader returned: valid, with colours for every vertex in `[0, 1]`.
+pub fn check_loaded_mesh(l: &LoadedMesh) {
+    check_mesh(&l.mesh);
+    if let Some(c) = &l.vertex_colors {
+        assert_eq!(c.len(), l.mesh.n_vertices(), "one colour per vertex");
+        assert!(
+            c.iter().flatten().all(|x| (0.0..=1.0).contains(x)),
+            "colour outside [0, 1]"
+        );
+    }
+}
+
+/// A reader's error for `bytes` read under `name`: it names the file first, and a line
+/// that exists (or the one after the last).
+pub fn check_error(bytes: &[u8], name: &str, e: &IoError) {
+    let text = e.to_string();
+    assert!(
+        text.starts_with(name),
+        "error does not name the input: {text}"
+    );
+    assert_eq!(e.path(), name);
+    if let Some(line) = e.line() {
+        assert!(
+            line >= 1 && line <= line_count(bytes) + 1,
+            "error names line {line} of a {}-line input: {text}",
+            line_count(bytes)
+        );
     }
 }
 
