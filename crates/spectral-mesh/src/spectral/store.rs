@@ -380,22 +380,14 @@ fn check_npy_size(bytes: &[u8]) -> Result<(), String> {
         return bad("truncated header");
     };
     let header = String::from_utf8_lossy(header);
-    let item = |key: &str| -> Option<String> {
-        let at = header.find(key)? + key.len();
-        Some(
-            header[at..]
-                .trim_start()
-                .trim_start_matches(':')
-                .trim_start()
-                .to_string(),
-        )
+    // npyz parses the header with a backtracking grammar that takes exponential time on
+    // some nested or oddly quoted texts (fuzz: a 1.5 kB archive ran for minutes): only the
+    // flat dictionary NumPy writes gets through to it.
+    let Some((descr, _fortran, dims)) = parse_npy_header(&header) else {
+        return bad("the header is not the dictionary NumPy writes");
     };
-    // 'descr': '<f8' -> 8 bytes per element (1 for '|u1').
-    let Some(descr) = item("'descr'") else {
-        return bad("no descr");
-    };
+    // '<f8' -> 8 bytes per element (1 for '|u1').
     let size: u64 = descr
-        .trim_start_matches(['\'', '"'])
         .chars()
         .skip(2)
         .take_while(char::is_ascii_digit)
@@ -403,18 +395,8 @@ fn check_npy_size(bytes: &[u8]) -> Result<(), String> {
         .parse()
         .unwrap_or(1)
         .max(1);
-    // 'shape': (3, 4) or (3,) or ().
-    let Some(shape) = item("'shape'") else {
-        return bad("no shape");
-    };
-    let Some(inner) = shape.strip_prefix('(').and_then(|s| s.split(')').next()) else {
-        return bad("malformed shape");
-    };
     let mut count: u64 = 1;
-    for dim in inner.split(',').map(str::trim).filter(|d| !d.is_empty()) {
-        let Some(d) = dim.trim_end_matches('L').parse::<u64>().ok() else {
-            return bad("malformed shape");
-        };
+    for d in dims {
         count = match count.checked_mul(d) {
             Some(c) => c,
             None => return bad("the shape's size overflows"),
@@ -427,6 +409,67 @@ fn check_npy_size(bytes: &[u8]) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// The header of an `.npy` file as NumPy writes it, `{'descr': '<f8', 'fortran_order':
+/// False, 'shape': (3, 4), }` padded with spaces and a newline: exactly these three keys
+/// (any order, each once, the last comma optional), quoted strings without escapes, a
+/// tuple of integers. Returns the descr, the order and the shape.
+fn parse_npy_header(header: &str) -> Option<(String, bool, Vec<u64>)> {
+    fn quoted(s: &str) -> Option<(&str, &str)> {
+        let q = s.chars().next().filter(|c| *c == '\'' || *c == '"')?;
+        let s = &s[1..];
+        let end = s.find(q)?;
+        let v = &s[..end];
+        (!v.contains('\\')).then_some((v, &s[end + 1..]))
+    }
+    let body = header.trim_matches(|c: char| c.is_ascii_whitespace() || c == '\0');
+    let body = body.strip_prefix('{')?.strip_suffix('}')?;
+    let (mut descr, mut fortran, mut shape) = (None, None, None);
+    let mut rest = body.trim_start();
+    while !rest.is_empty() {
+        let (key, r) = quoted(rest)?;
+        let r = r.trim_start().strip_prefix(':')?.trim_start();
+        let r = match key {
+            "descr" => {
+                let (v, r) = quoted(r)?;
+                if descr.replace(v.to_string()).is_some() {
+                    return None;
+                }
+                r
+            }
+            "fortran_order" => {
+                let (v, r) = match r.strip_prefix("True") {
+                    Some(r) => (true, r),
+                    None => (false, r.strip_prefix("False")?),
+                };
+                if fortran.replace(v).is_some() {
+                    return None;
+                }
+                r
+            }
+            "shape" => {
+                let r = r.strip_prefix('(')?;
+                let end = r.find(')')?;
+                let mut dims = Vec::new();
+                for d in r[..end].split(',').map(str::trim).filter(|d| !d.is_empty()) {
+                    dims.push(d.trim_end_matches('L').parse::<u64>().ok()?);
+                }
+                if shape.replace(dims).is_some() {
+                    return None;
+                }
+                &r[end + 1..]
+            }
+            _ => return None,
+        };
+        let r = r.trim_start();
+        rest = match r.strip_prefix(',') {
+            Some(r) => r.trim_start(),
+            None if r.is_empty() => r,
+            None => return None,
+        };
+    }
+    Some((descr?, fortran?, shape?))
 }
 
 /// The cache file name for a mesh hash, discretization and parameters.
