@@ -14,7 +14,8 @@
 # -ignore_timeouts=1: its hangs are recorded but do not fail the run.
 #
 # Environment: FUZZ_SANITIZER (default `none`; `address` needs RUSTC_BOOTSTRAP=1 on the
-# stable toolchain), FUZZ_CORPUS (default fuzz/corpus).
+# stable toolchain), FUZZ_CORPUS (default fuzz/corpus), FUZZ_TARGET_DIR (default
+# fuzz/target).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 cd "$here"
@@ -35,5 +36,7 @@ if awk -v t="$target" '$1 == t && $2 == "timeout" {f = 1} END {exit !f}' known-o
   echo "note: $target has a known open hang (fuzz/known-open.txt): timeouts are recorded, not fatal"
   opts+=(-fork=1 -ignore_timeouts=1)
 fi
-exec cargo fuzz run -s "${FUZZ_SANITIZER:-none}" "$target" "$corpus" "$here/seeds/$target" \
-  -- "${opts[@]}" "$@"
+target_dir=()
+[ -n "${FUZZ_TARGET_DIR:-}" ] && target_dir=(--target-dir "$FUZZ_TARGET_DIR")
+exec cargo fuzz run -s "${FUZZ_SANITIZER:-none}" "${target_dir[@]}" "$target" "$corpus" \
+  "$here/seeds/$target" -- "${opts[@]}" "$@"

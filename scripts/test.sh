@@ -57,8 +57,9 @@ done
 # first use).
 step "web app end-to-end (headless Chromium)" bash web/e2e/run.sh
 
-# Every fuzz target for FUZZ_SECONDS (default 30) from its seeds; about 12 min on a clean
-# checkout (build 4.5 min + 15 targets x 30 s), see scripts/fuzz-smoke.sh.
+# Every fuzz target from its seeds within FUZZ_BUDGET seconds (default 180, the build of
+# the instrumented targets included; a first build on a new machine takes longer), see
+# scripts/fuzz-smoke.sh and RELIABILITY.md ("CI cost").
 step "fuzz smoke (cargo fuzz, every target)" bash scripts/fuzz-smoke.sh
 
 echo
