@@ -63,6 +63,11 @@ step "python package (build, install, pytest)" bash scripts/test-python.sh
 # first use).
 step "web app end-to-end (headless Chromium)" bash web/e2e/run.sh
 
+# Every fuzz target from its seeds within FUZZ_BUDGET seconds (default 180, the build of
+# the instrumented targets included; a first build on a new machine takes longer), see
+# scripts/fuzz-smoke.sh and RELIABILITY.md ("CI cost").
+step "fuzz smoke (cargo fuzz, every target)" bash scripts/fuzz-smoke.sh
+
 echo
 echo "disk: target folder $(du -sh target 2>/dev/null | cut -f1), $(($(df -Pk . | awk 'NR==2 {print $4}') / 1024)) MiB free"
 if [ "$failed" -gt 0 ]; then

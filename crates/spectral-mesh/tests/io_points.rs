@@ -82,8 +82,11 @@ fn ply_without_faces_is_a_point_cloud_and_with_faces_a_mesh() {
     let p = points(&bin, "b.ply");
     assert_eq!(p.cloud.positions(), &[[1.0, 2.0, 3.0], [-1.0, 0.5, 0.25]]);
     // A truncated payload is an error naming the file.
+    // (The header's counts are checked against the payload first: the error names the
+    // element's header line.)
     let e = err(&bin[..bin.len() - 5], "cut.ply");
-    assert!(e.to_string().starts_with("cut.ply: "), "{e}");
+    assert!(e.to_string().starts_with("cut.ply:3: "), "{e}");
+    assert!(e.to_string().contains("truncated"), "{e}");
     // With faces: a mesh.
     let mesh = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
     assert!(matches!(

@@ -174,3 +174,69 @@ fn name_list_covers_every_shape_and_its_irregular_variant() {
     assert_eq!(dv("cylinder"), Some(6384));
     assert_eq!(dv("irregular-3torus"), None);
 }
+
+#[test]
+fn build_limited_refuses_specs_over_the_budget_before_building() {
+    use spectral_mesh::shapes::{build_limited, parse_shape};
+    // Regular: the formula decides, nothing is built (6.4 million vertices, about 4 GB).
+    let big = parse_shape("torus:res=8").unwrap();
+    match build_limited(&big, 100_000) {
+        Err(ShapeError::TooLarge {
+            vertices, limit, ..
+        }) => {
+            assert_eq!(vertices, 6_422_528);
+            assert_eq!(limit, 100_000);
+        }
+        other => panic!("{other:?}"),
+    }
+    let e = build_limited(&big, 100_000).unwrap_err().to_string();
+    assert!(e.contains("torus:res=8") && e.contains("100000"), "{e}");
+    // Exactly at the budget is fine.
+    let s = parse_shape("sphere:res=2").unwrap();
+    assert_eq!(build_limited(&s, 162).unwrap().n_vertices(), 162);
+    assert!(matches!(
+        build_limited(&s, 161),
+        Err(ShapeError::TooLarge { vertices: 162, .. })
+    ));
+    // Irregular: the bound (vertices + edges before each level) holds the built size.
+    let irr = parse_shape("irregular-torus:res=3").unwrap();
+    let full = build(&irr).unwrap().n_vertices();
+    let m = build_limited(&irr, 4 * full).unwrap();
+    assert_eq!(m.n_vertices(), full);
+    assert!(matches!(
+        build_limited(&irr, full / 2),
+        Err(ShapeError::TooLarge { .. })
+    ));
+    // The coarse base alone can be over the budget.
+    let huge = parse_shape("irregular-sphere:res=9").unwrap();
+    assert!(matches!(
+        build_limited(&huge, 50_000),
+        Err(ShapeError::TooLarge {
+            vertices: 163_842,
+            ..
+        })
+    ));
+}
+
+#[test]
+fn parameters_that_would_give_zero_area_triangles_are_refused() {
+    for (spec, words) in [
+        ("torus:R=1e300,r=1e-300", "between 1e-100 and 1e100"),
+        ("torus:R=1,r=1e-7", "at least R / 1e6"),
+        ("cylinder:r=1,h=1e-40", "between r / 1e6 and r * 1e6"),
+        ("cylinder:r=1e-3,h=1e4", "between r / 1e6 and r * 1e6"),
+    ] {
+        let e = parse_shape(spec).unwrap_err().to_string();
+        assert!(e.contains(words), "{spec}: {e}");
+    }
+    // The limits themselves build clean meshes.
+    for spec in [
+        "torus:res=2,R=1,r=1e-6",
+        "cylinder:res=2,r=1,h=1e-6",
+        "cylinder:res=1,r=1,h=1e6",
+    ] {
+        let m = build_str(spec).unwrap();
+        let r = spectral_mesh::mesh::validate::report(&m);
+        assert!(r.degenerate_faces.is_empty(), "{spec}: {:?}", r.problems());
+    }
+}

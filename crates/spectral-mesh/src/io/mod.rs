@@ -25,7 +25,9 @@
 //!   blank lines and counts split over several lines are fine; the header's edge count is
 //!   ignored. Each vertex is its coordinates followed, on the same line, by the values its
 //!   header letters announce (normal, colour with 3 or 4 components, texture coordinates);
-//!   each face is `n i1 .. in` followed by an optional colour on the same line.
+//!   each face is `n i1 .. in` followed by an optional colour on the same line. Vertex
+//!   colour components are bytes (0-255) when any of them, alpha included, exceeds 1, and
+//!   fractions in `[0, 1]` otherwise.
 //! - OBJ: `v` (optionally `v x y z r g b`), `vt`, `vn`, `f` with `a`, `a/b`, `a//c`, `a/b/c`
 //!   corners and negative (relative) indices; other statements are ignored.
 //! - PLY: ASCII and binary (both byte orders) through `ply-rs-bw`; vertex `x y z` of any
@@ -40,9 +42,16 @@
 //! [`write_mesh`] writes through a temporary file in the target folder and renames it, so
 //! a failed write never leaves a half-written file (it does overwrite an existing file: the
 //! caller decides that policy). OFF, OBJ and PLY store positions bit-exactly (shortest
-//! round-trip decimal text, or binary doubles); STL stores `f32` and is lossy.
+//! round-trip decimal text, or binary doubles); STL stores `f32` and is lossy: a mesh
+//! with a coordinate beyond the `f32` range, or a triangle whose corners coincide once
+//! rounded to `f32` (it would be lost), is refused rather than written.
+//!
+//! # Per-vertex fields
+//! [`read_field_text`] / [`write_field_text`] (module `field`) read and write one value per
+//! line, bit-exactly, as `numpy.loadtxt` / `numpy.savetxt` do.
 
 mod atomic;
+mod field;
 mod lexer;
 mod obj;
 mod off;
@@ -59,6 +68,7 @@ use std::str::FromStr;
 use crate::mesh::Mesh;
 
 pub use atomic::{AtomicWriteError, write_atomic, write_atomic_with};
+pub use field::{field_to_text, read_field, read_field_text, write_field, write_field_text};
 pub use points::{
     Input, LoadedPoints, PointFormat, read_input, read_input_from_bytes, read_points,
     read_points_from_bytes,
@@ -421,6 +431,9 @@ pub fn write_mesh_to(
                 format!("scalar name {name:?} clashes with a standard property"),
             ));
         }
+    }
+    if format == MeshFormat::Stl {
+        stl::check_representable(mesh).map_err(|m| ctx.invalid(None, m))?;
     }
     let mut bw = std::io::BufWriter::new(w);
     let res = match format {

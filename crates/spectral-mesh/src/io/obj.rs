@@ -55,6 +55,7 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     let mut unknown: BTreeSet<String> = BTreeSet::new();
     let mut lines_or_points = 0usize;
     let mut w_ignored = 0usize;
+    let mut bad_colors = 0usize;
     let mut idx: Vec<i64> = Vec::new();
 
     let mut statement = String::new();
@@ -122,7 +123,10 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
                     ));
                 }
                 match nums.len() {
-                    6 | 7 => colors.push([nums[3] as f32, nums[4] as f32, nums[5] as f32]),
+                    6 | 7 if nums[3..6].iter().all(|c| c.is_finite()) => {
+                        colors.push([nums[3] as f32, nums[4] as f32, nums[5] as f32]);
+                    }
+                    6 | 7 => bad_colors += 1,
                     4 => w_ignored += 1,
                     _ => {}
                 }
@@ -210,7 +214,13 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
             "{w_ignored} vertex weight(s) (4th coordinate) ignored"
         ));
     }
-    let vertex_colors = if !colors.is_empty() && colors.len() == positions.len() {
+    if bad_colors > 0 {
+        warnings.push(format!(
+            "{bad_colors} vertex colour(s) with a NaN or infinite component; colours dropped"
+        ));
+    }
+    let vertex_colors = if bad_colors == 0 && !colors.is_empty() && colors.len() == positions.len()
+    {
         let scale = if colors.iter().flatten().any(|&x| x > 1.0) {
             1.0 / 255.0
         } else {
@@ -223,7 +233,7 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
                 .collect(),
         )
     } else {
-        if !colors.is_empty() {
+        if bad_colors == 0 && !colors.is_empty() {
             warnings.push("only some vertices have colours; colours dropped".to_string());
         }
         None

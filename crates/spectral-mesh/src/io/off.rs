@@ -136,6 +136,9 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     let mut positions = Vec::with_capacity(cap);
     let mut lines = Vec::with_capacity(cap);
     let mut colors_raw: Vec<[f64; 3]> = Vec::new();
+    // An alpha above 1 means the colours are bytes (0-255) even when every red, green and
+    // blue is 0 or 1 (what this crate writes: `r g b 255`).
+    let mut alpha_over_one = false;
     let mut colors_ok = header.colors;
     let base_extra = 3 * usize::from(header.normals) + 2 * usize::from(header.texcoords);
     let mut odd_lines = 0usize;
@@ -195,6 +198,11 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
                     _ => colors_ok = false,
                 }
             }
+            if e - base_extra == 4
+                && parse_f64(extras[off + 3]).is_some_and(|a| a.is_finite() && a > 1.0)
+            {
+                alpha_over_one = true;
+            }
             colors_raw.push(c);
         }
     }
@@ -208,7 +216,7 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
         warnings.push("the vertex colours are incomplete or malformed; dropped".to_string());
     }
     let vertex_colors = if header.colors && colors_ok && colors_raw.len() == nv {
-        let scale = if colors_raw.iter().flatten().any(|&x| x > 1.0) {
+        let scale = if alpha_over_one || colors_raw.iter().flatten().any(|&x| x > 1.0) {
             1.0 / 255.0
         } else {
             1.0

@@ -62,6 +62,114 @@ fn color_component(p: &Property) -> Option<f32> {
     c.is_finite().then_some(c.clamp(0.0, 1.0) as f32)
 }
 
+/// The first token of 1-based line `line` that Rust reads as NaN or an infinity.
+fn non_finite_token(bytes: &[u8], line: usize) -> Option<String> {
+    let text = bytes.split(|&b| b == b'\n').nth(line.checked_sub(1)?)?;
+    String::from_utf8_lossy(text)
+        .split_whitespace()
+        .find(|t| t.parse::<f64>().is_ok_and(|x| !x.is_finite()))
+        .map(|t| super::lexer::show(t.as_bytes()))
+}
+
+/// Bytes of one value of a PLY scalar type (1 for an unknown name: ply-rs refuses it).
+fn type_size(name: &str) -> u64 {
+    match name {
+        "char" | "int8" | "uchar" | "uint8" => 1,
+        "short" | "int16" | "ushort" | "uint16" => 2,
+        "int" | "int32" | "uint" | "uint32" | "float" | "float32" => 4,
+        "double" | "float64" => 8,
+        _ => 1,
+    }
+}
+
+/// Checks the element counts of the header against the payload before ply-rs reads it:
+/// ply-rs loops `count` times per element, and an element without properties takes no
+/// bytes in a binary file, so `element vertex 42949672951` made it fill memory. Refuses an
+/// element declared twice (ply-rs then files the later properties under another element),
+/// a binary element with records but no property, and counts that need more bytes
+/// (binary: the smallest size of a record, a list counting as empty) or more lines (ASCII)
+/// than the payload has. `Ok` also when the header is malformed: ply-rs says why.
+fn check_counts(bytes: &[u8]) -> Result<(), (usize, String)> {
+    let mut binary = false;
+    // (name, count, smallest record size in bytes, properties, header line)
+    let mut elements: Vec<(String, u64, u64, usize, usize)> = Vec::new();
+    let mut offset = 0usize;
+    let mut payload: Option<&[u8]> = None;
+    for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        offset += raw.len() + 1;
+        let line = String::from_utf8_lossy(raw);
+        let tok: Vec<&str> = line.split_whitespace().collect();
+        match tok.as_slice() {
+            ["format", f, ..] => binary = f.starts_with("binary"),
+            ["element", name, count] => {
+                let Ok(count) = count.parse::<u64>() else {
+                    return Ok(());
+                };
+                if elements.iter().any(|e| e.0 == *name) {
+                    return Err((i + 1, format!("element '{name}' is declared twice")));
+                }
+                elements.push((name.to_string(), count, 0, 0, i + 1));
+            }
+            ["property", "list", count_type, _, _] => {
+                if let Some(e) = elements.last_mut() {
+                    e.2 += type_size(count_type);
+                    e.3 += 1;
+                }
+            }
+            ["property", ty, _] => {
+                if let Some(e) = elements.last_mut() {
+                    e.2 += type_size(ty);
+                    e.3 += 1;
+                }
+            }
+            ["end_header"] => {
+                payload = Some(bytes.get(offset.min(bytes.len())..).unwrap_or(&[]));
+                break;
+            }
+            _ => {}
+        }
+    }
+    let Some(payload) = payload else {
+        return Ok(());
+    };
+    if binary {
+        let mut need = 0u64;
+        for (name, count, size, props, line) in &elements {
+            if *count > 0 && *props == 0 {
+                return Err((
+                    *line,
+                    format!("element '{name}' has {count} records but no property"),
+                ));
+            }
+            need = need.saturating_add(count.saturating_mul(*size));
+            if need > payload.len() as u64 {
+                return Err((
+                    *line,
+                    format!(
+                        "element '{name}' announces {count} records, more than the {} bytes of binary payload can hold (truncated file or wrong count)",
+                        payload.len()
+                    ),
+                ));
+            }
+        }
+    } else {
+        let lines = payload.iter().filter(|&&b| b == b'\n').count() as u64 + 1;
+        let mut need = 0u64;
+        for (name, count, _, _, line) in &elements {
+            need = need.saturating_add(*count);
+            if need > lines {
+                return Err((
+                    *line,
+                    format!(
+                        "element '{name}' announces {count} records, more than the {lines} lines after the header (truncated file or wrong count)"
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// What a PLY file holds, before it is turned into a mesh or a point cloud.
 pub(crate) struct PlyData {
     pub(crate) positions: Vec<[f64; 3]>,
@@ -99,6 +207,7 @@ const NO_FACE_ELEMENT: &str = "the PLY file has no 'face' element (a point cloud
 /// element is refused as soon as the header is known (what the mesh reader does).
 pub(crate) fn parse(bytes: &[u8], ctx: &Ctx, require_faces: bool) -> Result<PlyData, IoError> {
     let (header_lines, binary) = header_info(bytes);
+    check_counts(bytes).map_err(|(line, m)| ctx.invalid(Some(line), format!("PLY: {m}")))?;
     let parser = Parser::<DefaultElement>::new();
     let mut cursor = std::io::Cursor::new(bytes);
     let ply = parser.read_ply(&mut cursor).map_err(|e| {
@@ -131,6 +240,18 @@ pub(crate) fn parse(bytes: &[u8], ctx: &Ctx, require_faces: bool) -> Result<PlyD
         } else {
             "PLY: "
         };
+        // ply-rs's number grammar has no NaN or infinity: name the value instead of the
+        // grammar.
+        if !binary
+            && let (Some(l), Some(h)) = (line, header_lines)
+            && l > h
+            && let Some(tok) = non_finite_token(bytes, l)
+        {
+            return ctx.invalid(
+                line,
+                format!("{prefix}non-finite value '{tok}' (NaN and infinities are refused)"),
+            );
+        }
         ctx.invalid(line, format!("{prefix}{msg}"))
     })?;
     let mut warnings = Vec::new();

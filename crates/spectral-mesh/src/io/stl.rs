@@ -24,6 +24,33 @@ fn starts_with_solid(bytes: &[u8]) -> bool {
     bytes[start..].starts_with(b"solid")
 }
 
+/// The 1-based line of the `k`-th (0-based) `facet` statement of an ASCII STL file, or of
+/// the first `vertex` line after it (up to its `endfacet`) that does not hold three finite
+/// `f32` values.
+fn facet_line(bytes: &[u8], k: usize) -> Option<usize> {
+    let starts = |l: &[u8], word: &[u8]| {
+        let l = l.trim_ascii_start();
+        l.starts_with(word) && l.get(word.len()).is_none_or(|b| b.is_ascii_whitespace())
+    };
+    let mut lines = bytes.split(|&b| b == b'\n').enumerate();
+    let (facet, _) = lines.by_ref().filter(|(_, l)| starts(l, b"facet")).nth(k)?;
+    for (i, l) in lines {
+        if starts(l, b"endfacet") {
+            break;
+        }
+        let text = String::from_utf8_lossy(l);
+        let values: Vec<&str> = text.split_whitespace().skip(1).collect();
+        let bad = values.len() != 3
+            || values
+                .iter()
+                .any(|t| t.parse::<f32>().map_or(true, |x| !x.is_finite()));
+        if starts(l, b"vertex") && bad {
+            return Some(i + 1);
+        }
+    }
+    Some(facet + 1)
+}
+
 pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     let binary = looks_binary(bytes);
     let mut buf: Vec<u8>;
@@ -66,13 +93,24 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     let mut faces = RawFaces::new();
     let mut dropped = 0usize;
     for (k, tri) in reader.enumerate() {
-        let tri = tri.map_err(|e| ctx.invalid(None, format!("{kind}, facet {k}: {e}")))?;
+        let tri = tri.map_err(|e| {
+            let line = if binary { None } else { facet_line(bytes, k) };
+            let e = e.to_string();
+            if e.contains("finite") {
+                ctx.invalid(
+                    line,
+                    format!("{kind}, facet {k} has a non-finite coordinate ({e})"),
+                )
+            } else {
+                ctx.invalid(line, format!("{kind}, facet {k}: {e}"))
+            }
+        })?;
         let mut keys = [[0u32; 3]; 3];
         for (c, v) in tri.vertices.iter().enumerate() {
             let p = v.0;
             if p.iter().any(|x| !x.is_finite()) {
                 return Err(ctx.invalid(
-                    None,
+                    if binary { None } else { facet_line(bytes, k) },
                     format!("{kind}, facet {k} has a non-finite coordinate {p:?}"),
                 ));
             }
@@ -112,6 +150,35 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
             warnings,
         },
     )
+}
+
+/// Checks that STL's `f32` coordinates can hold `mesh`: every used coordinate in the `f32`
+/// range, and the three corners of every triangle still distinct once rounded (a reader
+/// drops a triangle with two equal corners). The message names the first failure.
+pub(crate) fn check_representable(mesh: &Mesh) -> Result<(), String> {
+    let p = mesh.positions();
+    for (t, tri) in mesh.triangles().iter().enumerate() {
+        let mut keys = [[0u32; 3]; 3];
+        for (c, &v) in tri.iter().enumerate() {
+            for (d, &x) in p[v].iter().enumerate() {
+                let y = x as f32;
+                if !y.is_finite() {
+                    return Err(format!(
+                        "vertex {v}: {} = {x:e} is beyond the range of f32, the only number type of STL",
+                        ["x", "y", "z"][d]
+                    ));
+                }
+                keys[c][d] = (y + 0.0).to_bits();
+            }
+        }
+        if keys[0] == keys[1] || keys[1] == keys[2] || keys[0] == keys[2] {
+            return Err(format!(
+                "triangle {t} (vertices {} {} {}) has two corners that are equal once rounded                  to f32, the only number type of STL: the triangle would be lost (write OFF,                  OBJ or PLY to keep full precision)",
+                tri[0], tri[1], tri[2]
+            ));
+        }
+    }
+    Ok(())
 }
 
 pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, opts: &WriteOptions) -> std::io::Result<()> {

@@ -55,7 +55,10 @@ mod pretzel;
 mod refine;
 mod spec;
 
-pub use spec::{ExpectedTopology, ParamInfo, ShapeError, ShapeKind, ShapeSpec, parse_shape};
+pub use spec::{
+    ExpectedTopology, MAX_ASPECT, PARAM_RANGE, ParamInfo, ShapeError, ShapeKind, ShapeSpec,
+    parse_shape,
+};
 
 use crate::mesh::Mesh;
 use refine::{Refiner, Surface};
@@ -175,15 +178,40 @@ fn regular(kind: ShapeKind, res: u32, values: &[f64]) -> parametric::Arrays {
 }
 
 /// Builds the mesh of a spec (validated first). Deterministic: the same spec gives a
-/// bit-identical mesh.
+/// bit-identical mesh. The size is bounded only by [`ShapeKind::max_res`] (up to about
+/// 7 million vertices and 4 GB); a server or anything else that builds specs typed by
+/// others should call [`build_limited`] instead.
 pub fn build(spec: &ShapeSpec) -> Result<Mesh, ShapeError> {
+    build_limited(spec, usize::MAX)
+}
+
+/// [`build`] with a vertex budget: a spec whose mesh would have more than `max_vertices`
+/// vertices is refused with [`ShapeError::TooLarge`] before the large arrays are
+/// allocated. A regular shape is checked against its vertex-count formula; an irregular
+/// one builds its coarse base (`res - 2`, a sixteenth of the size) and, before every
+/// refinement level, checks the bound "current vertices + current edges" (a refinement
+/// adds at most one vertex per edge).
+pub fn build_limited(spec: &ShapeSpec, max_vertices: usize) -> Result<Mesh, ShapeError> {
     spec.validate()?;
     let kind = spec.kind;
+    let too_large = |vertices: usize| ShapeError::TooLarge {
+        spec: spec.to_string(),
+        vertices,
+        limit: max_vertices,
+    };
     if !spec.irregular {
+        let count = kind.vertex_count(spec.res).unwrap_or(usize::MAX);
+        if count > max_vertices {
+            return Err(too_large(count));
+        }
         let (p, t) = regular(kind, spec.res, &spec.values);
         return Ok(Mesh::new(p, t)?);
     }
     let base = spec.res.saturating_sub(IRREGULAR_COARSENING);
+    let base_count = kind.vertex_count(base).unwrap_or(usize::MAX);
+    if base_count > max_vertices {
+        return Err(too_large(base_count));
+    }
     // The finest triangles are always about level res + 1: fewer levels at res < 2.
     let levels = (spec.res + 1).min(IRREGULAR_THRESHOLDS.len() as u32) as usize;
     let (p, t) = regular(kind, base, &spec.values);
@@ -206,6 +234,12 @@ pub fn build(spec: &ShapeSpec) -> Result<Mesh, ShapeError> {
     let mut r = Refiner::new(p, t, surface, normals);
     let extent = (hi[0] - lo[0]).max(f64::MIN_POSITIVE);
     for &thr in &IRREGULAR_THRESHOLDS[..levels] {
+        if max_vertices != usize::MAX {
+            let bound = r.positions.len().saturating_add(edge_count(&r.triangles));
+            if bound > max_vertices {
+                return Err(too_large(bound));
+            }
+        }
         let marked: Vec<bool> = r
             .triangles
             .iter()
@@ -217,6 +251,17 @@ pub fn build(spec: &ShapeSpec) -> Result<Mesh, ShapeError> {
         r.refine(marked);
     }
     Ok(Mesh::new(r.positions, r.triangles)?)
+}
+
+/// Number of distinct edges of a triangle list.
+fn edge_count(triangles: &[[usize; 3]]) -> usize {
+    let mut e: Vec<(usize, usize)> = triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
+        .collect();
+    e.sort_unstable();
+    e.dedup();
+    e.len()
 }
 
 /// Parses and builds in one step.

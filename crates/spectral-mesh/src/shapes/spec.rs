@@ -7,6 +7,14 @@ use thiserror::Error;
 
 use crate::mesh::MeshError;
 
+/// Range of every shape parameter (`R`, `r`, `h`): beyond it, squared lengths and areas
+/// overflow or underflow `f64`.
+pub const PARAM_RANGE: (f64, f64) = (1e-100, 1e100);
+
+/// Largest ratio `R / r` of the torus and `h / r`, `r / h` of the cylinder: beyond it the
+/// finest resolutions have triangles at the rounding level of the mesh size (zero-area).
+pub const MAX_ASPECT: f64 = 1e6;
+
 /// Errors raised when a shape spec is parsed, validated or built.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum ShapeError {
@@ -55,6 +63,19 @@ pub enum ShapeError {
         value: String,
         /// What is wrong with it.
         reason: String,
+    },
+    /// The mesh would have more vertices than the caller's budget
+    /// ([`super::build_limited`]).
+    #[error(
+        "shape `{spec}` would have {vertices} vertices, more than the limit of {limit}; lower res"
+    )]
+    TooLarge {
+        /// The spec, in canonical form.
+        spec: String,
+        /// Its vertex count (an upper bound for the irregular variants).
+        vertices: usize,
+        /// The budget it exceeds.
+        limit: usize,
     },
     /// The generated arrays were rejected by [`crate::Mesh::new`] (a bug: please report).
     #[error("internal error while building a shape: {0}")]
@@ -112,7 +133,7 @@ const TORUS_PARAMS: &[ParamInfo] = &[
     ParamInfo {
         name: "r",
         default: 0.4,
-        meaning: "minor radius (of the tube), 0 < r < R",
+        meaning: "minor radius (of the tube), R / 1e6 <= r < R",
     },
 ];
 
@@ -125,7 +146,7 @@ const CYLINDER_PARAMS: &[ParamInfo] = &[
     ParamInfo {
         name: "h",
         default: 2.0,
-        meaning: "height (the tube spans z in [-h/2, h/2])",
+        meaning: "height (the tube spans z in [-h/2, h/2]), r / 1e6 <= h <= r * 1e6",
     },
 ];
 
@@ -412,13 +433,48 @@ impl ShapeSpec {
             if !(v.is_finite() && v > 0.0) {
                 return Err(bad(p.name, v.to_string(), "must be positive".into()));
             }
+            if !(PARAM_RANGE.0..=PARAM_RANGE.1).contains(&v) {
+                return Err(bad(
+                    p.name,
+                    v.to_string(),
+                    format!(
+                        "must be between {:e} and {:e}",
+                        PARAM_RANGE.0, PARAM_RANGE.1
+                    ),
+                ));
+            }
         }
-        if self.kind == ShapeKind::Torus && self.values[1] >= self.values[0] {
-            return Err(bad(
-                "r",
-                self.values[1].to_string(),
-                format!("must be smaller than R = {}", self.values[0]),
-            ));
+        if self.kind == ShapeKind::Torus {
+            let (big, small) = (self.values[0], self.values[1]);
+            if small >= big {
+                return Err(bad(
+                    "r",
+                    small.to_string(),
+                    format!("must be smaller than R = {big}"),
+                ));
+            }
+            if small < big / MAX_ASPECT {
+                return Err(bad(
+                    "r",
+                    small.to_string(),
+                    format!(
+                        "must be at least R / {MAX_ASPECT:e} = {} (a thinner tube has zero-area triangles)",
+                        big / MAX_ASPECT
+                    ),
+                ));
+            }
+        }
+        if self.kind == ShapeKind::Cylinder {
+            let (r, h) = (self.values[0], self.values[1]);
+            if !(r / MAX_ASPECT..=r * MAX_ASPECT).contains(&h) {
+                return Err(bad(
+                    "h",
+                    h.to_string(),
+                    format!(
+                        "must be between r / {MAX_ASPECT:e} and r * {MAX_ASPECT:e} (r = {r}; a flatter or longer tube has zero-area triangles)"
+                    ),
+                ));
+            }
         }
         Ok(())
     }

@@ -44,6 +44,10 @@
 //! parameters, `+ - * / ^` (`^` binds tightest and is right-associative, `-s^2 = -(s^2)`),
 //! unary minus, parentheses, and the functions `exp log sqrt abs sin cos tanh` (one
 //! argument) and `pow min max` (two arguments). Example: `custom-w:exp(-s*t)/s;t=0.1`.
+//! An expression may nest parentheses, function calls, signs and powers at most
+//! [`MAX_EXPR_NESTING`] deep and hold at most [`MAX_EXPR_NODES`] numbers, names and
+//! operations, so that parsing, evaluating and dropping it never overflow a thread's stack
+//! (a server's worker threads have 2 MB).
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -52,6 +56,13 @@ use std::str::FromStr;
 /// Eigenvalues with `|lambda| <= ZERO_EIGENVALUE_EPS * lambda_max` count as zero (one per
 /// connected component) and are skipped. The value matches pyFM's WKS cut-off.
 pub const ZERO_EIGENVALUE_EPS: f64 = 1e-8;
+
+/// Deepest nesting of parentheses, function calls, unary signs and powers in a custom
+/// expression.
+pub const MAX_EXPR_NESTING: usize = 64;
+
+/// Most numbers, names and operations in a custom expression.
+pub const MAX_EXPR_NODES: usize = 1000;
 
 /// Errors of filters: validation on a spectrum and parsing.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
@@ -521,6 +532,10 @@ struct Parser<'a> {
     chars: Vec<char>,
     pos: usize,
     names: &'a [&'a str],
+    /// Current nesting (see [`MAX_EXPR_NESTING`]).
+    depth: usize,
+    /// Nodes built so far (see [`MAX_EXPR_NODES`]).
+    nodes: usize,
 }
 
 impl Expr {
@@ -532,6 +547,8 @@ impl Expr {
             chars: src.chars().collect(),
             pos: 0,
             names,
+            depth: 0,
+            nodes: 0,
         };
         p.skip_ws();
         if p.pos >= p.chars.len() {
@@ -600,6 +617,28 @@ impl Parser<'_> {
         }
     }
 
+    /// Counts one more node, refusing expressions with more than [`MAX_EXPR_NODES`].
+    fn node(&mut self, n: Node) -> Result<Node, FilterError> {
+        self.nodes += 1;
+        if self.nodes > MAX_EXPR_NODES {
+            return Err(self.err(&format!(
+                "expression too long: more than {MAX_EXPR_NODES} numbers, names and operations"
+            )));
+        }
+        Ok(n)
+    }
+
+    /// Enters one nesting level, refusing more than [`MAX_EXPR_NESTING`].
+    fn enter(&mut self) -> Result<(), FilterError> {
+        self.depth += 1;
+        if self.depth > MAX_EXPR_NESTING {
+            return Err(self.err(&format!(
+                "expression nested too deeply: more than {MAX_EXPR_NESTING} levels of parentheses, calls, signs and powers"
+            )));
+        }
+        Ok(())
+    }
+
     fn skip_ws(&mut self) {
         while self.pos < self.chars.len() && self.chars[self.pos].is_whitespace() {
             self.pos += 1;
@@ -621,12 +660,14 @@ impl Parser<'_> {
     }
 
     fn expr(&mut self) -> Result<Node, FilterError> {
+        self.enter()?;
         let mut a = self.term()?;
         while let Some(c @ ('+' | '-')) = self.peek() {
             self.pos += 1;
             let b = self.term()?;
-            a = Node::Bin(c, Box::new(a), Box::new(b));
+            a = self.node(Node::Bin(c, Box::new(a), Box::new(b)))?;
         }
+        self.depth -= 1;
         Ok(a)
     }
 
@@ -635,20 +676,23 @@ impl Parser<'_> {
         while let Some(c @ ('*' | '/')) = self.peek() {
             self.pos += 1;
             let b = self.unary()?;
-            a = Node::Bin(c, Box::new(a), Box::new(b));
+            a = self.node(Node::Bin(c, Box::new(a), Box::new(b)))?;
         }
         Ok(a)
     }
 
     fn unary(&mut self) -> Result<Node, FilterError> {
         match self.peek() {
-            Some('-') => {
+            Some(c @ ('-' | '+')) => {
                 self.pos += 1;
-                Ok(Node::Neg(Box::new(self.unary()?)))
-            }
-            Some('+') => {
-                self.pos += 1;
-                self.unary()
+                self.enter()?;
+                let a = self.unary()?;
+                self.depth -= 1;
+                if c == '-' {
+                    self.node(Node::Neg(Box::new(a)))
+                } else {
+                    Ok(a)
+                }
             }
             _ => self.power(),
         }
@@ -658,8 +702,10 @@ impl Parser<'_> {
         let base = self.primary()?;
         if self.peek() == Some('^') {
             self.pos += 1;
+            self.enter()?;
             let e = self.unary()?;
-            return Ok(Node::Bin('^', Box::new(base), Box::new(e)));
+            self.depth -= 1;
+            return self.node(Node::Bin('^', Box::new(base), Box::new(e)));
         }
         Ok(base)
     }
@@ -689,13 +735,13 @@ impl Parser<'_> {
                 return self.call(&name, start);
             }
             if name == "s" {
-                return Ok(Node::S);
+                return self.node(Node::S);
             }
             if name == "pi" {
-                return Ok(Node::Num(std::f64::consts::PI));
+                return self.node(Node::Num(std::f64::consts::PI));
             }
             if let Some(i) = self.names.iter().position(|n| *n == name) {
-                return Ok(Node::Param(i));
+                return self.node(Node::Param(i));
             }
             self.pos = start;
             return Err(self.err(&format!(
@@ -725,10 +771,11 @@ impl Parser<'_> {
             }
         }
         let text: String = self.chars[start..self.pos].iter().collect();
-        text.parse::<f64>().map(Node::Num).map_err(|_| {
+        let v = text.parse::<f64>().map_err(|_| {
             self.pos = start;
             self.err(&format!("invalid number '{text}'"))
-        })
+        })?;
+        self.node(Node::Num(v))
     }
 
     fn call(&mut self, name: &str, start: usize) -> Result<Node, FilterError> {
@@ -758,13 +805,13 @@ impl Parser<'_> {
         let a = self.expr()?;
         if let Some(f) = f1 {
             self.expect(')')?;
-            return Ok(Node::F1(f, Box::new(a)));
+            return self.node(Node::F1(f, Box::new(a)));
         }
         self.expect(',')?;
         let b = self.expr()?;
         self.expect(')')?;
         match f2 {
-            Some(f) => Ok(Node::F2(f, Box::new(a), Box::new(b))),
+            Some(f) => self.node(Node::F2(f, Box::new(a), Box::new(b))),
             None => Err(self.err("internal: no function")),
         }
     }
@@ -820,6 +867,23 @@ mod tests {
         assert!(Expr::parse("", &[]).is_err());
         assert!(Expr::parse("(s))", &[]).is_err());
         assert!(Expr::parse("pow(s)", &[]).is_err());
+    }
+
+    #[test]
+    fn nesting_and_size_limits() {
+        let nested = |d: usize| format!("{}s{}", "(".repeat(d), ")".repeat(d));
+        // expr() itself is one level, each parenthesis one more.
+        assert!(Expr::parse(&nested(MAX_EXPR_NESTING - 1), &[]).is_ok());
+        let e = Expr::parse(&nested(MAX_EXPR_NESTING), &[]).unwrap_err();
+        assert!(e.to_string().contains("nested too deeply"), "{e}");
+        let e = Expr::parse(&format!("{}s", "-".repeat(100)), &[]).unwrap_err();
+        assert!(e.to_string().contains("nested too deeply"), "{e}");
+        // n terms make 2n - 1 nodes.
+        let sum = |n: usize| vec!["s"; n].join("+");
+        assert!(Expr::parse(&sum(MAX_EXPR_NODES.div_ceil(2)), &[]).is_ok());
+        let e = Expr::parse(&sum(MAX_EXPR_NODES.div_ceil(2) + 1), &[]).unwrap_err();
+        assert!(e.to_string().contains("expression too long"), "{e}");
+        assert!(format!("custom-w:{}", sum(2000)).parse::<Filter>().is_err());
     }
 
     #[test]

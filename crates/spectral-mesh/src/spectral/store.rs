@@ -225,20 +225,33 @@ pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(),
 /// Reads an archive written by [`save_npz`] (or by NumPy with the same arrays; the
 /// eigenvectors may be in C or Fortran order).
 pub fn load_npz(path: &Path) -> Result<(Eigenbasis, BasisMeta), StoreError> {
-    let e = io_err(path);
+    let file = std::fs::File::open(path).map_err(io_err(path))?;
+    load_npz_from_reader(std::io::BufReader::new(file), &path.display().to_string())
+}
+
+/// [`load_npz`] from any reader (an upload, a buffer); `name` labels the errors. Every
+/// array is checked against the others and against its declared size before it is
+/// allocated, so a damaged or hostile archive gives [`StoreError::Format`], never a panic
+/// or an allocation larger than its own content.
+pub fn load_npz_from_reader<R: Read + std::io::Seek>(
+    reader: R,
+    name: &str,
+) -> Result<(Eigenbasis, BasisMeta), StoreError> {
     let fmt = |reason: String| StoreError::Format {
-        path: path.display().to_string(),
+        path: name.to_string(),
         reason,
     };
-    let file = std::fs::File::open(path).map_err(&e)?;
-    let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
-        .map_err(|err| fmt(format!("not a zip archive ({err})")))?;
+    let mut zip =
+        zip::ZipArchive::new(reader).map_err(|err| fmt(format!("not a zip archive ({err})")))?;
     let mut read = |name: &str| -> Result<npyz::NpyFile<std::io::Cursor<Vec<u8>>>, StoreError> {
         let mut entry = zip
             .by_name(&format!("{name}.npy"))
             .map_err(|_| fmt(format!("missing array '{name}'")))?;
         let mut bytes = Vec::new();
-        entry.read_to_end(&mut bytes).map_err(&e)?;
+        entry
+            .read_to_end(&mut bytes)
+            .map_err(|err| fmt(format!("array '{name}': {err}")))?;
+        check_npy_size(&bytes).map_err(|reason| fmt(format!("array '{name}': {reason}")))?;
         npyz::NpyFile::new(std::io::Cursor::new(bytes))
             .map_err(|err| fmt(format!("array '{name}': {err}")))
     };
@@ -249,6 +262,10 @@ pub fn load_npz(path: &Path) -> Result<(Eigenbasis, BasisMeta), StoreError> {
     let i64s = |f: npyz::NpyFile<std::io::Cursor<Vec<u8>>>, name: &str| {
         f.into_vec::<i64>()
             .map_err(|err| fmt(format!("array '{name}': {err}")))
+    };
+    let finite = |v: &[f64], name: &str| match v.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(fmt(format!("'{name}' entry {i} is {}", v[i]))),
+        None => Ok(()),
     };
     let meta_bytes = read("meta")?
         .into_vec::<u8>()
@@ -262,14 +279,24 @@ pub fn load_npz(path: &Path) -> Result<(Eigenbasis, BasisMeta), StoreError> {
     if shape.len() != 2 {
         return Err(fmt(format!("eigenvectors have shape {shape:?}")));
     }
-    let (n, k) = (shape[0] as usize, shape[1] as usize);
+    let (Ok(n), Ok(k)) = (usize::try_from(shape[0]), usize::try_from(shape[1])) else {
+        return Err(fmt(format!("eigenvectors have shape {shape:?}")));
+    };
+    if n == 0 || k == 0 || n != meta.n || k != meta.k {
+        return Err(fmt(format!(
+            "eigenvectors {n} x {k}, but the metadata says n = {}, k = {} (both at least 1)",
+            meta.n, meta.k
+        )));
+    }
     let raw = f64s(vf, "eigenvectors")?;
-    if k != values.len() || raw.len() != n * k {
+    if k != values.len() || n.checked_mul(k) != Some(raw.len()) {
         return Err(fmt(format!(
             "eigenvectors {n} x {k} do not match {} eigenvalues",
             values.len()
         )));
     }
+    finite(&values, "eigenvalues")?;
+    finite(&raw, "eigenvectors")?;
     let vectors = match order {
         npyz::Order::Fortran => raw,
         npyz::Order::C => {
@@ -294,12 +321,33 @@ pub fn load_npz(path: &Path) -> Result<(Eigenbasis, BasisMeta), StoreError> {
     if mshape.len() != 2 || mshape[0] != n || mshape[1] != n {
         return Err(fmt(format!("mass shape {mshape:?} does not match n = {n}")));
     }
+    finite(&data, "mass_data")?;
+    // `SparseMatrix::from_csc` slices with each column's range before it has seen the
+    // whole index pointer: check it completely first.
+    if indptr.len() != n + 1
+        || indptr.first() != Some(&0)
+        || indptr.last() != Some(&indices.len())
+        || indptr.windows(2).any(|w| w[0] > w[1])
+        || indices.len() != data.len()
+    {
+        return Err(fmt(
+            "the mass matrix arrays are not valid CSC (mass_indptr must rise from 0 to the \
+             number of entries, one per column plus one)"
+                .to_string(),
+        ));
+    }
     let mass = SparseMatrix::from_csc(n, n, indptr, indices, data)
         .ok_or_else(|| fmt("the mass matrix arrays are not valid CSC".to_string()))?;
     let residuals = match read("residuals") {
         Ok(f) => f64s(f, "residuals")?,
         Err(_) => Vec::new(),
     };
+    if !(residuals.is_empty() || residuals.len() == k) {
+        return Err(fmt(format!(
+            "{} residuals for {k} eigenpairs",
+            residuals.len()
+        )));
+    }
     let basis = Eigenbasis {
         laplacian: meta.laplacian,
         n,
@@ -309,6 +357,119 @@ pub fn load_npz(path: &Path) -> Result<(Eigenbasis, BasisMeta), StoreError> {
         residuals,
     };
     Ok((basis, meta))
+}
+
+/// Checks, before `npyz` sees it, that the header of an `.npy` file announces no more data
+/// than the file holds (`npyz` multiplies the shape unchecked and reserves that many
+/// elements): the shape's product times the item size must fit in the bytes after the
+/// header.
+fn check_npy_size(bytes: &[u8]) -> Result<(), String> {
+    let bad = |m: &str| Err(format!("not a valid .npy array ({m})"));
+    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+        return bad("no NUMPY magic");
+    }
+    let (len, start): (usize, usize) = match bytes[6] {
+        1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
+        2 | 3 if bytes.len() >= 12 => (
+            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+            12,
+        ),
+        _ => return bad("unknown format version"),
+    };
+    let Some(header) = bytes.get(start..start.saturating_add(len)) else {
+        return bad("truncated header");
+    };
+    let header = String::from_utf8_lossy(header);
+    // npyz parses the header with a backtracking grammar that takes exponential time on
+    // some nested or oddly quoted texts (fuzz: a 1.5 kB archive ran for minutes): only the
+    // flat dictionary NumPy writes gets through to it.
+    let Some((descr, _fortran, dims)) = parse_npy_header(&header) else {
+        return bad("the header is not the dictionary NumPy writes");
+    };
+    // '<f8' -> 8 bytes per element (1 for '|u1').
+    let size: u64 = descr
+        .chars()
+        .skip(2)
+        .take_while(char::is_ascii_digit)
+        .collect::<String>()
+        .parse()
+        .unwrap_or(1)
+        .max(1);
+    let mut count: u64 = 1;
+    for d in dims {
+        count = match count.checked_mul(d) {
+            Some(c) => c,
+            None => return bad("the shape's size overflows"),
+        };
+    }
+    let data = (bytes.len() - (start + len)) as u64;
+    if count.checked_mul(size).is_none_or(|b| b > data) {
+        return Err(format!(
+            "the header announces {count} elements of {size} bytes but only {data} bytes follow"
+        ));
+    }
+    Ok(())
+}
+
+/// The header of an `.npy` file as NumPy writes it, `{'descr': '<f8', 'fortran_order':
+/// False, 'shape': (3, 4), }` padded with spaces and a newline: exactly these three keys
+/// (any order, each once, the last comma optional), quoted strings without escapes, a
+/// tuple of integers. Returns the descr, the order and the shape.
+fn parse_npy_header(header: &str) -> Option<(String, bool, Vec<u64>)> {
+    fn quoted(s: &str) -> Option<(&str, &str)> {
+        let q = s.chars().next().filter(|c| *c == '\'' || *c == '"')?;
+        let s = &s[1..];
+        let end = s.find(q)?;
+        let v = &s[..end];
+        (!v.contains('\\')).then_some((v, &s[end + 1..]))
+    }
+    let body = header.trim_matches(|c: char| c.is_ascii_whitespace() || c == '\0');
+    let body = body.strip_prefix('{')?.strip_suffix('}')?;
+    let (mut descr, mut fortran, mut shape) = (None, None, None);
+    let mut rest = body.trim_start();
+    while !rest.is_empty() {
+        let (key, r) = quoted(rest)?;
+        let r = r.trim_start().strip_prefix(':')?.trim_start();
+        let r = match key {
+            "descr" => {
+                let (v, r) = quoted(r)?;
+                if descr.replace(v.to_string()).is_some() {
+                    return None;
+                }
+                r
+            }
+            "fortran_order" => {
+                let (v, r) = match r.strip_prefix("True") {
+                    Some(r) => (true, r),
+                    None => (false, r.strip_prefix("False")?),
+                };
+                if fortran.replace(v).is_some() {
+                    return None;
+                }
+                r
+            }
+            "shape" => {
+                let r = r.strip_prefix('(')?;
+                let end = r.find(')')?;
+                let mut dims = Vec::new();
+                for d in r[..end].split(',').map(str::trim).filter(|d| !d.is_empty()) {
+                    dims.push(d.trim_end_matches('L').parse::<u64>().ok()?);
+                }
+                if shape.replace(dims).is_some() {
+                    return None;
+                }
+                &r[end + 1..]
+            }
+            _ => return None,
+        };
+        let r = r.trim_start();
+        rest = match r.strip_prefix(',') {
+            Some(r) => r.trim_start(),
+            None if r.is_empty() => r,
+            None => return None,
+        };
+    }
+    Some((descr?, fortran?, shape?))
 }
 
 /// The cache file name for a mesh hash, discretization and parameters.
