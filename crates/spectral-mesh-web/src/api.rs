@@ -191,7 +191,9 @@ async fn read_body(
             ),
         )
     };
+    let mut body = body;
     if declared.is_some_and(|n| n > limit) {
+        drain(&mut body, deadline).await;
         return Err(too_large());
     }
     let expect = declared.unwrap_or(limit);
@@ -203,7 +205,6 @@ async fn read_body(
         StatusCode::PAYLOAD_TOO_LARGE,
     )
     .await?;
-    let mut body = body;
     let mut buf: Vec<u8> = Vec::with_capacity(expect.min(limit).min(1 << 20));
     let read = async {
         while let Some(frame) = body.frame().await {
@@ -224,7 +225,13 @@ async fn read_body(
     };
     match tokio::time::timeout_at(deadline.0, read).await {
         Ok(Ok(())) => {}
-        Ok(Err(e)) => return Err(e),
+        Ok(Err(e)) => {
+            if e.0 == StatusCode::PAYLOAD_TOO_LARGE {
+                drop(buf);
+                drain(&mut body, deadline).await;
+            }
+            return Err(e);
+        }
         Err(_) => {
             return Err(ApiError(
                 StatusCode::REQUEST_TIMEOUT,
@@ -244,6 +251,32 @@ async fn read_body(
         )));
     }
     Ok((Bytes::from(buf), reservation))
+}
+
+/// Most bytes of a refused body read and dropped before the refusal is sent.
+const DRAIN_BYTES: usize = 16 << 20;
+
+/// Reads and drops up to [`DRAIN_BYTES`] more of a body refused as too large (for at most
+/// 5 s, never past the deadline): a client still sending then reads the 413 instead of a
+/// connection reset by the server's closing on unread data.
+async fn drain(body: &mut Body, deadline: Deadline) {
+    let until = deadline
+        .0
+        .min(tokio::time::Instant::now() + std::time::Duration::from_secs(5));
+    let read = async {
+        let mut seen = 0usize;
+        while seen < DRAIN_BYTES {
+            match body.frame().await {
+                Some(Ok(frame)) => {
+                    if let Ok(data) = frame.into_data() {
+                        seen += data.len();
+                    }
+                }
+                _ => break,
+            }
+        }
+    };
+    let _ = tokio::time::timeout_at(until, read).await;
 }
 
 /// Memory reserved per byte of a JSON body (the text, `serde_json::Value`, the request).
