@@ -59,6 +59,9 @@ done
 # 1 min for the tests.
 step "python package (build, install, pytest)" bash scripts/test-python.sh
 
+# The web server under a bounded load (about 40 s; the long soak is web/soak.sh).
+step "web server soak (quick)" env SPECTRAL_MESH_CLI="$cli" SOAK_OUT="$root/target/soak-quick.json" bash web/soak.sh --quick
+
 # The web app in headless Chromium (installs Debian's chromium and the npm packages on
 # first use).
 step "web app end-to-end (headless Chromium)" bash web/e2e/run.sh

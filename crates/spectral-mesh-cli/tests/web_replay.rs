@@ -62,7 +62,10 @@ fn json_of(addr: SocketAddr, method: &str, path: &str, body: &Value) -> Value {
 fn a_web_download_replays_to_the_same_bytes() {
     let server = spawn(ServeConfig {
         port: 0,
-        cache_bytes: 256 << 20,
+        limits: spectral_mesh_web::Limits {
+            cache_bytes: 256 << 20,
+            ..Default::default()
+        },
         ..Default::default()
     })
     .unwrap();

@@ -140,7 +140,11 @@ fn main() {
     // Through HTTP: the server on 127.0.0.1, the basis computed through the API.
     let server = spawn(ServeConfig {
         port: 0,
-        cache_bytes: 2 << 30,
+        limits: spectral_mesh_web::Limits {
+            cache_bytes: 2 << 30,
+            memory_bytes: 3 << 30,
+            ..Default::default()
+        },
         ..Default::default()
     })
     .unwrap();

@@ -1,6 +1,8 @@
 //! Runs the web app without the CLI: `cargo run -p spectral-mesh-web --example serve --
-//! [--host 127.0.0.1] [--port 8000] [--cache-mib 1024] [--max-upload-mib 64]`.
-//! Prints `spectral-mesh web app: URL` once listening (port 0 picks a free port).
+//! [--host 127.0.0.1] [--port 8000] [--memory-mib 2048] [--cache-mib 1024]
+//! [--max-upload-mib 64]` (the other limits at their defaults; `spectral-mesh serve` sets
+//! them all). Prints `spectral-mesh web app: URL` once listening (port 0 picks a free
+//! port).
 
 use spectral_mesh_web::{ServeConfig, serve_blocking};
 
@@ -10,17 +12,14 @@ fn main() {
     let mut i = 0;
     while i < args.len() {
         let value = args.get(i + 1).cloned().unwrap_or_default();
+        let mib = value.parse::<usize>().map(|v| v << 20);
+        let l = &mut cfg.limits;
         let ok = match args[i].as_str() {
             "--host" => value.parse().map(|v| cfg.host = v).is_ok(),
             "--port" => value.parse().map(|v| cfg.port = v).is_ok(),
-            "--cache-mib" => value
-                .parse::<usize>()
-                .map(|v| cfg.cache_bytes = v << 20)
-                .is_ok(),
-            "--max-upload-mib" => value
-                .parse::<usize>()
-                .map(|v| cfg.max_upload_bytes = v << 20)
-                .is_ok(),
+            "--memory-mib" => mib.map(|v| l.memory_bytes = v).is_ok(),
+            "--cache-mib" => mib.map(|v| l.cache_bytes = v).is_ok(),
+            "--max-upload-mib" => mib.map(|v| l.max_upload_bytes = v).is_ok(),
             _ => false,
         };
         if !ok {

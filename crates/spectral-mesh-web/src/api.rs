@@ -2,29 +2,32 @@
 //! [`spectral_mesh::analysis::Analysis`]; this module only parses, caches and encodes.
 
 use std::sync::Arc;
-use std::time::Instant;
 
-use axum::body::Bytes;
-use axum::extract::rejection::{BytesRejection, JsonRejection, QueryRejection};
-use axum::extract::{DefaultBodyLimit, Path, Query, State};
+use axum::body::{Body, Bytes};
+use axum::extract::rejection::QueryRejection;
+use axum::extract::{DefaultBodyLimit, Extension, Path, Query, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
+use http_body_util::BodyExt;
 use serde::Deserialize;
 use serde_json::json;
-use spectral_mesh::analysis::{Analysis, AnalysisError, request::DEFAULT_K};
+use spectral_mesh::Mesh;
+use spectral_mesh::analysis::{Analysis, AnalysisError};
 use spectral_mesh::experiments::file::ExperimentFile;
-use spectral_mesh::linalg::EigenProgress;
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::spectral::eigenbasis::EigenError;
-use spectral_mesh::{Laplacian, Mesh};
 use spectral_mesh_render::figure::Figure;
 
-use crate::body::{BodyError, FieldBody};
+use crate::body::{self, BodyError, FieldBody};
+use crate::cache::Shortfall;
 use crate::field::{FieldReply, field_reply};
+use crate::jobs::{self, Job, Submit, Submitted};
+use crate::limits::{Deadline, busy, guard, mib, read_inside};
 use crate::state::{
-    AnalysisKey, AppState, Item, Job, JobSlot, Key, MeshEntry, basis_bytes, mesh_bytes,
+    AnalysisKey, AppState, Item, Key, MeshEntry, Reservation, analysis_creation_bytes, field_bytes,
+    mesh_bytes,
 };
 
 type St = State<Arc<AppState>>;
@@ -72,7 +75,12 @@ fn internal(e: impl std::fmt::Display) -> ApiError {
 
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
-        (self.0, Json(json!({ "error": self.1 }))).into_response()
+        let mut r = (self.0, Json(json!({ "error": self.1 }))).into_response();
+        if self.0 == StatusCode::SERVICE_UNAVAILABLE {
+            r.headers_mut()
+                .insert(header::RETRY_AFTER, HeaderValue::from_static("2"));
+        }
+        r
     }
 }
 
@@ -80,7 +88,7 @@ type ApiResult<T> = Result<T, ApiError>;
 
 /// Builds the router over `state`.
 pub fn router(state: Arc<AppState>) -> Router {
-    let limit = state.config.max_upload_bytes;
+    let limit = state.config.limits.max_json_bytes;
     Router::new()
         .route("/", get(index))
         .route("/index.html", get(index))
@@ -105,8 +113,196 @@ pub fn router(state: Arc<AppState>) -> Router {
             get(download_get).post(download_post),
         )
         .fallback(|| async { ApiError::not_found("no such page") })
+        // Bodies are read by the handlers themselves (limits, memory, deadline); this
+        // only bounds extractors that might be added later.
         .layer(DefaultBodyLimit::max(limit))
+        .layer(axum::middleware::from_fn_with_state(state.clone(), guard))
         .with_state(state)
+}
+
+// ---------- limits ----------
+
+/// The answer to a reservation that failed: 503 when other work holds the memory (try
+/// again), `never` (413 or 422) when it could never fit.
+fn no_room(what: &str, short: &Shortfall, never: StatusCode) -> ApiError {
+    if short.never_fits() {
+        ApiError(
+            never,
+            format!(
+                "{what} needs about {}, more than this server's memory budget of {} (--memory-mib)",
+                mib(short.wanted),
+                mib(short.limit)
+            ),
+        )
+    } else {
+        ApiError(
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!(
+                "the server's memory is busy: {what} needs about {}, and of the budget of {} the cache holds {} ({} in use) and work in progress {}; try again later",
+                mib(short.wanted),
+                mib(short.limit),
+                mib(short.cached),
+                mib(short.pinned),
+                mib(short.reserved)
+            ),
+        )
+    }
+}
+
+/// Reserves `bytes` of the memory budget, waiting until the request's deadline.
+async fn reserve(
+    s: &AppState,
+    what: &str,
+    bytes: usize,
+    deadline: Deadline,
+    never: StatusCode,
+) -> ApiResult<Reservation> {
+    s.cache
+        .reserve(bytes, deadline.0)
+        .await
+        .map_err(|short| no_room(what, &short, never))
+}
+
+/// Reads a request body of at most `limit` bytes (413 beyond, at once when the
+/// `Content-Length` says so), with `factor` times its length reserved from the memory
+/// budget first (the body and what parsing it takes), before the request's deadline
+/// (408 when the body has not arrived by then; 400 when the client stopped sending).
+async fn read_body(
+    s: &AppState,
+    headers: &HeaderMap,
+    body: Body,
+    (limit, what, factor): (usize, &str, usize),
+    deadline: Deadline,
+) -> ApiResult<(Bytes, Reservation)> {
+    let declared = headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.parse::<usize>().ok());
+    let too_large = || {
+        ApiError(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            format!(
+                "the {what} is larger than the limit of {limit} bytes ({})",
+                if what == "upload" {
+                    "--max-upload-mib"
+                } else {
+                    "JSON bodies"
+                }
+            ),
+        )
+    };
+    let mut body = body;
+    if declared.is_some_and(|n| n > limit) {
+        drain(&mut body, deadline).await;
+        return Err(too_large());
+    }
+    let expect = declared.unwrap_or(limit);
+    let reservation = reserve(
+        s,
+        &format!("reading this {what}"),
+        expect.saturating_mul(factor),
+        deadline,
+        StatusCode::PAYLOAD_TOO_LARGE,
+    )
+    .await?;
+    let mut buf: Vec<u8> = Vec::with_capacity(expect.min(limit).min(1 << 20));
+    let read = async {
+        while let Some(frame) = body.frame().await {
+            let frame = frame.map_err(|e| {
+                ApiError::bad(format!(
+                    "the {what} ended early after {} bytes: {e}",
+                    buf.len()
+                ))
+            })?;
+            if let Ok(data) = frame.into_data() {
+                if buf.len() + data.len() > limit {
+                    return Err(too_large());
+                }
+                buf.extend_from_slice(&data);
+            }
+        }
+        Ok(())
+    };
+    match tokio::time::timeout_at(deadline.0, read).await {
+        Ok(Ok(())) => {}
+        Ok(Err(e)) => {
+            if e.0 == StatusCode::PAYLOAD_TOO_LARGE {
+                drop(buf);
+                drain(&mut body, deadline).await;
+            }
+            return Err(e);
+        }
+        Err(_) => {
+            return Err(ApiError(
+                StatusCode::REQUEST_TIMEOUT,
+                format!(
+                    "the {what} did not arrive within {} s (--request-seconds): {} bytes received",
+                    s.config.limits.request_seconds,
+                    buf.len()
+                ),
+            ));
+        }
+    }
+    if declared.is_some_and(|n| n != buf.len()) {
+        return Err(ApiError::bad(format!(
+            "the {what} ended early: {} of {} bytes",
+            buf.len(),
+            declared.unwrap_or(0)
+        )));
+    }
+    Ok((Bytes::from(buf), reservation))
+}
+
+/// Most bytes of a refused body read and dropped before the refusal is sent.
+const DRAIN_BYTES: usize = 16 << 20;
+
+/// Reads and drops up to [`DRAIN_BYTES`] more of a body refused as too large (for at most
+/// 5 s, never past the deadline): a client still sending then reads the 413 instead of a
+/// connection reset by the server's closing on unread data.
+async fn drain(body: &mut Body, deadline: Deadline) {
+    let until = deadline
+        .0
+        .min(tokio::time::Instant::now() + std::time::Duration::from_secs(5));
+    let read = async {
+        let mut seen = 0usize;
+        while seen < DRAIN_BYTES {
+            match body.frame().await {
+                Some(Ok(frame)) => {
+                    if let Ok(data) = frame.into_data() {
+                        seen += data.len();
+                    }
+                }
+                _ => break,
+            }
+        }
+    };
+    let _ = tokio::time::timeout_at(until, read).await;
+}
+
+/// Memory reserved per byte of a JSON body (the text, `serde_json::Value`, the request).
+const JSON_FACTOR: usize = 8;
+
+/// Memory reserved per byte of an uploaded mesh: the bytes, the parsed mesh, its
+/// connectivity and validation report (see RELIABILITY.md for the measurement).
+pub const UPLOAD_FACTOR: usize = 12;
+
+/// Memory reserved per vertex while a shape is built and checked.
+pub const SHAPE_BYTES_PER_VERTEX: usize = 1200;
+
+async fn json_body(
+    s: &AppState,
+    headers: &HeaderMap,
+    body: Body,
+    deadline: Deadline,
+) -> ApiResult<(Bytes, Reservation)> {
+    read_body(
+        s,
+        headers,
+        body,
+        (s.config.limits.max_json_bytes, "JSON body", JSON_FACTOR),
+        deadline,
+    )
+    .await
 }
 
 // ---------- static files (a fixed list: no path parameters) ----------
@@ -117,10 +313,10 @@ const STYLE_CSS: &str = include_str!("../static/style.css");
 
 async fn static_file(state: &AppState, name: &str, builtin: &'static str, mime: &str) -> Response {
     let body = match &state.config.static_dir {
-        Some(dir) => match tokio::fs::read(dir.join(name)).await {
+        Some(dir) => match read_inside(dir, name).await {
             Ok(b) => b,
             Err(e) => {
-                return ApiError::not_found(format!("static file {name}: {e}")).into_response();
+                return ApiError::not_found(format!("static file {e}")).into_response();
             }
         },
         None => builtin.as_bytes().to_vec(),
@@ -180,8 +376,7 @@ async fn vendor(s: &AppState, rel: &str, embedded: Option<&'static [u8]>) -> Res
     if let (Some(b), false) = (embedded, told) {
         return reply("embedded", b.to_vec());
     }
-    let path = s.node_modules.join(rel);
-    match tokio::fs::read(&path).await {
+    match read_inside(&s.node_modules, rel).await {
         Ok(b) => reply("folder", b),
         Err(_) => match embedded {
             Some(b) => reply("embedded", b.to_vec()),
@@ -211,11 +406,18 @@ async fn orbit_js(State(s): St) -> Response {
 // ---------- meshes ----------
 
 async fn health(State(s): St) -> Json<serde_json::Value> {
+    let (running, queued) = s.jobs.counts();
     Json(json!({
         "ok": true,
         "cache_used": s.cache.used(),
         "cache_capacity": s.cache.capacity(),
         "cache_entries": s.cache.len(),
+        "memory_reserved": s.cache.reserved(),
+        "memory_budget": s.cache.budget(),
+        "jobs_running": running,
+        "jobs_queued": queued,
+        "requests_in_progress": s.in_flight.get(),
+        "limits": s.config.limits,
     }))
 }
 
@@ -228,11 +430,6 @@ async fn shapes() -> Json<serde_json::Value> {
         })
         .collect();
     Json(json!({ "shapes": list }))
-}
-
-#[derive(Deserialize)]
-struct ShapeBody {
-    shape: String,
 }
 
 fn check_id(id: &str) -> ApiResult<()> {
@@ -280,15 +477,49 @@ fn mesh_reply(e: &MeshEntry) -> serde_json::Value {
     })
 }
 
-/// Largest built-in shape the web app builds (a resolution typo must not exhaust memory).
+/// Largest built-in shape the web app builds whatever `--max-vertices` says (a
+/// resolution typo must not exhaust memory).
 pub const MAX_SHAPE_VERTICES: usize = 2_000_000;
 
+/// Checks a mesh against the vertex and triangle limits (413).
+fn check_size(s: &AppState, what: &str, n: usize, m: usize) -> ApiResult<()> {
+    let l = &s.config.limits;
+    if n > l.max_vertices {
+        return Err(ApiError(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            format!(
+                "{what} has {n} vertices, more than this server's limit of {} (--max-vertices)",
+                l.max_vertices
+            ),
+        ));
+    }
+    if m > l.max_faces {
+        return Err(ApiError(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            format!(
+                "{what} has {m} triangles, more than this server's limit of {} (--max-faces)",
+                l.max_faces
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Enters a mesh into the cache (after its check and its info), with the reservation
+/// that covered its reading released first (the parsed mesh is what stays).
 fn insert_mesh(
     s: &AppState,
     mesh: Mesh,
     source: String,
     notes: Vec<String>,
+    reservation: Reservation,
 ) -> ApiResult<serde_json::Value> {
+    check_size(
+        s,
+        &format!("'{source}'"),
+        mesh.n_vertices(),
+        mesh.n_triangles(),
+    )?;
     let hash = mesh.content_hash();
     let id = hash[..16].to_string();
     if let Some(item) = s.mesh(&id)
@@ -298,6 +529,7 @@ fn insert_mesh(
     }
     let topo = Topology::new(&mesh);
     let mut info = info_json(&mesh, &topo);
+    drop(topo);
     info["reader_notes"] = json!(notes);
     let bytes = mesh_bytes(&mesh);
     let entry = MeshEntry {
@@ -308,75 +540,83 @@ fn insert_mesh(
         info,
     };
     let reply = mesh_reply(&entry);
-    if !s
-        .cache
+    drop(reservation);
+    s.cache
         .insert(Key::Mesh(id), Arc::new(Item::Mesh(Box::new(entry))), bytes)
-    {
-        return Err(ApiError(
-            StatusCode::PAYLOAD_TOO_LARGE,
-            format!("the mesh needs about {bytes} bytes, more than the cache holds"),
-        ));
-    }
+        .map_err(|short| {
+            if short.never_fits() {
+                ApiError(
+                    StatusCode::PAYLOAD_TOO_LARGE,
+                    format!(
+                        "the mesh needs about {}, more than the cache holds ({}, --cache-mib)",
+                        mib(bytes),
+                        mib(short.limit)
+                    ),
+                )
+            } else {
+                no_room("this mesh", &short, StatusCode::PAYLOAD_TOO_LARGE)
+            }
+        })?;
     Ok(reply)
 }
 
 async fn load_mesh(
     State(s): St,
+    Extension(deadline): Extension<Deadline>,
     headers: HeaderMap,
-    body: Result<Bytes, BytesRejection>,
+    body: Body,
 ) -> ApiResult<Json<serde_json::Value>> {
-    let body = body.map_err(|r| {
-        let status = r.status();
-        let msg = if status == StatusCode::PAYLOAD_TOO_LARGE {
-            format!(
-                "the upload is larger than the limit of {} bytes",
-                s.config.max_upload_bytes
-            )
-        } else {
-            r.body_text()
-        };
-        ApiError(status, msg)
-    })?;
     let is_json = headers
         .get(header::CONTENT_TYPE)
         .and_then(|v| v.to_str().ok())
         .is_some_and(|v| v.starts_with("application/json"));
     let s2 = s.clone();
     let reply = if is_json {
-        let req: ShapeBody =
-            serde_json::from_slice(&body).map_err(|e| ApiError::bad(format!("bad JSON: {e}")))?;
-        if req.shape.len() > 200 {
-            return Err(ApiError::bad("the shape spec is too long"));
+        let (bytes, r) = json_body(&s, &headers, body, deadline).await?;
+        let (text, spec, most) = body::parse_shape(&bytes)?;
+        drop(r);
+        let cap = s.config.limits.max_vertices.min(MAX_SHAPE_VERTICES);
+        if most > cap {
+            return Err(ApiError(
+                StatusCode::PAYLOAD_TOO_LARGE,
+                format!(
+                    "shape '{text}' has {most} vertices, more than this server's limit of {cap} (--max-vertices)"
+                ),
+            ));
         }
+        let r = reserve(
+            &s,
+            &format!("building shape '{text}'"),
+            most * SHAPE_BYTES_PER_VERTEX,
+            deadline,
+            StatusCode::PAYLOAD_TOO_LARGE,
+        )
+        .await?;
         tokio::task::spawn_blocking(move || {
-            let mesh = spectral_mesh::shapes::build_str(&req.shape)
-                .map_err(|e| ApiError::bad(format!("shape '{}': {e}", req.shape)))?;
-            if mesh.n_vertices() > MAX_SHAPE_VERTICES {
-                return Err(ApiError::unprocessable(format!(
-                    "shape '{}' has {} vertices, more than the web app's limit of {MAX_SHAPE_VERTICES}",
-                    req.shape,
-                    mesh.n_vertices()
-                )));
-            }
-            insert_mesh(&s2, mesh, req.shape.clone(), Vec::new())
+            let mesh = spectral_mesh::shapes::build(&spec)
+                .map_err(|e| ApiError::bad(format!("shape '{text}': {e}")))?;
+            insert_mesh(&s2, mesh, text, Vec::new(), r)
         })
         .await
         .map_err(internal)??
     } else {
-        let name = headers
-            .get("x-filename")
-            .and_then(|v| v.to_str().ok())
-            .unwrap_or("upload.off")
-            .chars()
-            .filter(|c| !c.is_control())
-            .take(200)
-            .collect::<String>();
-        if body.is_empty() {
+        let name = body::upload_name(headers.get("x-filename").and_then(|v| v.to_str().ok()));
+        let limit = s.config.limits.max_upload_bytes;
+        let (bytes, r) = read_body(
+            &s,
+            &headers,
+            body,
+            (limit, "upload", UPLOAD_FACTOR),
+            deadline,
+        )
+        .await?;
+        if bytes.is_empty() {
             return Err(ApiError::bad("the upload is empty"));
         }
         tokio::task::spawn_blocking(move || {
-            let loaded = spectral_mesh::io::read_mesh_from_bytes(&body, &name)
+            let loaded = spectral_mesh::io::read_mesh_from_bytes(&bytes, &name)
                 .map_err(|e| ApiError::unprocessable(e.to_string()))?;
+            drop(bytes);
             let mut notes = loaded.warnings;
             if loaded.polygons_triangulated > 0 {
                 notes.push(format!(
@@ -384,7 +624,7 @@ async fn load_mesh(
                     loaded.polygons_triangulated
                 ));
             }
-            insert_mesh(&s2, loaded.mesh, name, notes)
+            insert_mesh(&s2, loaded.mesh, name, notes, r)
         })
         .await
         .map_err(internal)??
@@ -424,11 +664,24 @@ fn octet(body: Vec<u8>) -> Response {
         .into_response()
 }
 
-async fn geometry(State(s): St, Path(id): Path<String>) -> ApiResult<Response> {
+async fn geometry(
+    State(s): St,
+    Extension(deadline): Extension<Deadline>,
+    Path(id): Path<String>,
+) -> ApiResult<Response> {
     let item = get_mesh(&s, &id)?;
     let e = entry(&item)?;
     let (n, m) = (e.mesh.n_vertices(), e.mesh.n_triangles());
-    let mut out = Vec::with_capacity(8 + 12 * n + 12 * m);
+    let size = 8 + 12 * n + 12 * m;
+    let _r = reserve(
+        &s,
+        "the geometry",
+        size,
+        deadline,
+        StatusCode::UNPROCESSABLE_ENTITY,
+    )
+    .await?;
+    let mut out = Vec::with_capacity(size);
     out.extend((n as u32).to_le_bytes());
     out.extend((m as u32).to_le_bytes());
     for p in e.mesh.positions() {
@@ -446,253 +699,169 @@ async fn geometry(State(s): St, Path(id): Path<String>) -> ApiResult<Response> {
 
 // ---------- eigenbasis ----------
 
-/// Body of `POST /api/mesh/{id}/basis`.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct BasisBody {
-    laplacian: Option<String>,
-    normalize: Option<bool>,
-    k: Option<usize>,
-}
-
-fn parse_laplacian(s: Option<&str>) -> ApiResult<Laplacian> {
-    match s {
-        None => Ok(Laplacian::Fem),
-        Some(s) => s
-            .parse::<Laplacian>()
-            .map_err(|e| ApiError::bad(format!("laplacian: {e}"))),
+/// The analysis of `key`: the existing one, or a new one made off the request thread
+/// with the memory of its assembly reserved first.
+async fn analysis_for(
+    s: &Arc<AppState>,
+    item: &Arc<Item>,
+    key: &AnalysisKey,
+    deadline: Deadline,
+) -> ApiResult<Arc<Analysis>> {
+    if let Some(a) = s.existing_analysis(key) {
+        return Ok(a);
     }
-}
-
-/// The progress of an eigenbasis computation as (fraction done, message).
-fn progress_of(p: &EigenProgress) -> (f64, String) {
-    match p {
-        EigenProgress::Dense { n } => (0.1, format!("dense solver, n = {n}")),
-        EigenProgress::Factorization { n, .. } => (0.02, format!("factoring, n = {n}")),
-        EigenProgress::Iteration {
-            iteration,
-            converged,
-            wanted,
-            ..
-        } => (
-            0.05 + 0.9 * *converged as f64 / (*wanted).max(1) as f64,
-            format!("iteration {iteration}: {converged} of {wanted} pairs converged"),
-        ),
-        EigenProgress::Finished { .. } => (0.99, "finishing".into()),
-    }
-}
-
-fn job_of(key: &AnalysisKey, k: usize, held_k: usize, state: &str, message: String) -> Job {
-    Job {
-        state: state.into(),
-        laplacian: key.laplacian.name().into(),
-        normalize: key.normalize,
-        k,
-        held_k,
-        progress: if state == "done" { 1.0 } else { 0.0 },
-        message,
-        seconds: 0.0,
-    }
-}
-
-/// Starts `analysis.basis(k)` off the request thread. One computation per mesh: a request
-/// for other parameters cancels the running one (its status becomes "cancelled").
-async fn start_basis(
-    State(s): St,
-    Path(id): Path<String>,
-    body: Result<Json<BasisBody>, JsonRejection>,
-) -> ApiResult<(StatusCode, Json<Job>)> {
-    let Json(body) = body.map_err(|r| ApiError::bad(r.body_text()))?;
-    let item = get_mesh(&s, &id)?;
-    let e = entry(&item)?;
-    let n = e.mesh.n_vertices();
-    let key = AnalysisKey {
-        id: id.clone(),
-        laplacian: parse_laplacian(body.laplacian.as_deref())?,
-        normalize: body.normalize.unwrap_or(true),
-    };
-    let k = body.k.unwrap_or(DEFAULT_K);
-    if k == 0 || k > n {
-        return Err(ApiError::unprocessable(format!(
-            "k must be in 1..={n} (the number of vertices); got {k}"
-        )));
-    }
-    let need = basis_bytes(n, k);
-    if need > s.cache.capacity() / 2 {
-        return Err(ApiError::unprocessable(format!(
-            "an eigenbasis of k = {k} on {n} vertices needs {need} bytes, more than half the cache ({} bytes)",
-            s.cache.capacity()
-        )));
-    }
-    // Assembling the operators is O(n): off the async threads.
+    let n = entry(item)?.mesh.n_vertices();
+    let r = reserve(
+        s,
+        "assembling the operators",
+        analysis_creation_bytes(n, key.laplacian),
+        deadline,
+        StatusCode::UNPROCESSABLE_ENTITY,
+    )
+    .await?;
     let (s2, key2, item2) = (s.clone(), key.clone(), item.clone());
-    let analysis = tokio::task::spawn_blocking(move || -> ApiResult<Arc<Analysis>> {
-        Ok(s2.analysis(entry(&item2)?, &key2))
+    tokio::task::spawn_blocking(move || -> ApiResult<Arc<Analysis>> {
+        let a = s2.analysis(entry(&item2)?, &key2);
+        drop(r);
+        Ok(a)
     })
     .await
-    .map_err(internal)??;
-    let held = analysis.held_k();
-    let mut jobs = s.jobs();
-    if held >= k {
-        let job = job_of(&key, k, held, "done", format!("held ({held} pairs)"));
-        // A finished status is replaced; a running job for other parameters goes on.
-        if jobs.get(&id).is_none_or(|j| j.job.state != "running") {
-            jobs.insert(
-                id.clone(),
-                JobSlot {
-                    job: job.clone(),
-                    serial: s.serial(),
-                    cancel: Default::default(),
-                    analysis: None,
-                    key,
-                },
-            );
+    .map_err(internal)?
+}
+
+/// The `X-Client-Id` of a request, if it is a short visible ASCII string.
+fn client_id(headers: &HeaderMap) -> Option<String> {
+    let v = headers.get("x-client-id")?.to_str().ok()?.trim();
+    (!v.is_empty() && v.len() <= 64 && v.bytes().all(|b| b.is_ascii_graphic()))
+        .then(|| v.to_string())
+}
+
+/// Queues `analysis.basis(k)` (see [`crate::jobs`] for the queue, the admission and the
+/// rules that stop a job).
+async fn start_basis(
+    State(s): St,
+    Extension(deadline): Extension<Deadline>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+    body: Body,
+) -> ApiResult<Response> {
+    check_id(&id)?;
+    let (bytes, r) = json_body(&s, &headers, body, deadline).await?;
+    let b = body::parse_basis(&bytes)?;
+    drop(r);
+    let item = get_mesh(&s, &id)?;
+    let n = entry(&item)?.mesh.n_vertices();
+    let limits = &s.config.limits;
+    body::check_k(b.k, n, limits.max_k).map_err(ApiError::unprocessable)?;
+    let key = AnalysisKey {
+        id: id.clone(),
+        laplacian: b.laplacian,
+        normalize: b.normalize,
+    };
+    let analysis = analysis_for(&s, &item, &key, deadline).await?;
+    let estimate = jobs::estimate(n, b.k, &analysis);
+    let after = jobs::held_after(n, b.k, &analysis);
+    if analysis.held_k() < b.k {
+        let mesh = mesh_bytes(&entry(&item)?.mesh);
+        if after + mesh > limits.cache_bytes {
+            return Err(ApiError::unprocessable(format!(
+                "an eigenbasis of k = {} on {n} vertices would make this mesh and its analysis hold about {}, more than the cache's {} (--cache-mib): ask for fewer pairs",
+                b.k,
+                mib(after + mesh),
+                mib(limits.cache_bytes)
+            )));
         }
-        return Ok((StatusCode::OK, Json(job)));
-    }
-    if let Some(slot) = jobs.get(&id)
-        && slot.job.state == "running"
-    {
-        if slot.key == key && slot.job.k >= k {
-            return Ok((StatusCode::ACCEPTED, Json(slot.job.clone())));
+        let held = crate::state::analysis_bytes(&analysis) + mesh;
+        if estimate + held > limits.memory_bytes {
+            return Err(ApiError::unprocessable(format!(
+                "an eigenbasis of k = {} on {n} vertices needs about {} at its peak (estimate) besides the {} its mesh and analysis hold, more than this server's memory budget of {} (--memory-mib): ask for fewer pairs",
+                b.k,
+                mib(estimate),
+                mib(held),
+                mib(limits.memory_bytes)
+            )));
         }
-        slot.cancel.cancel();
     }
-    let serial = s.serial();
-    let cancel = spectral_mesh::cancel::CancelToken::new();
-    let mut job = job_of(&key, k, held, "running", "starting".into());
-    job.progress = 0.0;
-    jobs.insert(
-        id.clone(),
-        JobSlot {
-            job: job.clone(),
-            serial,
-            cancel: cancel.clone(),
-            analysis: Some(analysis.clone()),
-            key: key.clone(),
+    let submitted = s.jobs.submit(
+        &s,
+        Submit {
+            id: id.clone(),
+            key,
+            k: b.k,
+            analysis,
+            estimate,
+            client: client_id(&headers),
         },
     );
-    drop(jobs);
-    let s2 = s.clone();
-    tokio::task::spawn_blocking(move || run_basis(&s2, &key, &analysis, k, serial, &cancel));
-    Ok((StatusCode::ACCEPTED, Json(job)))
-}
-
-/// The body of a basis job: computes, reports progress into the job (if it is still the
-/// current one), and re-enters the analysis into the cache with its new size.
-fn run_basis(
-    s: &AppState,
-    key: &AnalysisKey,
-    analysis: &Arc<Analysis>,
-    k: usize,
-    serial: u64,
-    cancel: &spectral_mesh::cancel::CancelToken,
-) {
-    let start = Instant::now();
-    let update = |f: &mut dyn FnMut(&mut Job)| {
-        if let Some(slot) = s.jobs().get_mut(&key.id)
-            && slot.serial == serial
-        {
-            f(&mut slot.job);
-            slot.job.seconds = start.elapsed().as_secs_f64();
+    match submitted {
+        Submitted::Done(job) => Ok((StatusCode::OK, Json(job)).into_response()),
+        Submitted::QueueFull(msg) => Ok(busy(msg, 5)),
+        Submitted::Accepted(_) => {
+            jobs::pump(&s);
+            Ok((StatusCode::ACCEPTED, Json(s.jobs.status(&id))).into_response())
         }
-    };
-    let mut progress = |p: EigenProgress| {
-        let (frac, msg) = progress_of(&p);
-        update(&mut |j| {
-            j.progress = frac;
-            j.message = msg.clone();
-        });
-    };
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        analysis.basis(k, &mut progress, cancel)
-    }));
-    let held = analysis.held_k();
-    let (state, message) = match result {
-        Ok(Ok(b)) => (
-            "done",
-            format!("{} pairs in {:.2} s", b.k(), start.elapsed().as_secs_f64()),
-        ),
-        Ok(Err(AnalysisError::Eigen(EigenError::Cancelled))) => {
-            ("cancelled", "cancelled by another request".to_string())
-        }
-        Ok(Err(e)) => ("error", e.to_string()),
-        Err(_) => ("error", "the eigensolver failed unexpectedly".to_string()),
-    };
-    if let Some(slot) = s.jobs().get_mut(&key.id)
-        && slot.serial == serial
-    {
-        slot.job.state = state.into();
-        slot.job.message = message;
-        slot.job.held_k = held;
-        slot.job.seconds = start.elapsed().as_secs_f64();
-        if state == "done" {
-            slot.job.progress = 1.0;
-        }
-        slot.analysis = None;
     }
-    s.remember(key, analysis);
 }
 
-/// Cancels the running eigenbasis computation of a mesh, if any.
+/// Cancels the eigenbasis job of a mesh (queued: removed; running: stopped).
 async fn cancel_basis(State(s): St, Path(id): Path<String>) -> ApiResult<Json<Job>> {
     get_mesh(&s, &id)?;
-    let jobs = s.jobs();
-    let slot = jobs
-        .get(&id)
+    let job = s
+        .jobs
+        .cancel(&id)
         .ok_or_else(|| ApiError::not_found("no eigenbasis computation for this mesh"))?;
-    if slot.job.state == "running" {
-        slot.cancel.cancel();
-    }
-    Ok(Json(slot.job.clone()))
+    jobs::pump(&s);
+    Ok(Json(job))
 }
 
 async fn basis_status(State(s): St, Path(id): Path<String>) -> ApiResult<Json<Job>> {
     get_mesh(&s, &id)?;
-    let job = s.jobs().get(&id).map(|slot| slot.job.clone());
-    Ok(Json(job.unwrap_or(Job {
-        state: "idle".into(),
-        laplacian: String::new(),
-        normalize: true,
-        k: 0,
-        held_k: 0,
-        progress: 0.0,
-        message: "no eigenbasis requested yet".into(),
-        seconds: 0.0,
-    })))
+    Ok(Json(s.jobs.status(&id)))
 }
 
 // ---------- fields ----------
 
-/// Parses a body (400 on bad JSON or keys).
-fn parse_body(bytes: &[u8]) -> ApiResult<FieldBody> {
-    let v: serde_json::Value =
-        serde_json::from_slice(bytes).map_err(|e| ApiError::bad(format!("bad JSON: {e}")))?;
-    Ok(FieldBody::from_value(v)?)
-}
-
-/// The reply to `body` on mesh `id` (off the request thread); 409 when the basis is not
-/// there yet.
-/// With `encode`, the binary reply too (on the field threads as well).
+/// The reply to `body` on mesh `id` (off the request thread, with its memory reserved
+/// first); 409 when the basis is not there yet. With `encode`, the binary reply too (on
+/// the field threads as well).
 async fn compute(
     s: &Arc<AppState>,
     id: &str,
     body: FieldBody,
     encode: bool,
+    deadline: Deadline,
 ) -> ApiResult<(FieldReply, Option<Vec<u8>>, Arc<Item>)> {
     let item = get_mesh(s, id)?;
+    let n = entry(&item)?.mesh.n_vertices();
+    let key = AnalysisKey {
+        id: id.to_string(),
+        laplacian: body.laplacian,
+        normalize: body.normalize,
+    };
+    let needs_basis = body.request.eigenpairs().is_some();
+    let analysis = match s.existing_analysis(&key) {
+        Some(a) => a,
+        None if needs_basis => {
+            let k = body.request.eigenpairs().unwrap_or(0);
+            if k > n {
+                return Err(AnalysisError::TooManyPairs { k, n }.into());
+            }
+            body.request.validate().map_err(AnalysisError::from)?;
+            return Err(missing_basis(s, &key, &body, 0));
+        }
+        None => analysis_for(s, &item, &key, deadline).await?,
+    };
+    let r = reserve(
+        s,
+        "this field",
+        field_bytes(n, &body.request),
+        deadline,
+        StatusCode::UNPROCESSABLE_ENTITY,
+    )
+    .await?;
     let s2 = s.clone();
-    let item2 = item.clone();
-    let id = id.to_string();
     let (reply, bytes) = tokio::task::spawn_blocking(move || -> ApiResult<_> {
-        let e = entry(&item2)?;
-        let key = AnalysisKey {
-            id: id.clone(),
-            laplacian: body.laplacian,
-            normalize: body.normalize,
-        };
-        let analysis = s2.analysis(e, &key);
-        let before = analysis.held_k();
+        let before = analysis.memory_bytes();
         let reply = s2.on_field_threads(|| -> ApiResult<_> {
             let Some(r) = field_reply(&analysis, &body.request, body.levels)? else {
                 return Ok(None);
@@ -703,15 +872,14 @@ async fn compute(
                 None
             };
             Ok(Some((r, bytes)))
-        })?;
-        match reply {
-            Some((r, bytes)) => {
-                if r.field.request.eigenpairs().is_none() && before == analysis.held_k() {
-                    // Harmonic maps factor a solver: account for it.
-                    s2.remember(&key, &analysis);
-                }
-                Ok((r, bytes))
-            }
+        });
+        // A harmonic map factors a solver, the wFEM distance computes B X: account.
+        if analysis.memory_bytes() != before {
+            s2.remember(&key, &analysis);
+        }
+        drop(r);
+        match reply? {
+            Some((r, bytes)) => Ok((r, bytes)),
             None => Err(missing_basis(&s2, &key, &body, analysis.held_k())),
         }
     })
@@ -724,14 +892,21 @@ async fn compute(
 fn missing_basis(s: &AppState, key: &AnalysisKey, body: &FieldBody, held: usize) -> ApiError {
     let k = body.request.eigenpairs().unwrap_or(0);
     let running = s
-        .jobs()
-        .get(&key.id)
-        .filter(|slot| slot.job.state == "running" && slot.key == *key)
-        .map(|slot| {
+        .jobs
+        .peek(&key.id)
+        .filter(|job| {
+            job.active() && job.laplacian == key.laplacian.name() && job.normalize == key.normalize
+        })
+        .map(|job| {
             format!(
-                " (a basis of k = {} is being computed: {:.0}%)",
-                slot.job.k,
-                100.0 * slot.job.progress
+                " (a basis of k = {} is {}: {:.0}%)",
+                job.k,
+                if job.state == "queued" {
+                    "queued"
+                } else {
+                    "being computed"
+                },
+                100.0 * job.progress
             )
         })
         .unwrap_or_default();
@@ -746,9 +921,18 @@ fn missing_basis(s: &AppState, key: &AnalysisKey, body: &FieldBody, held: usize)
     )
 }
 
-async fn field(State(s): St, Path(id): Path<String>, body: Bytes) -> ApiResult<Response> {
-    let body = parse_body(&body)?;
-    let (_, bytes, _) = compute(&s, &id, body, true).await?;
+async fn field(
+    State(s): St,
+    Extension(deadline): Extension<Deadline>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+    body: Body,
+) -> ApiResult<Response> {
+    check_id(&id)?;
+    let (bytes, r) = json_body(&s, &headers, body, deadline).await?;
+    let body = body::parse_field(&bytes)?;
+    drop((bytes, r));
+    let (_, bytes, _) = compute(&s, &id, body, true, deadline).await?;
     Ok(octet(bytes.unwrap_or_default()))
 }
 
@@ -765,6 +949,7 @@ struct DownloadQuery {
 
 async fn download_get(
     State(s): St,
+    Extension(deadline): Extension<Deadline>,
     Path(id): Path<String>,
     query: Result<Query<DownloadQuery>, QueryRejection>,
 ) -> ApiResult<Response> {
@@ -774,22 +959,36 @@ async fn download_get(
             r.body_text()
         ))
     })?;
-    let mut body = parse_body(q.body.as_bytes())?;
+    let mut body = body::parse_field(q.body.as_bytes())?;
     if q.format.is_some() {
         body.format = q.format;
     }
-    download(&s, &id, body).await
+    download(&s, &id, body, deadline).await
 }
 
-async fn download_post(State(s): St, Path(id): Path<String>, body: Bytes) -> ApiResult<Response> {
-    let body = parse_body(&body)?;
-    download(&s, &id, body).await
+async fn download_post(
+    State(s): St,
+    Extension(deadline): Extension<Deadline>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+    body: Body,
+) -> ApiResult<Response> {
+    check_id(&id)?;
+    let (bytes, r) = json_body(&s, &headers, body, deadline).await?;
+    let body = body::parse_field(&bytes)?;
+    drop((bytes, r));
+    download(&s, &id, body, deadline).await
 }
 
 /// Formats a download can have.
 pub const DOWNLOAD_FORMATS: [&str; 5] = ["png", "wrl", "ply", "txt", "toml"];
 
-async fn download(s: &Arc<AppState>, id: &str, body: FieldBody) -> ApiResult<Response> {
+async fn download(
+    s: &Arc<AppState>,
+    id: &str,
+    body: FieldBody,
+    deadline: Deadline,
+) -> ApiResult<Response> {
     let format = body
         .format
         .clone()
@@ -803,7 +1002,7 @@ async fn download(s: &Arc<AppState>, id: &str, body: FieldBody) -> ApiResult<Res
     }
     let options = body.figure_options()?;
     let (laplacian, normalize) = (body.laplacian, body.normalize);
-    let (reply, _, item) = compute(s, id, FieldBody { levels: 0, ..body }, false).await?;
+    let (reply, _, item) = compute(s, id, FieldBody { levels: 0, ..body }, false, deadline).await?;
     let name = format!("{}-{}.{format}", reply.field.request.kind(), &id[..8]);
     let mime = match format.as_str() {
         "png" => "image/png",
@@ -812,10 +1011,26 @@ async fn download(s: &Arc<AppState>, id: &str, body: FieldBody) -> ApiResult<Res
         "toml" => "application/toml",
         _ => "text/plain; charset=utf-8",
     };
+    // A picture takes its pixels (size^2 x 4 bytes, several buffers); a text or mesh file
+    // about 64 bytes per vertex and triangle.
+    let n = reply.field.values.len();
+    let size = options.size as usize;
+    let need = match format.as_str() {
+        "png" => 16 * size * size + 200 * n,
+        _ => 200 * n,
+    };
+    let r = reserve(
+        s,
+        "this download",
+        need,
+        deadline,
+        StatusCode::UNPROCESSABLE_ENTITY,
+    )
+    .await?;
     let bytes = tokio::task::spawn_blocking(move || -> ApiResult<Vec<u8>> {
         let e = entry(&item)?;
         let field = &reply.field;
-        if format == "toml" {
+        let out = if format == "toml" {
             let mut f = ExperimentFile::for_field(&e.source, field.request.clone());
             f.mesh_hash = Some(e.hash.clone());
             f.laplacian = Some(laplacian.name().into());
@@ -826,10 +1041,13 @@ async fn download(s: &Arc<AppState>, id: &str, body: FieldBody) -> ApiResult<Res
             };
             f.figure = Some(options.to_file());
             f.validate().map_err(internal)?;
-            return Ok(f.to_toml().map_err(internal)?.into_bytes());
-        }
-        let fig = Figure::of_field(&e.mesh, field, options).map_err(internal)?;
-        fig.bytes(&format).map_err(internal)
+            f.to_toml().map_err(internal)?.into_bytes()
+        } else {
+            let fig = Figure::of_field(&e.mesh, field, options).map_err(internal)?;
+            fig.bytes(&format).map_err(internal)?
+        };
+        drop(r);
+        Ok(out)
     })
     .await
     .map_err(internal)??;

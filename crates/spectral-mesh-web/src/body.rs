@@ -1,11 +1,16 @@
-//! The JSON body of field and download requests: the library's [`FieldRequest`] in its
-//! serde form (tag `kind`, unknown keys refused), with the analysis keys and the picture
-//! keys beside it in the same object.
+//! The request bodies, parsed and checked as the handlers do (and as the `web_body`
+//! fuzz target does): the field and download body (the library's [`FieldRequest`] in
+//! its serde form, tag `kind`, unknown keys refused, with the analysis keys and the
+//! picture keys beside it in the same object), the basis body, the shape body and the
+//! name of an uploaded file.
 
+use serde::Deserialize;
 use serde_json::{Map, Value};
 use spectral_mesh::Laplacian;
 use spectral_mesh::analysis::FieldRequest;
+use spectral_mesh::analysis::request::DEFAULT_K;
 use spectral_mesh::experiments::file::FigureFile;
+use spectral_mesh::shapes::ShapeSpec;
 use spectral_mesh_render::figure::FigureOptions;
 
 /// Keys of a body that are not the request's.
@@ -141,9 +146,215 @@ impl FieldBody {
     }
 }
 
+/// Parses the body of a field or download request (JSON, then [`FieldBody::from_value`]).
+pub fn parse_field(bytes: &[u8]) -> Result<FieldBody, BodyError> {
+    let v: Value = serde_json::from_slice(bytes).map_err(|e| bad(format!("bad JSON: {e}")))?;
+    let body = FieldBody::from_value(v)?;
+    Ok(body)
+}
+
+/// The JSON of `POST /api/mesh/{id}/basis`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BasisJson {
+    laplacian: Option<String>,
+    normalize: Option<bool>,
+    k: Option<usize>,
+}
+
+/// A parsed basis request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BasisBody {
+    /// Discretization (default fem).
+    pub laplacian: Laplacian,
+    /// Unit-area normalisation (default true).
+    pub normalize: bool,
+    /// Pairs (default 100).
+    pub k: usize,
+}
+
+/// Parses the body of a basis request (an empty body is `{}`: every default).
+pub fn parse_basis(bytes: &[u8]) -> Result<BasisBody, BodyError> {
+    let j: BasisJson = if bytes.iter().all(u8::is_ascii_whitespace) {
+        BasisJson::default()
+    } else {
+        serde_json::from_slice(bytes).map_err(|e| bad(format!("bad JSON: {e}")))?
+    };
+    let laplacian = match j.laplacian {
+        None => Laplacian::Fem,
+        Some(s) => s
+            .parse::<Laplacian>()
+            .map_err(|e| bad(format!("laplacian: {e}")))?,
+    };
+    Ok(BasisBody {
+        laplacian,
+        normalize: j.normalize.unwrap_or(true),
+        k: j.k.unwrap_or(DEFAULT_K),
+    })
+}
+
+/// Checks `k` against a mesh of `n` vertices and the server's `max_k` (the handler
+/// answers 422 with the message).
+pub fn check_k(k: usize, n: usize, max_k: usize) -> Result<(), String> {
+    if k == 0 || k > n {
+        return Err(format!(
+            "k must be in 1..={n} (the number of vertices); got {k}"
+        ));
+    }
+    if k > max_k {
+        return Err(format!(
+            "k = {k} is more than this server's limit of {max_k} eigenpairs (--max-k)"
+        ));
+    }
+    Ok(())
+}
+
+/// The JSON of `POST /api/mesh` with a shape.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ShapeJson {
+    shape: String,
+}
+
+/// Longest shape spec accepted.
+pub const MAX_SHAPE_SPEC: usize = 200;
+
+/// Parses a shape request: the spec parsed and validated, with the most vertices its
+/// mesh can have (exact for the regular shapes; the irregular ones are at most the
+/// regular shape one level finer).
+pub fn parse_shape(bytes: &[u8]) -> Result<(String, ShapeSpec, usize), BodyError> {
+    let j: ShapeJson = serde_json::from_slice(bytes).map_err(|e| bad(format!("bad JSON: {e}")))?;
+    if j.shape.len() > MAX_SHAPE_SPEC {
+        return Err(bad(format!(
+            "the shape spec is too long (more than {MAX_SHAPE_SPEC} characters)"
+        )));
+    }
+    let spec = spectral_mesh::shapes::parse_shape(&j.shape)
+        .and_then(|s| s.validate().map(|()| s))
+        .map_err(|e| bad(format!("shape '{}': {e}", j.shape)))?;
+    let res = if spec.irregular {
+        spec.res + 1
+    } else {
+        spec.res
+    };
+    let most = spec
+        .kind
+        .vertex_count(res)
+        .or_else(|| spec.kind.vertex_count(spec.res))
+        .unwrap_or(usize::MAX);
+    Ok((j.shape, spec, most))
+}
+
+/// Longest name kept of an uploaded file.
+pub const MAX_NAME: usize = 100;
+
+/// The name an upload is known by (from `X-Filename`): its last path component, with
+/// only letters, digits, `.`, `-`, `_`, `+`, `=`, `,` and spaces kept (others become
+/// `_`), no leading dots, at most [`MAX_NAME`] characters keeping the extension;
+/// `upload.off` when nothing is left. It names the mesh in replies and in downloaded
+/// experiment files (`mesh = NAME`, read beside the file): it can never name another
+/// folder.
+pub fn upload_name(header: Option<&str>) -> String {
+    let raw = header.unwrap_or("");
+    let last = raw.rsplit(['/', '\\']).next().unwrap_or("").trim();
+    let mut name: String = last
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || " .-_+=,".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    name = name.trim_start_matches(['.', ' ']).trim_end().to_string();
+    if name.chars().count() > MAX_NAME {
+        let ext: String = match name.rsplit_once('.') {
+            Some((_, e)) if e.len() <= 8 => format!(".{e}"),
+            _ => String::new(),
+        };
+        let stem: String = name.chars().take(MAX_NAME - ext.len()).collect();
+        name = format!("{stem}{ext}");
+    }
+    if name.is_empty() || name.chars().all(|c| c == '_' || c == '.') {
+        "upload.off".into()
+    } else {
+        name
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn upload_names_never_name_a_folder() {
+        for (given, want) in [
+            (Some("bunny.off"), "bunny.off"),
+            (Some("../../etc/passwd.off"), "passwd.off"),
+            (Some("..\\..\\x.obj"), "x.obj"),
+            (Some("/abs/path/m.ply"), "m.ply"),
+            (Some(".."), "upload.off"),
+            (Some("..."), "upload.off"),
+            (Some(".hidden.stl"), "hidden.stl"),
+            (Some("a\u{0}b\nc.off"), "a_b_c.off"),
+            (Some("caf\u{e9}.off"), "caf_.off"),
+            (Some("dir/"), "upload.off"),
+            (None, "upload.off"),
+        ] {
+            let got = upload_name(given);
+            assert_eq!(got, want, "{given:?}");
+            assert!(!got.contains('/') && !got.contains('\\') && !got.starts_with('.'));
+        }
+        let long = format!("{}.off", "x".repeat(300));
+        let got = upload_name(Some(&long));
+        assert_eq!(got.len(), MAX_NAME);
+        assert!(got.ends_with(".off"));
+    }
+
+    #[test]
+    fn basis_and_shape_bodies() {
+        assert_eq!(
+            parse_basis(b"").unwrap(),
+            BasisBody {
+                laplacian: Laplacian::Fem,
+                normalize: true,
+                k: 100
+            }
+        );
+        let b =
+            parse_basis(br#"{"k": 7, "laplacian": "voronoi-cot", "normalize": false}"#).unwrap();
+        assert_eq!(
+            (b.k, b.laplacian, b.normalize),
+            (7, Laplacian::VoronoiCot, false)
+        );
+        for body in [
+            &br#"{"k": -1}"#[..],
+            br#"{"k": 1e3}"#,
+            br#"{"kk": 1}"#,
+            br#"{"laplacian": "x"}"#,
+            br#"[1]"#,
+            b"{",
+        ] {
+            assert!(
+                parse_basis(body).is_err(),
+                "{}",
+                String::from_utf8_lossy(body)
+            );
+        }
+        assert!(check_k(0, 10, 1000).unwrap_err().contains("1..=10"));
+        assert!(check_k(11, 10, 1000).is_err());
+        assert!(check_k(1001, 5000, 1000).unwrap_err().contains("--max-k"));
+        assert!(check_k(10, 10, 1000).is_ok());
+        let (_, spec, most) = parse_shape(br#"{"shape": "sphere:res=3"}"#).unwrap();
+        assert_eq!(most, 642);
+        assert!(!spec.irregular);
+        let (_, _, most) = parse_shape(br#"{"shape": "irregular-sphere:res=3"}"#).unwrap();
+        assert_eq!(most, 2562);
+        assert!(parse_shape(br#"{"shape": "sphere:res=99"}"#).is_err());
+        assert!(parse_shape(br#"{"shape": "/etc/passwd"}"#).is_err());
+        assert!(parse_shape(br#"{"shape": "x", "y": 1}"#).is_err());
+    }
 
     #[test]
     fn request_keys_and_face_keys_in_one_object() {

@@ -98,7 +98,11 @@ pub mod api;
 pub mod body;
 pub mod cache;
 pub mod field;
+pub mod jobs;
+pub mod limits;
 pub mod state;
+
+pub use limits::Limits;
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::path::PathBuf;
@@ -111,11 +115,8 @@ pub struct ServeConfig {
     pub host: IpAddr,
     /// Port (default 8000; 0 = any free port).
     pub port: u16,
-    /// Memory cap of the cache of meshes and analyses (operators, factorizations,
-    /// eigenbases), in bytes (default 1 GiB).
-    pub cache_bytes: usize,
-    /// Largest accepted upload, in bytes (default 64 MiB); larger ones get 413.
-    pub max_upload_bytes: usize,
+    /// Memory, size, count and time limits (see [`Limits`]).
+    pub limits: Limits,
     /// Serve `index.html`, `app.js`, `style.css` from this folder instead of the built-in copies.
     pub static_dir: Option<PathBuf>,
     /// Folder holding `three/` (npm's `node_modules`) to serve the page's 3D library from
@@ -129,8 +130,7 @@ impl Default for ServeConfig {
         Self {
             host: IpAddr::V4(Ipv4Addr::LOCALHOST),
             port: 8000,
-            cache_bytes: 1 << 30,
-            max_upload_bytes: 64 << 20,
+            limits: Limits::default(),
             static_dir: None,
             node_modules: None,
         }
@@ -182,6 +182,7 @@ pub async fn bind(config: ServeConfig) -> Result<BoundServer, ServeError> {
         .map_err(|source| ServeError::Bind { addr, source })?;
     let addr = listener.local_addr()?;
     let state = Arc::new(state::AppState::new(config));
+    tokio::spawn(watchdog(Arc::downgrade(&state)));
     Ok(BoundServer {
         listener,
         app: api::router(state),
@@ -189,10 +190,41 @@ pub async fn bind(config: ServeConfig) -> Result<BoundServer, ServeError> {
     })
 }
 
+/// Every half second: stops the jobs whose client went away or that ran too long, drops
+/// the cache entries idle for longer than `idle_seconds`, forgets the jobs of meshes no
+/// longer loaded, and starts what waits in the queue. Ends with the server.
+async fn watchdog(state: std::sync::Weak<state::AppState>) {
+    let mut tick = tokio::time::interval(std::time::Duration::from_millis(500));
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+    loop {
+        tick.tick().await;
+        let Some(s) = state.upgrade() else {
+            return;
+        };
+        let l = &s.config.limits;
+        s.jobs.enforce(l.job_seconds, l.job_idle_seconds);
+        if l.idle_seconds > 0 {
+            s.cache
+                .expire(std::time::Duration::from_secs(l.idle_seconds));
+        }
+        s.jobs
+            .forget(|id| s.cache.peek(&state::Key::Mesh(id.to_string())).is_some());
+        jobs::pump(&s);
+    }
+}
+
 /// Binds, prints `spectral-mesh web app: URL` on stdout, and serves until the process ends.
+/// Says so on stderr when the address is not a loopback one (other machines can reach
+/// the server).
 pub async fn serve(config: ServeConfig) -> Result<(), ServeError> {
     let server = bind(config).await?;
     println!("spectral-mesh web app: {}", server.url());
+    if !server.addr.ip().is_loopback() {
+        eprintln!(
+            "warning: listening on {}: other machines on the network can use this server",
+            server.addr
+        );
+    }
     server.run().await
 }
 

@@ -1,17 +1,16 @@
-//! Server state: the byte-bounded cache of meshes and analyses, and the eigenbasis jobs
-//! in flight.
+//! Server state: the byte-bounded cache of meshes and analyses with the memory budget,
+//! the eigenbasis jobs, and the counters of the limits.
 
-use std::collections::HashMap;
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::Arc;
 
-use serde::Serialize;
-use spectral_mesh::analysis::{Analysis, AnalysisOptions};
-use spectral_mesh::cancel::CancelToken;
+use spectral_mesh::analysis::{Analysis, AnalysisOptions, DistanceSpec, FieldRequest};
 use spectral_mesh::{Laplacian, Mesh};
 
 use crate::ServeConfig;
-use crate::cache::ByteLru;
+use crate::cache::{ByteLru, Entry};
+use crate::jobs::{Jobs, predicted_factor_len};
+use crate::limits::InFlight;
 
 /// A mesh the page has loaded.
 pub struct MeshEntry {
@@ -55,52 +54,37 @@ pub enum Item {
     Analysis(Arc<Analysis>),
 }
 
-/// State of the eigenbasis computation of one mesh, as the status endpoint reports it.
-#[derive(Debug, Clone, Serialize)]
-pub struct Job {
-    /// "running", "done", "error" or "cancelled".
-    pub state: String,
-    /// Discretization.
-    pub laplacian: String,
-    /// Unit-area normalisation.
-    pub normalize: bool,
-    /// Pairs asked for.
-    pub k: usize,
-    /// Pairs the analysis holds now (at least `k` once done).
-    pub held_k: usize,
-    /// 0..=1.
-    pub progress: f64,
-    /// Last progress or error message.
-    pub message: String,
-    /// Seconds since start (or total when finished).
-    pub seconds: f64,
+impl Entry<Key> for Item {
+    fn in_use(self: &Arc<Self>) -> bool {
+        Arc::strong_count(self) > 1
+            || matches!(&**self, Item::Analysis(a) if Arc::strong_count(a) > 1)
+    }
+
+    fn dependents(&self, keys: &[Key]) -> Vec<Key> {
+        match self {
+            Item::Mesh(e) => keys
+                .iter()
+                .filter(|k| matches!(k, Key::Analysis(a) if a.id == e.id))
+                .cloned()
+                .collect(),
+            Item::Analysis(_) => Vec::new(),
+        }
+    }
 }
 
-/// A job and what the server needs to control it.
-pub struct JobSlot {
-    /// What the status endpoint shows.
-    pub job: Job,
-    /// Which start this is (a finished or cancelled computation only updates its own).
-    pub serial: u64,
-    /// Set to stop the computation.
-    pub cancel: CancelToken,
-    /// The analysis being computed, held while running (so that field requests find it
-    /// even if the cache evicted it), dropped when done.
-    pub analysis: Option<Arc<Analysis>>,
-    /// Its key.
-    pub key: AnalysisKey,
-}
+/// Memory reserved from the server's budget (released when dropped).
+pub type Reservation = crate::cache::Reservation<Key, Item>;
 
 /// Everything the handlers share.
 pub struct AppState {
     /// The configuration.
     pub config: ServeConfig,
-    /// Meshes and analyses.
-    pub cache: ByteLru<Key, Item>,
-    /// Basis jobs per mesh id.
-    pub jobs: Mutex<HashMap<String, JobSlot>>,
-    /// Serial numbers of jobs.
-    pub next_serial: Mutex<u64>,
+    /// Meshes and analyses, and the reservations of work in progress.
+    pub cache: Arc<ByteLru<Key, Item>>,
+    /// Eigenbasis jobs.
+    pub jobs: Jobs,
+    /// Requests in progress.
+    pub in_flight: InFlight,
     /// Resolved `node_modules` folder.
     pub node_modules: PathBuf,
     /// Threads of the field requests' parallel work, apart from rayon's global pool where
@@ -127,11 +111,12 @@ impl AppState {
             .thread_name(|i| format!("spectral-mesh-field-{i}"))
             .build()
             .ok();
+        let limits = &config.limits;
         Self {
             fields,
-            cache: ByteLru::new(config.cache_bytes),
-            jobs: Mutex::new(HashMap::new()),
-            next_serial: Mutex::new(0),
+            cache: Arc::new(ByteLru::new(limits.cache_bytes, limits.memory_bytes)),
+            jobs: Jobs::default(),
+            in_flight: InFlight::default(),
             config,
             node_modules,
         }
@@ -145,39 +130,28 @@ impl AppState {
         }
     }
 
-    /// The jobs map (poisoning ignored: entries are plain data).
-    pub fn jobs(&self) -> MutexGuard<'_, HashMap<String, JobSlot>> {
-        self.jobs.lock().unwrap_or_else(|p| p.into_inner())
-    }
-
-    /// A new job serial number.
-    pub fn serial(&self) -> u64 {
-        let mut s = self.next_serial.lock().unwrap_or_else(|p| p.into_inner());
-        *s += 1;
-        *s
-    }
-
     /// The mesh `id`, if still cached.
     pub fn mesh(&self, id: &str) -> Option<Arc<Item>> {
         self.cache.get(&Key::Mesh(id.to_string()))
     }
 
-    /// The analysis of `entry` for `key`: the cached one, the one a running job holds, or
-    /// a new one (operators assembled now, O(n); nothing factored yet).
-    pub fn analysis(&self, entry: &MeshEntry, key: &AnalysisKey) -> Arc<Analysis> {
-        let ck = Key::Analysis(key.clone());
-        if let Some(item) = self.cache.get(&ck)
+    /// The analysis of `key` if one exists: the cached one or the one a job holds.
+    pub fn existing_analysis(&self, key: &AnalysisKey) -> Option<Arc<Analysis>> {
+        if let Some(item) = self.cache.get(&Key::Analysis(key.clone()))
             && let Item::Analysis(a) = &*item
         {
-            return a.clone();
+            return Some(a.clone());
         }
-        let running = self
-            .jobs()
-            .get(&key.id)
-            .filter(|slot| &slot.key == key)
-            .and_then(|slot| slot.analysis.clone());
-        if let Some(a) = running {
-            self.remember(key, &a);
+        let a = self.jobs.analysis_of(key)?;
+        self.remember(key, &a);
+        Some(a)
+    }
+
+    /// The analysis of `entry` for `key`: an existing one, or a new one (operators
+    /// assembled now, O(n): reserve [`analysis_creation_bytes`] first; nothing factored
+    /// yet).
+    pub fn analysis(&self, entry: &MeshEntry, key: &AnalysisKey) -> Arc<Analysis> {
+        if let Some(a) = self.existing_analysis(key) {
             return a;
         }
         let a = Arc::new(Analysis::new(
@@ -192,34 +166,70 @@ impl AppState {
         a
     }
 
-    /// (Re-)inserts an analysis into the cache with its current size.
+    /// (Re-)enters an analysis into the cache with its current size, if its mesh is
+    /// still loaded. When it does not fit, it is left out (it is freed when its last
+    /// user lets go; a field request then answers 409 and the basis is asked again).
     pub fn remember(&self, key: &AnalysisKey, a: &Arc<Analysis>) {
-        self.cache.insert(
-            Key::Analysis(key.clone()),
-            Arc::new(Item::Analysis(a.clone())),
-            analysis_bytes(a),
-        );
+        if self.cache.peek(&Key::Mesh(key.id.clone())).is_none() {
+            return;
+        }
+        let k = Key::Analysis(key.clone());
+        let bytes = analysis_bytes(a);
+        match self.cache.peek(&k) {
+            Some(item) if matches!(&*item, Item::Analysis(held) if Arc::ptr_eq(held, a)) => {
+                drop(item);
+                self.cache.resize(&k, bytes);
+            }
+            _ => {
+                let _ = self
+                    .cache
+                    .insert(k, Arc::new(Item::Analysis(a.clone())), bytes);
+            }
+        }
     }
 }
 
-/// Bytes a mesh entry takes, roughly.
+/// Bytes a mesh entry takes: positions and triangles (24 bytes each), the connectivity
+/// the info panel was computed from is not kept; 64 + 96 per vertex and triangle leaves
+/// room for the info JSON and allocator overhead.
 pub fn mesh_bytes(m: &Mesh) -> usize {
     m.n_vertices() * 64 + m.n_triangles() * 96
 }
 
-/// Bytes an analysis takes, roughly: operators, the factorization kept for larger bases
-/// (estimated at 20 non-zeros per vertex), the held basis (twice: `B X` is cached for
-/// the wFEM distance), the connectivity and link edges.
+/// Bytes an analysis takes: [`Analysis::memory_bytes`] (counted from its arrays) plus a
+/// tenth for allocator overhead and the factor's symbolic analysis.
 pub fn analysis_bytes(a: &Analysis) -> usize {
-    let n = a.n();
-    let ops = a.operators();
-    let ops_bytes = (ops.stiffness.nnz() + ops.mass.nnz()) * 16 + n * 16;
-    let factor = n * 20 * 16;
-    let topo = a.mesh().n_triangles() * 96 + n * 32;
-    ops_bytes + factor + topo + 2 * basis_bytes(n, a.held_k())
+    let b = a.memory_bytes();
+    b + b / 10
 }
 
 /// Bytes an eigenbasis of `k` pairs on `n` vertices takes.
 pub fn basis_bytes(n: usize, k: usize) -> usize {
     n * k * 8 + k * 16
+}
+
+/// Peak bytes of assembling the operators of a new analysis on `n` vertices (triplets
+/// and the two sparse matrices; the robust Laplacian builds an intrinsic mesh first).
+pub fn analysis_creation_bytes(n: usize, laplacian: Laplacian) -> usize {
+    match laplacian {
+        Laplacian::Robust => 3000 * n,
+        _ => 1000 * n,
+    }
+}
+
+/// Peak bytes of a field request on `n` vertices beyond what the analysis holds: the
+/// values, the reply, critical points and level sets (400 per vertex), plus a harmonic
+/// map's factorization (when not kept from an earlier request) or the wFEM distance's
+/// `B X` (`n x k`, computed once).
+pub fn field_bytes(n: usize, request: &FieldRequest) -> usize {
+    let base = 400 * n;
+    match request {
+        FieldRequest::Harmonic { .. } => base + predicted_factor_len(n) * 13,
+        FieldRequest::Distance {
+            distance: DistanceSpec::WfemDiffusion { .. },
+            k,
+            ..
+        } => base + 8 * n * k,
+        _ => base,
+    }
 }

@@ -107,8 +107,11 @@ async fn post_json(addr: std::net::SocketAddr, path: &str, v: Value) -> Reply {
 async fn start(max_upload: usize) -> std::net::SocketAddr {
     let cfg = ServeConfig {
         port: 0,
-        max_upload_bytes: max_upload,
-        cache_bytes: 256 << 20,
+        limits: spectral_mesh_web::Limits {
+            max_upload_bytes: max_upload,
+            cache_bytes: 256 << 20,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let server = bind(cfg).await.unwrap();
@@ -133,7 +136,7 @@ async fn wait_basis(addr: std::net::SocketAddr, id: &str) -> Value {
         let j = get(addr, &format!("/api/mesh/{id}/basis/status"))
             .await
             .json();
-        if j["state"] != "running" {
+        if j["state"] != "running" && j["state"] != "queued" {
             return j;
         }
         tokio::time::sleep(Duration::from_millis(50)).await;

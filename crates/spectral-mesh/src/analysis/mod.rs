@@ -34,6 +34,7 @@ pub mod hint;
 pub mod points;
 pub mod request;
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock, RwLock};
 
 pub use hint::{TRUNCATION_RATIO_WARNING, TruncationHint};
@@ -224,6 +225,9 @@ pub struct Analysis {
     bx: Mutex<Option<BxCache>>,
     /// The last few harmonic solvers: (order, constrained vertices ascending, solver).
     harmonic: Mutex<Vec<HarmonicEntry>>,
+    /// Values of the eigensolver's kept factorizations, as of its last solve (read
+    /// without waiting for a running solve).
+    factor_len: AtomicUsize,
 }
 
 /// The basis `B X` was computed from, and `B X`.
@@ -284,6 +288,7 @@ impl Analysis {
             held: RwLock::new(None),
             bx: Mutex::new(None),
             harmonic: Mutex::new(Vec::new()),
+            factor_len: AtomicUsize::new(0),
         }
     }
 
@@ -423,7 +428,13 @@ impl Analysis {
         {
             return Ok(b);
         }
-        let b = lock(&self.solver).solve(k, progress, cancel)?;
+        let mut solver = lock(&self.solver);
+        let solved = solver.solve(k, progress, cancel);
+        // A factorization made before a cancellation or failure is kept too.
+        self.factor_len
+            .store(solver.factor_len(), Ordering::Relaxed);
+        drop(solver);
+        let b = solved?;
         *self.held.write().unwrap_or_else(|p| p.into_inner()) = Some(b.clone());
         Ok(b)
     }
@@ -440,6 +451,49 @@ impl Analysis {
         }
         *self.held.write().unwrap_or_else(|p| p.into_inner()) = Some(Arc::new(basis));
         Ok(())
+    }
+
+    /// Values of the eigensolver's kept factorization (8 bytes each), as of its last
+    /// solve: 0 before the first sparse solve (never waits for a running one).
+    pub fn factor_len(&self) -> usize {
+        self.factor_len.load(Ordering::Relaxed)
+    }
+
+    /// Bytes the analysis holds, counted from the lengths of its arrays (8 bytes per
+    /// value, 8 per index): the operators, the eigensolver's kept factorization (its
+    /// values only), the held basis (vectors `n x k` and its copy of the mass matrix), the
+    /// `B X` cache of the wFEM distance, the kept harmonic solvers, and the connectivity
+    /// and critical-point links once built. Allocator overhead and the factor's symbolic
+    /// analysis are not counted. Never waits for a running eigenbasis computation (the
+    /// factorization counted is the one of the last finished or cancelled solve).
+    pub fn memory_bytes(&self) -> usize {
+        let n = self.n();
+        let m = self.mesh.n_triangles();
+        let sparse = |a: &crate::linalg::sparse::SparseMatrix| a.nnz() * 16 + (a.ncols() + 1) * 8;
+        let ops = sparse(&self.ops.stiffness) + sparse(&self.ops.mass);
+        let factor = self.factor_len() * 8;
+        let basis = self.held_basis().map_or(0, |b| {
+            (b.vectors.len() + b.values.len() + b.residuals.len()) * 8 + sparse(&b.mass)
+        });
+        let bx = lock(&self.bx).as_ref().map_or(0, |(_, v)| v.len() * 8);
+        let harmonic: usize = lock(&self.harmonic)
+            .iter()
+            .map(|(_, v, s)| v.len() * 8 + s.memory_bytes())
+            .sum();
+        let topology = self.topology.get().map_or(0, |t| {
+            t.edges.len() * 20
+                + (t.vertex_component.len() + t.triangle_component.len()) * 8
+                + t.boundary_loops
+                    .iter()
+                    .map(|l| l.len() * 8 + 24)
+                    .sum::<usize>()
+        });
+        // Link edges: one per triangle corner (two indices each), offsets, flags.
+        let critical = self
+            .critical
+            .get()
+            .map_or(0, |_| 3 * m * 16 + (n + 1) * 8 + n);
+        ops + factor + basis + bx + harmonic + topology + critical
     }
 
     /// The field of `request`, computing the eigenbasis first when the held one is too

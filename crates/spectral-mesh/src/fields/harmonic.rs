@@ -524,6 +524,15 @@ pub struct FloatingComponent {
 }
 
 impl HarmonicSolver {
+    /// Bytes this solver holds, counted from its arrays: the factor's values (8 bytes
+    /// each), the coupling block `Q_FI` (16 bytes per stored entry) and the vertex lists.
+    /// The factor's symbolic analysis is not counted.
+    pub fn memory_bytes(&self) -> usize {
+        self.chol.factor_len() * 8
+            + self.q_fi.nnz() * 16
+            + (self.constrained.len() + self.free.len() + self.floating.len()) * 8
+    }
+
     /// Builds the operators of `params.laplacian` and factors the free block for the
     /// constrained vertices `constrained` (any order, no repeats).
     pub fn new(

@@ -801,6 +801,17 @@ impl EigenSolver {
         self.factors.count
     }
 
+    /// Values of the kept factorizations (8 bytes each, plus their symbolic analysis):
+    /// 0 before the first sparse solve and on the dense path.
+    pub fn factor_len(&self) -> usize {
+        self.factors
+            .whole
+            .iter()
+            .chain(self.factors.parts.iter().flatten())
+            .map(|f| f.factor_len())
+            .sum()
+    }
+
     /// A basis of at least `k` pairs: the held one when it has enough, otherwise `k` pairs
     /// computed afresh on the kept factorization (see the type's contract). Progress goes
     /// to `progress` (a [`EigenProgress::Factorization`] only when the pencil is
