@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # End-to-end tests of the web app in headless Chromium (Debian's package) driven by
-# playwright-core. Starts the release server on a free port of 127.0.0.1, runs
-# `node --test web/e2e/*.test.mjs`, stops the server.
+# playwright-core. Builds the release CLI (`spectral-mesh`, its page assets embedded by
+# build.rs), starts `spectral-mesh serve` on a free port of 127.0.0.1, runs
+# `node --test web/e2e/*.test.mjs` (release.test.mjs copies the binary to an empty folder
+# and serves from there), stops the server. About 2-4 minutes on 2 loaded cores after the
+# build (most of it eigenbases: 3torus, a 10k-vertex torus at k = 100).
 #   SPECTRAL_MESH_SHARED_MESHES  folder with sphere966.off (default: ../shared/meshes beside
 #                                the clone, then /work/shared/meshes)
 #   SPECTRAL_MESH_WEB_BENCH=1    also run the ~100k-vertex, k = 200 input-to-picture benchmark
@@ -19,8 +22,9 @@ if [ ! -d web/node_modules/three ] || [ ! -d web/node_modules/playwright-core ];
   (cd web && npm ci --no-audit --no-fund)
 fi
 
-cargo build --release -q -p spectral-mesh-web --example serve
-BIN="${CARGO_TARGET_DIR:-$ROOT/target}/release/examples/serve"
+cargo build --release -q -p spectral-mesh-cli
+BIN="${CARGO_TARGET_DIR:-$ROOT/target}/release/spectral-mesh"
+export SPECTRAL_MESH_RELEASE_BIN="$BIN"
 
 if [ -z "${SPECTRAL_MESH_SHARED_MESHES:-}" ]; then
   for d in "$ROOT/../shared/meshes" /work/shared/meshes; do
@@ -30,7 +34,7 @@ fi
 export SPECTRAL_MESH_SHARED_MESHES="${SPECTRAL_MESH_SHARED_MESHES:-}"
 
 LOG=$(mktemp)
-"$BIN" --host 127.0.0.1 --port 0 --cache-mib 2048 >"$LOG" 2>&1 &
+"$BIN" serve --host 127.0.0.1 --port 0 --cache-mib 2048 >"$LOG" 2>&1 &
 PID=$!
 cleanup() { kill "$PID" 2>/dev/null || true; wait "$PID" 2>/dev/null || true; rm -f "$LOG"; }
 trap cleanup EXIT

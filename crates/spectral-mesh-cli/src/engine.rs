@@ -9,13 +9,13 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use spectral_mesh::analysis::request::DEFAULT_K;
-use spectral_mesh::analysis::{Analysis, AnalysisOptions, Field, FieldRequest};
+use spectral_mesh::analysis::{Analysis, AnalysisInput, AnalysisOptions, Field, FieldRequest};
 use spectral_mesh::experiments::file::ExperimentFile;
 use spectral_mesh::linalg::EigenProgress;
 use spectral_mesh::spectral::Eigenbasis;
 use spectral_mesh::spectral::eigenbasis::EigenParams;
 use spectral_mesh::spectral::store::load_or_compute;
-use spectral_mesh::{CancelToken, Laplacian, Mesh};
+use spectral_mesh::{CancelToken, Laplacian};
 use spectral_mesh_render::figure::FigureOptions;
 
 use crate::input::MeshInfo;
@@ -28,9 +28,12 @@ pub struct BasisArgs {
     /// Number of eigenpairs (the smallest eigenvalues).
     #[arg(long, short = 'k', default_value_t = DEFAULT_K)]
     pub k: usize,
-    /// Discretization: cot, voronoi-cot, fem, mixed-voronoi, uniform.
-    #[arg(long, default_value_t = AnalysisOptions::default().laplacian)]
-    pub laplacian: Laplacian,
+    /// Discretization: cot, voronoi-cot, fem (the default for meshes), mixed-voronoi,
+    /// uniform, robust (tufted cover and intrinsic Delaunay: any triangle soup, for
+    /// non-manifold meshes). A point cloud takes only robust, its point-cloud Laplacian
+    /// (the default for point files).
+    #[arg(long, help = LAPLACIAN_HELP, long_help = LAPLACIAN_LONG_HELP)]
+    pub laplacian: Option<Laplacian>,
     /// Target relative residual of every eigenpair.
     #[arg(long, default_value_t = EigenParams::default().tolerance)]
     pub tolerance: f64,
@@ -43,11 +46,39 @@ pub struct BasisArgs {
     pub repair: bool,
 }
 
+/// The short help of every `--laplacian` option.
+pub const LAPLACIAN_HELP: &str = "Discretization: cot, voronoi-cot, fem, mixed-voronoi, uniform, robust [default: fem; robust for point clouds, the only one that applies to them]";
+
+/// The long help of every `--laplacian` option.
+pub const LAPLACIAN_LONG_HELP: &str = "Discretization (S, B):
+  fem            cotangent stiffness, consistent linear FEM mass (default for meshes)
+  voronoi-cot    cotangent stiffness, barycentric lumped mass
+  mixed-voronoi  cotangent stiffness, Meyer et al.'s mixed Voronoi mass
+  cot            cotangent stiffness, B = I
+  uniform        graph Laplacian, B = I (not geometric)
+  robust         Sharp and Crane 2020: tufted cover, intrinsic Delaunay, lumped mass;
+                 any triangle soup (non-manifold edges and vertices: see `info`)
+Point clouds (.xyz/.pts/.txt/.csv, PLY without faces) take only robust: their
+point-cloud Laplacian (30 neighbours, local Delaunay, tufted union); it is their default.";
+
+/// The discretization for `input`: `given`, or fem for a mesh and robust for a point
+/// cloud; refuses a discretization that does not apply to a point cloud, by name.
+pub fn resolve_laplacian(given: Option<Laplacian>, input: &AnalysisInput) -> Result<Laplacian> {
+    match (input.is_points(), given) {
+        (true, None | Some(Laplacian::Robust)) => Ok(Laplacian::Robust),
+        (true, Some(l)) => bail!(
+            "--laplacian {l} does not apply to a point cloud: it needs triangles; a point cloud has only its point-cloud Laplacian, --laplacian robust (the default for point files)"
+        ),
+        (false, l) => Ok(l.unwrap_or(AnalysisOptions::default().laplacian)),
+    }
+}
+
 impl BasisArgs {
-    /// The analysis options: these, the shape scaled to unit area when `normalize`, zero
-    /// Dirichlet conditions on `dirichlet`.
+    /// The analysis options for `input`: these, the shape scaled to unit area when
+    /// `normalize`, zero Dirichlet conditions on `dirichlet`.
     pub fn options(
         &self,
+        input: &AnalysisInput,
         normalize: bool,
         dirichlet: Option<Vec<usize>>,
     ) -> Result<AnalysisOptions> {
@@ -55,7 +86,7 @@ impl BasisArgs {
             bail!("--tolerance {}: must be a positive number", self.tolerance);
         }
         Ok(AnalysisOptions {
-            laplacian: self.laplacian,
+            laplacian: resolve_laplacian(self.laplacian, input)?,
             normalize,
             eigen: EigenParams {
                 tolerance: self.tolerance,
@@ -71,15 +102,16 @@ impl BasisArgs {
             bail!("-k 0: at least one eigenpair is needed");
         }
         if self.k > n {
-            bail!("-k {}: the mesh has only {n} vertices", self.k);
+            bail!("-k {}: the input has only {n} vertices", self.k);
         }
         Ok(())
     }
 
-    /// The analysis of `mesh` with these options (`-k` is checked against the mesh when
-    /// a request needs the eigenbasis).
-    pub fn analysis(&self, mesh: Mesh, normalize: bool) -> Result<Analysis> {
-        Ok(Analysis::new(mesh, self.options(normalize, None)?))
+    /// The analysis of a mesh or a point cloud with these options (`-k` is checked
+    /// against the input when a request needs the eigenbasis).
+    pub fn analysis(&self, input: AnalysisInput, normalize: bool) -> Result<Analysis> {
+        let options = self.options(&input, normalize, None)?;
+        Ok(Analysis::from_input(input, options)?)
     }
 
     /// Warns when an option cannot be recorded in an experiment file.
@@ -178,7 +210,7 @@ pub fn field(an: &Analysis, request: &FieldRequest, cache: Option<&Path>) -> Res
 /// Refuses a vertex index out of range before any work, naming the option.
 pub fn check_vertex(v: usize, n: usize, option: &str) -> Result<()> {
     if v >= n {
-        bail!("{option} {v}: the mesh has only {n} vertices");
+        bail!("{option} {v}: the input has only {n} vertices");
     }
     Ok(())
 }

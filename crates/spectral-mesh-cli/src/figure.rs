@@ -4,8 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use spectral_mesh::Mesh;
-use spectral_mesh::analysis::Field;
+use spectral_mesh::analysis::{Analysis, Field};
 use spectral_mesh_render::Colormap;
 use spectral_mesh_render::figure::{Figure, FigureOptions, field_text};
 use spectral_mesh_render::raster::View;
@@ -64,17 +63,17 @@ pub fn labels_text(labels: &[usize]) -> String {
     s
 }
 
-/// Writes a field to each of `outs` by extension (.png, .wrl/.vrml, .ply, .txt) with the
-/// render crate's figure code; a segmentation's .txt holds its integer labels. The
-/// figure (and its critical points) is only prepared when a picture or a scene is asked
-/// for.
+/// Writes a field of `an` to each of `outs` by extension (.png, .wrl/.vrml, .ply, .txt)
+/// with the render crate's figure code (a point cloud drawn as discs, its .ply and .wrl as
+/// point sets); a segmentation's .txt holds its integer labels. The figure (and its
+/// critical points) is only prepared when a picture or a scene is asked for.
 pub fn write_field(
-    mesh: &Mesh,
+    an: &Analysis,
     field: &Field,
     outs: &[PathBuf],
     options: FigureOptions,
 ) -> Result<()> {
-    write_field_files(mesh, field, outs, options)?;
+    write_field_files(an, field, outs, options)?;
     for o in outs {
         println!("-> {}", o.display());
     }
@@ -83,14 +82,14 @@ pub fn write_field(
 
 /// [`write_field`] without naming each file on stdout.
 pub fn write_field_files(
-    mesh: &Mesh,
+    an: &Analysis,
     field: &Field,
     outs: &[PathBuf],
     options: FigureOptions,
 ) -> Result<()> {
     let drawn = outs.iter().any(|o| extension(o).as_deref() != Some("txt"));
     let fig = if drawn {
-        Some(Figure::of_field(mesh, field, options)?)
+        Some(Figure::of_analysis(an, field, options)?)
     } else {
         None
     };
@@ -99,7 +98,7 @@ pub fn write_field_files(
             (_, Some("txt"), Some(labels)) => write(o, labels_text(labels).as_bytes())?,
             (_, Some("txt"), None) => write(o, field_text(&field.values).as_bytes())?,
             (Some(fig), _, _) => fig.write(o)?,
-            (None, _, _) => Figure::of_field(mesh, field, options)?.write(o)?,
+            (None, _, _) => Figure::of_analysis(an, field, options)?.write(o)?,
         }
     }
     Ok(())

@@ -1,12 +1,14 @@
-//! Resolving the MESH|SHAPE argument into a mesh, and reading per-vertex field files.
+//! Resolving the MESH|SHAPE argument into a mesh or a point cloud, and reading per-vertex
+//! field files.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use spectral_mesh::Mesh;
+use spectral_mesh::analysis::AnalysisInput;
 use spectral_mesh::experiments::file::{parent_dir, relative_path};
 use spectral_mesh::experiments::paper::MeshSummary;
-use spectral_mesh::io::read_mesh;
+use spectral_mesh::io::{self, read_input};
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::mesh::validate::{RepairOptions, repair};
 use spectral_mesh::shapes;
@@ -34,11 +36,11 @@ pub struct MeshInfo {
     hash_as_read: Option<String>,
 }
 
-/// A resolved input mesh.
+/// A resolved input: a mesh or a point cloud.
 #[derive(Debug, Clone)]
 pub struct Input {
-    /// The mesh (repaired when asked).
-    pub mesh: Mesh,
+    /// The mesh (repaired when asked) or the point cloud.
+    pub shape: AnalysisInput,
     /// Where it came from.
     pub info: MeshInfo,
 }
@@ -72,6 +74,14 @@ impl MeshInfo {
             .unwrap_or_else(|| mesh.content_hash())
     }
 
+    /// The content hash of `shape` as read: [`MeshInfo::hash`] for a mesh, the hash of
+    /// the points for a point cloud.
+    pub fn hash_of(&self, shape: &AnalysisInput) -> String {
+        self.hash_as_read
+            .clone()
+            .unwrap_or_else(|| shape.content_hash())
+    }
+
     /// The library's summary of `mesh` (loaded with this information).
     pub fn summary(&self, mesh: &Mesh, topology: &Topology) -> MeshSummary {
         MeshSummary::new(self.name(), self.hash(mesh), mesh, topology)
@@ -99,6 +109,34 @@ impl Input {
     pub fn label(&self) -> String {
         self.info.label()
     }
+
+    /// Number of vertices or points.
+    pub fn n(&self) -> usize {
+        self.shape.n()
+    }
+
+    /// The mesh, or an error naming `what` (a command or an option) when the input is a
+    /// point cloud.
+    pub fn mesh(&self, what: &str) -> Result<&Mesh> {
+        match &self.shape {
+            AnalysisInput::Mesh(m) => Ok(m),
+            AnalysisInput::Points { .. } => bail!(
+                "{what} does not apply to a point cloud ({}): it needs a triangle mesh",
+                self.label()
+            ),
+        }
+    }
+
+    /// [`Input::mesh`], consuming the input.
+    pub fn into_mesh(self, what: &str) -> Result<(Mesh, MeshInfo)> {
+        match self.shape {
+            AnalysisInput::Mesh(m) => Ok((m, self.info)),
+            AnalysisInput::Points { .. } => bail!(
+                "{what} does not apply to a point cloud ({}): it needs a triangle mesh",
+                self.info.label()
+            ),
+        }
+    }
 }
 
 /// Loads a file or builds a shape; `None` means the paper's default shape.
@@ -112,21 +150,32 @@ pub fn load(spec: Option<&str>) -> Result<Input> {
         hash_as_read: None,
     };
     if path.exists() {
-        let loaded = read_mesh(path)?;
-        return Ok(Input {
-            mesh: loaded.mesh,
-            info: info(
-                Source::File(path.to_path_buf()),
-                loaded.polygons_triangulated,
-                loaded.warnings,
-            ),
+        return Ok(match read_input(path)? {
+            io::Input::Mesh(loaded) => Input {
+                shape: AnalysisInput::Mesh(loaded.mesh),
+                info: info(
+                    Source::File(path.to_path_buf()),
+                    loaded.polygons_triangulated,
+                    loaded.warnings,
+                ),
+            },
+            io::Input::Points(p) => {
+                let mut i = info(Source::File(path.to_path_buf()), 0, p.warnings);
+                // A cloud is named by the hash of its points (its Laplacian's triangles
+                // are derived).
+                i.hash_as_read = Some(p.cloud.content_hash());
+                Input {
+                    shape: p.cloud.into(),
+                    info: i,
+                }
+            }
         });
     }
     if shapes::is_shape_spec(spec) {
         let s = shapes::parse_shape(spec)?;
         let mesh = shapes::build(&s).with_context(|| format!("building shape '{spec}'"))?;
         return Ok(Input {
-            mesh,
+            shape: AnalysisInput::Mesh(mesh),
             info: info(Source::Shape(spec.to_string()), 0, Vec::new()),
         });
     }
@@ -142,10 +191,11 @@ pub fn load(spec: Option<&str>) -> Result<Input> {
 pub fn load_repaired(spec: Option<&str>, do_repair: bool) -> Result<Input> {
     let mut input = load(spec)?;
     if do_repair {
-        let r = repair(&input.mesh, &RepairOptions::default())
+        let mesh = input.mesh("--repair")?;
+        let r = repair(mesh, &RepairOptions::default())
             .with_context(|| format!("repairing {}", input.label()))?;
-        input.info.hash_as_read = Some(input.mesh.content_hash());
-        input.mesh = r.mesh;
+        input.info.hash_as_read = Some(mesh.content_hash());
+        input.shape = AnalysisInput::Mesh(r.mesh);
         input.info.notes.extend(r.log);
     }
     Ok(input)

@@ -20,7 +20,9 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 ///
 /// MESH arguments take a file (OFF, OBJ, PLY, STL) or a built-in shape such as
 /// `3torus` or `sphere:res=4` (`spectral-mesh shapes` lists them). With no mesh, the
-/// paper's default shape, the 3-torus, is used.
+/// paper's default shape, the 3-torus, is used. Point clouds (.xyz, .pts, .txt, .csv, PLY
+/// without faces) go wherever a mesh does, with their point-cloud Laplacian
+/// (`--laplacian robust`).
 #[derive(Debug, Parser)]
 #[command(name = "spectral-mesh", version, about, long_about = None)]
 struct Cli {

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use spectral_mesh::Mesh;
-use spectral_mesh::analysis::Field;
+use spectral_mesh::analysis::{Analysis, Field};
 use spectral_mesh::experiments::file::FigureFile;
 use spectral_mesh::fields::critical_points::{CriticalPoints, critical_points};
 use spectral_mesh::io::{IoError, MeshFormat, WriteOptions, write_atomic, write_mesh_to};
@@ -161,7 +161,17 @@ pub struct Figure<'a> {
     pub colors: Option<Vec<[f32; 3]>>,
     /// How to draw.
     pub options: FigureOptions,
+    /// Draw the vertices as discs of this radius (world units) instead of the surface: the
+    /// figure of a point cloud (see [`Figure::of_analysis`]). The PLY output is then a
+    /// point set (no faces) and the VRML scene a `PointSet`.
+    pub point_radius: Option<f64>,
 }
+
+/// Radius of the discs of a point cloud's picture, as a fraction of its mean neighbour
+/// spacing ([`Analysis::point_spacing`]): the discs of neighbouring points overlap, so a
+/// well-sampled surface looks closed (the circumradius of an equilateral triangle is
+/// `0.577` of its side).
+pub const POINT_RADIUS_FACTOR: f64 = 0.65;
 
 impl<'a> Figure<'a> {
     /// Prepares a figure, computing the critical points unless turned off.
@@ -189,7 +199,21 @@ impl<'a> Figure<'a> {
             critical,
             colors: None,
             options,
+            point_radius: None,
         })
+    }
+
+    /// The figure of a field of `an` ([`Figure::of_field`] on its mesh); for a point cloud
+    /// the points are drawn as discs sized from the mean neighbour spacing
+    /// ([`POINT_RADIUS_FACTOR`]) and the PLY and VRML outputs are point sets.
+    pub fn of_analysis(
+        an: &'a Analysis,
+        field: &'a Field,
+        options: FigureOptions,
+    ) -> Result<Self, FigureError> {
+        let mut fig = Self::of_field(an.mesh(), field, options)?;
+        fig.point_radius = an.point_spacing().map(|h| POINT_RADIUS_FACTOR * h);
+        Ok(fig)
     }
 
     /// The figure of an analysis' field: its marks as sources; a segmentation is drawn
@@ -219,6 +243,7 @@ impl<'a> Figure<'a> {
         let cmap = self.options.colormap;
         let range = field_range(self.field, cmap);
         let mut scene = Scene::new(self.mesh);
+        scene.point_radius = self.point_radius;
         scene.vertex_colors = match &self.colors {
             Some(c) => c.clone(),
             None => field_colors(self.field, cmap, Some(range)),
@@ -298,7 +323,10 @@ impl<'a> Figure<'a> {
             .unwrap_or_else(|| field_colors(self.field, self.options.colormap, None))
             .into_iter()
             .map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8))
-            .collect();
+            .collect::<Vec<_>>();
+        if self.point_radius.is_some() {
+            return Ok(point_ply(self.mesh.positions(), &colors, self.field));
+        }
         let mut buf = Vec::new();
         write_mesh_to(
             &mut buf,
@@ -344,6 +372,25 @@ impl<'a> Figure<'a> {
         write_atomic(path, &bytes)?;
         Ok(())
     }
+}
+
+/// An ASCII PLY point set (no faces): `x y z`, colour and the raw field as `value`.
+fn point_ply(points: &[[f64; 3]], colors: &[[u8; 3]], values: &[f64]) -> Vec<u8> {
+    use std::fmt::Write;
+    let mut s = String::with_capacity(points.len() * 64 + 256);
+    let _ = write!(
+        s,
+        "ply\nformat ascii 1.0\ncomment written by spectral-mesh: a point cloud and a field\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nproperty double value\nend_header\n",
+        points.len()
+    );
+    for ((p, c), v) in points.iter().zip(colors).zip(values) {
+        let _ = writeln!(
+            s,
+            "{:?} {:?} {:?} {} {} {} {v:?}",
+            p[0], p[1], p[2], c[0], c[1], c[2]
+        );
+    }
+    s.into_bytes()
 }
 
 /// A per-vertex field as text: one value per line, shortest round-trip form.

@@ -271,6 +271,11 @@ pub struct Scene<'a> {
     pub markers: Vec<Marker>,
     /// Optional colour bar beside the shape.
     pub colorbar: Option<ColorBar>,
+    /// Draw the vertices as points instead of the triangles: each vertex is a disc of
+    /// this radius (world units) facing the camera, in its colour shaded by its normal,
+    /// drawn far to near (the triangles still carry the level sets). `None` (default):
+    /// the surface.
+    pub point_radius: Option<f64>,
 }
 
 impl<'a> Scene<'a> {
@@ -282,6 +287,7 @@ impl<'a> Scene<'a> {
             level_sets: Vec::new(),
             markers: Vec::new(),
             colorbar: None,
+            point_radius: None,
         }
     }
 
@@ -304,6 +310,7 @@ impl<'a> Scene<'a> {
                 max: hi,
                 colormap,
             }),
+            point_radius: None,
         }
     }
 
@@ -554,7 +561,12 @@ pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Image, Render
             }
         })
         .collect();
-    raster_all(&mut buf, mesh.triangles(), &verts);
+    match scene.point_radius {
+        Some(r) if r.is_finite() && r > 0.0 => {
+            splat_all(&mut buf, &verts, r * cam.scale * ss_f, ss_f)
+        }
+        _ => raster_all(&mut buf, mesh.triangles(), &verts),
+    }
 
     // Level-set lines.
     let ppu = cam.pixels_per_unit();
@@ -658,6 +670,46 @@ fn raster_all(buf: &mut Buffers, tris: &[[usize; 3]], verts: &[RVert]) {
                 raster_triangle(&mut band, &verts[a], &verts[bb], &verts[c]);
             }
         });
+}
+
+/// Draws every vertex as a disc facing the camera of `radius` samples (times the
+/// perspective factor, at least one output pixel across), far to near with a depth test
+/// at the vertex's depth; the disc is shaded slightly darker towards its rim.
+fn splat_all(buf: &mut Buffers, verts: &[RVert], radius: f64, ss: f64) {
+    let mut order: Vec<usize> = (0..verts.len())
+        .filter(|&i| verts[i].x.is_finite() && verts[i].y.is_finite() && verts[i].z.is_finite())
+        .collect();
+    order.sort_by(|&a, &b| verts[a].z.total_cmp(&verts[b].z).then(a.cmp(&b)));
+    for i in order {
+        let v = &verts[i];
+        let r = (radius * v.iw).max(0.5 * ss);
+        let r2 = r * r;
+        let xmin = (v.x - r).floor().max(0.0);
+        let ymin = (v.y - r).floor().max(0.0);
+        let xmax = (v.x + r).ceil().min(buf.w as f64 - 1.0);
+        let ymax = (v.y + r).ceil().min(buf.h as f64 - 1.0);
+        if xmin > xmax || ymin > ymax {
+            continue;
+        }
+        let z = v.z as f32;
+        for py in ymin as usize..=ymax as usize {
+            let dy = py as f64 + 0.5 - v.y;
+            for px in xmin as usize..=xmax as usize {
+                let dx = px as f64 + 0.5 - v.x;
+                let d2 = dx * dx + dy * dy;
+                if d2 > r2 {
+                    continue;
+                }
+                let k = py * buf.w + px;
+                if z >= buf.depth[k] {
+                    buf.depth[k] = z;
+                    let shade = 0.8 + 0.2 * (1.0 - d2 / r2).sqrt() as f32;
+                    let c = |j: usize| fast_u8(v.c[j] * shade);
+                    buf.rgba[k] = [c(0), c(1), c(2), 255];
+                }
+            }
+        }
+    }
 }
 
 fn raster_triangle(buf: &mut Band, v0: &RVert, v1: &RVert, v2: &RVert) {

@@ -20,7 +20,12 @@ pub fn write_vrml(w: &mut impl Write, scene: &Scene) -> io::Result<()> {
     let mut s = String::new();
     s.push_str("#VRML V2.0 utf8\n# written by spectral-mesh-render\n\n");
     s.push_str("Shape {\n  appearance Appearance { material Material { diffuseColor 1 1 1 } }\n");
-    s.push_str("  geometry IndexedFaceSet {\n    solid FALSE\n    colorPerVertex TRUE\n");
+    if scene.point_radius.is_some() {
+        // A point cloud: a PointSet of the vertices in their colours.
+        s.push_str("  geometry PointSet {\n");
+    } else {
+        s.push_str("  geometry IndexedFaceSet {\n    solid FALSE\n    colorPerVertex TRUE\n");
+    }
     s.push_str("    coord Coordinate { point [\n");
     for p in mesh.positions() {
         let _ = writeln!(s, "      {} {} {},", p[0], p[1], p[2]);
@@ -36,11 +41,15 @@ pub fn write_vrml(w: &mut impl Write, scene: &Scene) -> io::Result<()> {
         };
         let _ = writeln!(s, "      {:.4} {:.4} {:.4},", f(c[0]), f(c[1]), f(c[2]));
     }
-    s.push_str("    ] }\n    coordIndex [\n");
-    for t in mesh.triangles() {
-        let _ = writeln!(s, "      {} {} {} -1,", t[0], t[1], t[2]);
+    if scene.point_radius.is_some() {
+        s.push_str("    ] }\n  }\n}\n");
+    } else {
+        s.push_str("    ] }\n    coordIndex [\n");
+        for t in mesh.triangles() {
+            let _ = writeln!(s, "      {} {} {} -1,", t[0], t[1], t[2]);
+        }
+        s.push_str("    ]\n  }\n}\n");
     }
-    s.push_str("    ]\n  }\n}\n");
     w.write_all(s.as_bytes())?;
 
     for ls in &scene.level_sets {

@@ -145,26 +145,67 @@ async fn style_css(State(s): St) -> Response {
     static_file(&s, "style.css", STYLE_CSS, "text/css; charset=utf-8").await
 }
 
-async fn vendor(s: &AppState, rel: &str) -> Response {
+/// The page's third-party assets (three.js), embedded by `build.rs` from npm's
+/// `node_modules` at build time.
+mod assets {
+    include!(concat!(env!("OUT_DIR"), "/assets.rs"));
+}
+
+/// True when the binary carries its page's 3D library.
+pub fn assets_embedded() -> bool {
+    assets::THREE_MODULE_JS.is_some() && assets::ORBIT_CONTROLS_JS.is_some()
+}
+
+/// A vendored asset: from the `node_modules` folder the server was told about
+/// (`--node-modules` or `SPECTRAL_MESH_WEB_NODE_MODULES`), else the copy embedded at build
+/// time, else the source tree's `web/node_modules` (a binary built without npm). The
+/// header `X-Spectral-Mesh-Asset` says which (`folder` or `embedded`).
+async fn vendor(s: &AppState, rel: &str, embedded: Option<&'static [u8]>) -> Response {
+    let told = s.config.node_modules.is_some()
+        || std::env::var_os("SPECTRAL_MESH_WEB_NODE_MODULES").is_some();
+    let reply = |origin: &'static str, body: Vec<u8>| {
+        (
+            [
+                (header::CONTENT_TYPE, "text/javascript; charset=utf-8"),
+                (header::CACHE_CONTROL, "max-age=3600"),
+                (
+                    header::HeaderName::from_static("x-spectral-mesh-asset"),
+                    origin,
+                ),
+            ],
+            body,
+        )
+            .into_response()
+    };
+    if let (Some(b), false) = (embedded, told) {
+        return reply("embedded", b.to_vec());
+    }
     let path = s.node_modules.join(rel);
     match tokio::fs::read(&path).await {
-        Ok(b) => (
-            [(header::CONTENT_TYPE, "text/javascript; charset=utf-8")],
-            b,
-        )
+        Ok(b) => reply("folder", b),
+        Err(_) => match embedded {
+            Some(b) => reply("embedded", b.to_vec()),
+            None => ApiError(
+                StatusCode::NOT_FOUND,
+                format!(
+                    "the page's 3D library (three.js, {rel}) is not in this binary: {}. Build the binary from the source tree with npm installed (`cargo build` runs `npm ci` in web/), or pass --node-modules with a folder holding npm's three package",
+                    if assets::MISSING_WHY.is_empty() { "not embedded" } else { assets::MISSING_WHY }
+                ),
+            )
             .into_response(),
-        Err(_) => ApiError(
-            StatusCode::NOT_FOUND,
-            format!("{rel} not found: run `npm ci` in the web/ folder of the source tree"),
-        )
-        .into_response(),
+        },
     }
 }
 async fn three_js(State(s): St) -> Response {
-    vendor(&s, "three/build/three.module.js").await
+    vendor(&s, "three/build/three.module.js", assets::THREE_MODULE_JS).await
 }
 async fn orbit_js(State(s): St) -> Response {
-    vendor(&s, "three/examples/jsm/controls/OrbitControls.js").await
+    vendor(
+        &s,
+        "three/examples/jsm/controls/OrbitControls.js",
+        assets::ORBIT_CONTROLS_JS,
+    )
+    .await
 }
 
 // ---------- meshes ----------

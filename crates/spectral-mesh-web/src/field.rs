@@ -4,7 +4,9 @@
 use std::time::Instant;
 
 use serde::Serialize;
-use spectral_mesh::analysis::{Analysis, AnalysisError, CriticalReport, Field, FieldRequest};
+use spectral_mesh::analysis::{
+    Analysis, AnalysisError, CriticalReport, Field, FieldRequest, TruncationHint,
+};
 use spectral_mesh::fields::harmonic::{Constraint, FloatingComponent};
 use spectral_mesh::fields::level_sets::{level_set_segments, level_values};
 
@@ -61,8 +63,13 @@ pub struct FieldHeader {
     pub levels: Vec<f64>,
     /// Segments per level set, in the order of `levels`.
     pub level_counts: Vec<u32>,
-    /// Critical points with the Euler check (`null` for categorical fields).
+    /// Critical points with the Euler check (`null` for categorical fields). A field
+    /// constant within the library's relative tolerance has `flat = true` and none.
     pub critical: Option<CriticalReport>,
+    /// For heat and diffusion fields: the weight of the first eigenpair left out against
+    /// the first varying one, with a warning when truncation dominates
+    /// ([`spectral_mesh::analysis::TruncationHint`]); `null` for other fields.
+    pub truncation: Option<TruncationHint>,
     /// Server time.
     pub timing_ms: Timing,
 }
@@ -145,6 +152,7 @@ pub fn field_reply(
         levels: isos,
         level_counts,
         critical,
+        truncation: analysis.truncation_hint(&field),
         timing_ms: Timing {
             field: ms(t_field),
             critical: ms(t_critical - t_field),

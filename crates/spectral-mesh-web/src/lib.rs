@@ -56,7 +56,13 @@
 //!   `categorical` (segmentation labels), `min`, `max`, `levels`, `level_counts`,
 //!   `critical` (the library's `CriticalReport`: `points {minima, maxima, saddles,
 //!   on_boundary, non_manifold}`, counts, `chi`, `doubled`, `lhs`, `rhs`, `holds`,
-//!   `formula`, the check per component; `null` for labels) and `timing_ms {field, critical, levels, total}`.
+//!   `formula`, the check per component, and the plateau rule: `flat`, `flat_tolerance`,
+//!   `plateau_components`; `null` for labels), `truncation` (heat and diffusion fields: the
+//!   library's [`spectral_mesh::analysis::TruncationHint`], the weight of the first
+//!   omitted eigenpair against the first varying one and a warning when truncation
+//!   dominates; `null` otherwise) and `timing_ms {field, critical, levels, total}`. The
+//!   page asks for `levels = 0` (it draws level sets in its shader) and reads the values
+//!   straight into a `Float32Array`.
 //!
 //! Downloads:
 //! - `POST /api/mesh/{id}/download` with the body of a field request plus `format` (`png`,
@@ -78,6 +84,15 @@
 //! eigenbasis, 413 for an upload over the cap, 422 for values the analysis refuses (a
 //! vertex out of range, `k` larger than the mesh, a filter that is not positive, ...).
 //! No endpoint takes a file path. The server listens on 127.0.0.1 unless told otherwise.
+//!
+//! ## The page's assets
+//! `index.html`, `app.js` and `style.css` are compiled in. The page's 3D library
+//! (three.js, from npm) is embedded by `build.rs` from `web/node_modules` of the source
+//! tree, which it fills with `npm ci` when missing and npm is available (offline-safe: a
+//! failure only warns). A binary built without it serves a page that says how to get it.
+//! So an installed binary, copied anywhere, serves its page without a source tree and the
+//! page fetches nothing from the network. `ServeConfig::node_modules` (or
+//! `SPECTRAL_MESH_WEB_NODE_MODULES`) serves the library from a folder instead.
 
 pub mod api;
 pub mod body;
@@ -103,8 +118,9 @@ pub struct ServeConfig {
     pub max_upload_bytes: usize,
     /// Serve `index.html`, `app.js`, `style.css` from this folder instead of the built-in copies.
     pub static_dir: Option<PathBuf>,
-    /// Folder holding `three/` (npm's `node_modules`); default: `web/node_modules` of the
-    /// source tree, or `SPECTRAL_MESH_WEB_NODE_MODULES` when set.
+    /// Folder holding `three/` (npm's `node_modules`) to serve the page's 3D library from
+    /// instead of the copy embedded at build time (`SPECTRAL_MESH_WEB_NODE_MODULES` does
+    /// the same); default: the embedded copy, else `web/node_modules` of the source tree.
     pub node_modules: Option<PathBuf>,
 }
 

@@ -1,41 +1,62 @@
 // spectral-mesh web app: the page. Talks to the server's /api (JSON + binary), draws with
-// three.js. Per-vertex colours are computed here from the Float32 field values, so
-// switching the colour map needs no request.
+// three.js. The per-vertex values go to the GPU once per field (a Float32Array straight from
+// the binary reply); the colour map (a 1D texture), the levels and the level-set lines are
+// computed in the fragment shader, so changing them costs no request and no per-vertex work.
 import * as THREE from 'three';
 import { OrbitControls } from '/vendor/OrbitControls.js';
 
 const $ = (id) => document.getElementById(id);
 // The page's experiments, each one kind of the library's field request (see fieldRequest).
 const USES_FILTER = new Set(['distance', 'signature', 'segmentation', 'embedding']);
+const HAS_SOURCE = new Set(['heat', 'diffusion', 'distance']);
+
+const GUIDANCE = {
+  harmonic: 'Harmonic map: the smoothest field that takes the constrained values. Click the surface to add a constraint (values alternate 0, 1); × removes one. Level sets and critical points show its structure.',
+  heat: 'Heat kernel: the heat at time t from the anchor (yellow). Click the surface to move the anchor; drag t to let the heat spread.',
+  diffusion: 'wFEM diffusion distance from the source (yellow) at time t: small t is local, large t global. Click the surface to move the source.',
+  distance: 'Filtered spectral distance from the source (yellow): bi-harmonic by default. Click the surface to move the source; switch the filter to compare distances.',
+  signature: 'Spectral signature G(p,p) of every vertex for the filter: a shape descriptor (no source).',
+  segmentation: 'Segments: the watershed of a signature, basins whose maxima differ by less than the persistence merged.',
+  embedding: 'One coordinate of the spectral embedding for the filter (component 1 is the first non-constant one).',
+  eigenfunction: 'One eigenfunction of the Laplacian (component 0 is the constant one); its level sets are nodal-like curves.',
+};
+const QUANTITY = {
+  heat: 'heat kernel k_t(anchor, x)', distance: 'distance from the source', harmonic: 'harmonic map value',
+  'spectral-function': 'signature G(p,p)', segmentation: 'segment label', embedding: 'embedding coordinate',
+  eigenfunction: 'eigenfunction value', diffusion: 'diffusion value', hks: 'heat kernel signature',
+};
 
 const app = {
-  meshId: null, n: 0, m: 0, info: null, positions: null, triangles: null,
+  meshId: null, n: 0, m: 0, info: null, positions: null, normals: null, triangles: null,
   basisKey: null,        // "laplacian:k" of a basis known to be held
-  pending: null,         // an update waiting for the one in flight
+  pending: false,        // an update waiting for the one in flight (coalesced: latest wins)
   inFlight: false,
-  inputTime: 0,          // performance.now() of the input that started the update
-  field: null,
+  inputTime: 0,          // performance.now() of the latest input not yet drawn
+  field: null,           // { header, values: Float32Array, params }
+  constraints: null,     // explicit harmonic constraints [{vertex, value}], null: the preset
+  lastControl: null,     // id of the control behind the request in flight
+  framed: null,          // mesh id the camera was aimed for
 };
 window.__app = app;
 window.__lastField = null;
 window.__timings = [];
+window.__lastError = null;
+window.__markers = {};
 
 // ---------- three.js scene ----------
 const view = $('view');
 const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
 renderer.setPixelRatio(window.devicePixelRatio);
-view.appendChild(renderer.domElement);
+view.prepend(renderer.domElement);
 const scene = new THREE.Scene();
 scene.background = new THREE.Color(0xffffff);
 const camera = new THREE.PerspectiveCamera(40, 1, 0.01, 1000);
 const controls = new OrbitControls(camera, renderer.domElement);
-scene.add(new THREE.AmbientLight(0xffffff, 0.55));
-const light = new THREE.DirectionalLight(0xffffff, 1.6);
-camera.add(light);
-light.position.set(1, 2, 3);
 scene.add(camera);
-let meshObj = null, levelObj = null, critObj = null, markerObj = null;
-let bboxDiag = 1;
+let meshObj = null;
+const markerObjs = [];
+let radius = 1;
+const center = new THREE.Vector3();
 
 function resize() {
   const w = view.clientWidth, h = view.clientHeight;
@@ -47,21 +68,178 @@ function resize() {
 window.addEventListener('resize', resize);
 function render() { renderer.render(scene, camera); }
 controls.addEventListener('change', render);
+const nextFrame = () => new Promise((r) => requestAnimationFrame(() => r()));
 
-// ---------- helpers ----------
-function showError(msg) {
-  const e = $('error');
-  e.textContent = msg || '';
-  e.classList.toggle('shown', !!msg);
-  window.__lastError = msg || null;
+// ---------- colour maps: one 256 x 1 texture ----------
+const STOPS = {
+  viridis: ['440154', '482878', '3e4989', '31688e', '26828e', '1f9e89', '35b779', '6ece58', 'b5de2b', 'fde725'],
+  turbo: ['30123b', '4145ab', '4675ed', '39a2fc', '1bcfd4', '24eca6', '61fc6c', 'a4fc3b', 'd1e834', 'f3c63a', 'fe9b2d', 'f36315', 'd93806', 'b11901', '7a0403'],
+  diverging: ['3b4cc0', '7092f3', 'aac7fd', 'dddddd', 'f7b89c', 'e7755b', 'b40426'],
+  // HSV hue from red through yellow, green, cyan, blue to magenta (as the server's files).
+  hue: ['ff0000', 'ffff00', '00ff00', '00ffff', '0000ff', 'ff00ff'],
+};
+function lut(name) {
+  const stops = (STOPS[name] || STOPS.viridis).map((h) => [0, 2, 4].map((i) => parseInt(h.slice(i, i + 2), 16)));
+  const data = new Uint8Array(256 * 4);
+  for (let i = 0; i < 256; i++) {
+    const s = (i / 255) * (stops.length - 1);
+    const j = Math.min(Math.floor(s), stops.length - 2), f = s - j;
+    for (let c = 0; c < 3; c++) data[4 * i + c] = Math.round(stops[j][c] + f * (stops[j + 1][c] - stops[j][c]));
+    data[4 * i + 3] = 255;
+  }
+  return data;
+}
+const cmapTexture = new THREE.DataTexture(lut('viridis'), 256, 1, THREE.RGBAFormat);
+cmapTexture.magFilter = THREE.LinearFilter; cmapTexture.minFilter = THREE.LinearFilter;
+cmapTexture.needsUpdate = true;
+
+const fieldMaterial = new THREE.ShaderMaterial({
+  uniforms: {
+    cmap: { value: cmapTexture }, lo: { value: 0 }, hi: { value: 1 },
+    nLevels: { value: 10 }, showLevels: { value: 1 }, hasField: { value: 0 },
+  },
+  vertexShader: `
+    attribute float scalar;
+    varying float vS;
+    varying vec3 vN;
+    void main() {
+      vS = scalar;
+      vN = normalize(normalMatrix * normal);
+      gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+    }`,
+  fragmentShader: `
+    uniform sampler2D cmap;
+    uniform float lo, hi, nLevels, showLevels, hasField;
+    varying float vS;
+    varying vec3 vN;
+    void main() {
+      vec3 c = vec3(0.8);
+      if (hasField > 0.5) {
+        float u = hi > lo ? (vS - lo) / (hi - lo) : 0.5;
+        c = texture2D(cmap, vec2(clamp(u, 0.0, 1.0) * (255.0 / 256.0) + 0.5 / 256.0, 0.5)).rgb;
+        if (showLevels > 0.5 && nLevels > 0.5 && hi > lo) {
+          // The server's level values: lo + (i + 1/2) (hi - lo) / nLevels, i < nLevels.
+          float x = u * nLevels - 0.5;
+          float r = floor(x + 0.5);
+          float w = max(fwidth(x), 1e-6);
+          float line = (r >= 0.0 && r <= nLevels - 1.0) ? 1.0 - smoothstep(0.5 * w, 1.5 * w, abs(x - r)) : 0.0;
+          c = mix(c, vec3(0.06), 0.85 * line);
+        }
+      }
+      float d = abs(dot(normalize(vN), normalize(vec3(0.3, 0.5, 1.0))));
+      gl_FragColor = vec4(c * (0.42 + 0.58 * d), 1.0);
+    }`,
+  side: THREE.DoubleSide,
+  polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
+});
+
+// ---------- markers: one sprite shape per kind, drawn on the surface ----------
+const MARKERS = {
+  source: { label: 'source / anchor', fill: '#ffd400', stroke: '#000', shape: 'star', size: 22 },
+  constraint: { label: 'constraint', fill: '#ffffff', stroke: '#000', shape: 'square', size: 16 },
+  maximum: { label: 'maximum', fill: '#e0301e', stroke: '#fff', shape: 'up', size: 15 },
+  minimum: { label: 'minimum', fill: '#1f5fe0', stroke: '#fff', shape: 'down', size: 15 },
+  saddle: { label: 'saddle', fill: '#10a040', stroke: '#fff', shape: 'diamond', size: 14 },
+};
+function markerCanvas(kind) {
+  const m = MARKERS[kind];
+  const c = document.createElement('canvas'); c.width = c.height = 64;
+  const g = c.getContext('2d');
+  g.beginPath();
+  if (m.shape === 'square') g.rect(12, 12, 40, 40);
+  else if (m.shape === 'up') { g.moveTo(32, 6); g.lineTo(58, 54); g.lineTo(6, 54); g.closePath(); }
+  else if (m.shape === 'down') { g.moveTo(6, 10); g.lineTo(58, 10); g.lineTo(32, 58); g.closePath(); }
+  else if (m.shape === 'diamond') { g.moveTo(32, 4); g.lineTo(60, 32); g.lineTo(32, 60); g.lineTo(4, 32); g.closePath(); }
+  else {
+    for (let i = 0; i < 10; i++) {
+      const r = i % 2 ? 13 : 29, a = -Math.PI / 2 + i * Math.PI / 5;
+      g[i ? 'lineTo' : 'moveTo'](32 + r * Math.cos(a), 33 + r * Math.sin(a));
+    }
+    g.closePath();
+  }
+  g.fillStyle = m.fill; g.fill();
+  g.lineWidth = 5; g.strokeStyle = m.stroke; g.stroke();
+  return c;
+}
+const MARKER_TEX = {};
+for (const kind of Object.keys(MARKERS)) {
+  const canvas = markerCanvas(kind);
+  const texture = new THREE.CanvasTexture(canvas);
+  texture.colorSpace = THREE.SRGBColorSpace;
+  MARKER_TEX[kind] = { texture, url: canvas.toDataURL() };
+}
+function buildLegend() {
+  const el = $('legend');
+  el.innerHTML = '<div class="lg-title">Legend</div>';
+  for (const [kind, m] of Object.entries(MARKERS)) {
+    const row = document.createElement('div');
+    row.dataset.kind = kind;
+    row.innerHTML = `<img alt="" src="${MARKER_TEX[kind].url}"><span>${m.label}</span>`;
+    el.appendChild(row);
+  }
+  const lines = document.createElement('div');
+  lines.innerHTML = '<svg width="16" height="16"><line x1="0" y1="8" x2="16" y2="8" stroke="#111" stroke-width="2"/></svg><span>level set</span>';
+  el.appendChild(lines);
+}
+
+function clearMarkers() {
+  for (const o of markerObjs) { scene.remove(o); o.geometry.dispose(); o.material.dispose(); }
+  markerObjs.length = 0;
+  window.__markers = {};
+}
+// Points a little above the surface (along the vertex normal), so none is half buried.
+function addMarkers(kind, vertices) {
+  window.__markers[kind] = vertices.length;
+  if (!vertices.length) return;
+  const lift = 0.006 * radius;
+  const pts = new Float32Array(3 * vertices.length);
+  vertices.forEach((v, i) => {
+    for (let c = 0; c < 3; c++) pts[3 * i + c] = app.positions[3 * v + c] + lift * app.normals[3 * v + c];
+  });
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(pts, 3));
+  const mat = new THREE.PointsMaterial({
+    size: MARKERS[kind].size, sizeAttenuation: false, map: MARKER_TEX[kind].texture,
+    transparent: true, alphaTest: 0.3, depthTest: true,
+  });
+  const o = new THREE.Points(g, mat);
+  o.renderOrder = kind === 'source' || kind === 'constraint' ? 3 : 2;
+  markerObjs.push(o);
+  scene.add(o);
+}
+
+// ---------- errors: next to the control that caused them ----------
+const ERROR_AT = { 'shape-select': 'shape-spec', 'click-value': 'constraint-list', preset: 'constraint-list', 'constraints-clear': 'constraint-list', 'custom-kind': 'custom' };
+function clearErrors() {
+  document.querySelectorAll('.ctl-error').forEach((e) => e.remove());
+  window.__lastError = null;
+  $('stale').hidden = true;
+  view.classList.remove('stale');
+}
+function showError(control, msg) {
+  const id = ERROR_AT[control] || control || 'experiment';
+  const ctl = $(id) || $('experiment');
+  const anchor = ctl.closest('.row') || ctl;
+  document.querySelectorAll(`.ctl-error[data-for="${id}"]`).forEach((e) => e.remove());
+  const div = document.createElement('div');
+  div.className = 'ctl-error';
+  div.setAttribute('role', 'alert');
+  div.dataset.for = id;
+  div.textContent = msg;
+  anchor.after(div);
+  window.__lastError = msg;
+  window.__lastErrorFor = id;
+  window.__errorCount = (window.__errorCount || 0) + 1;
+  if (app.field) {
+    $('stale').textContent = 'Stale: this is the last good picture; the new one was refused (see the message in the panel).';
+    $('stale').hidden = false;
+    view.classList.add('stale');
+  }
 }
 
 async function api(method, url, body, binary = false) {
   const opts = { method, headers: {} };
-  if (body instanceof ArrayBuffer || body instanceof Uint8Array || body instanceof Blob) {
-    opts.body = body;
-    opts.headers['Content-Type'] = 'application/octet-stream';
-  } else if (body !== undefined) {
+  if (body !== undefined) {
     opts.body = JSON.stringify(body);
     opts.headers['Content-Type'] = 'application/json';
   }
@@ -80,66 +258,28 @@ async function fetchWith(url, opts, binary) {
   return binary ? r.arrayBuffer() : r.json();
 }
 
-// ---------- colour maps ----------
-const STOPS = {
-  viridis: ['440154', '482878', '3e4989', '31688e', '26828e', '1f9e89', '35b779', '6ece58', 'b5de2b', 'fde725'],
-  turbo: ['30123b', '4145ab', '4675ed', '39a2fc', '1bcfd4', '24eca6', '61fc6c', 'a4fc3b', 'd1e834', 'f3c63a', 'fe9b2d', 'f36315', 'd93806', 'b11901', '7a0403'],
-  diverging: ['3b4cc0', '7092f3', 'aac7fd', 'dddddd', 'f7b89c', 'e7755b', 'b40426'],
-};
-const STOP_RGB = Object.fromEntries(Object.entries(STOPS).map(([k, v]) =>
-  [k, v.map((h) => [parseInt(h.slice(0, 2), 16) / 255, parseInt(h.slice(2, 4), 16) / 255, parseInt(h.slice(4, 6), 16) / 255])]));
-
-function hue(u, out, o) {
-  // HSV hue from red through yellow, green, cyan, blue to magenta (as the server's files).
-  const h = Math.min(Math.max(u, 0), 1) * 5;
-  const x = 1 - Math.abs((h % 2) - 1);
-  let r = 0, g = 0, b = 0;
-  switch (Math.min(Math.floor(h), 4)) {
-    case 0: r = 1; g = x; break;
-    case 1: r = x; g = 1; break;
-    case 2: g = 1; b = x; break;
-    case 3: g = x; b = 1; break;
-    default: r = x; b = 1;
-  }
-  out[o] = r; out[o + 1] = g; out[o + 2] = b;
-}
-
-function colorize(values, lo, hi, map) {
-  const n = values.length;
-  const out = new Float32Array(3 * n);
-  let a = lo, d = hi - lo;
-  if (map === 'diverging' && lo < 0 && hi > 0) { const m = Math.max(-lo, hi); a = -m; d = 2 * m; }
-  if (!(d > 0)) d = 1;
-  const stops = STOP_RGB[map];
-  for (let i = 0; i < n; i++) {
-    const u = (values[i] - a) / d;
-    if (!stops) { hue(u, out, 3 * i); continue; }
-    const s = Math.min(Math.max(u, 0), 1) * (stops.length - 1);
-    const j = Math.min(Math.floor(s), stops.length - 2), f = s - j;
-    const c0 = stops[j], c1 = stops[j + 1];
-    out[3 * i] = c0[0] + f * (c1[0] - c0[0]);
-    out[3 * i + 1] = c0[1] + f * (c1[1] - c0[1]);
-    out[3 * i + 2] = c0[2] + f * (c1[2] - c0[2]);
-  }
-  return out;
-}
-
 // ---------- parameters ----------
-function tValue() { return Math.pow(10, parseFloat($('t').value)); }
+// t: the slider (log scale), or a value typed in the box beside it (any positive number).
+let tTyped = null;
+function tValue() { return tTyped ?? Math.pow(10, parseFloat($('t').value)); }
+function kWanted() { return parseInt($('k').value, 10); }
+// k for this mesh: the request, at most the mesh's vertex count (never carried over).
+function kFor(n) { const k = kWanted(); return Number.isFinite(k) && k > n ? n : k; }
 
 function params() {
   const src = $('source').value.trim();
   return {
     experiment: $('experiment').value,
     laplacian: $('laplacian').value,
-    k: parseInt($('k').value, 10),
+    k: kFor(app.n),
     t: tValue(),
     a: parseFloat($('a').value),
     filter: $('filter').value,
     custom: $('custom').value,
     custom_kind: $('custom-kind').value,
     source: src === '' ? null : parseInt(src, 10), // null: the library's default (largest x)
-    constraints: $('constraints').value,
+    preset: $('preset').value,
+    constraints: app.constraints ? app.constraints.map((c) => ({ ...c })) : null,
     levels: parseInt($('levels').value, 10),
     component: parseInt($('component').value, 10),
     persistence: parseFloat($('persistence').value),
@@ -156,24 +296,14 @@ function filterText(p) {
   }
 }
 
-// Harmonic constraints: a preset count (2, 4, 6) or "vertex=value,..." pairs.
-function constraintsOf(text) {
-  const t = text.trim();
-  if (/^[246]$/.test(t)) return parseInt(t, 10);
-  return t.split(',').map((item) => {
-    const m = item.trim().match(/^(\d+)\s*=\s*(\S+)$/);
-    if (!m || !Number.isFinite(Number(m[2]))) throw new Error(`constraints: '${item.trim()}' should be vertex=value (or use 2, 4 or 6)`);
-    return { vertex: parseInt(m[1], 10), value: Number(m[2]) };
-  });
-}
-
 // The body of a field request: the library's FieldRequest (serde form, tagged by kind)
-// plus the analysis keys and the number of level sets.
-function fieldRequest(p) {
+// plus the analysis keys and the number of level sets the server draws (none for the
+// page, which draws them in its shader; the downloads ask for them).
+function fieldRequest(p, levels = 0) {
   const withSource = (key, r) => (p.source === null ? r : { ...r, [key]: p.source });
   let r;
   switch (p.experiment) {
-    case 'harmonic': r = { kind: 'harmonic', constraints: constraintsOf(p.constraints) }; break;
+    case 'harmonic': r = { kind: 'harmonic', constraints: p.constraints ?? parseInt(p.preset, 10) }; break;
     case 'heat': r = withSource('anchor', { kind: 'heat', t: p.t, k: p.k }); break;
     case 'diffusion': r = withSource('source', { kind: 'distance', distance: `wfem-diffusion:t=${p.t}`, k: p.k }); break;
     case 'distance': r = withSource('source', { kind: 'distance', distance: filterText(p), k: p.k }); break;
@@ -182,7 +312,17 @@ function fieldRequest(p) {
     case 'embedding': r = { kind: 'embedding', filter: filterText(p), component: p.component, k: p.k }; break;
     default: r = { kind: 'eigenfunction', index: p.component, k: p.k };
   }
-  return { ...r, laplacian: p.laplacian, normalize: true, levels: p.levels };
+  return { ...r, laplacian: p.laplacian, normalize: true, levels };
+}
+
+// Why a harmonic request cannot be sent yet (null when it can).
+function harmonicMissing(p) {
+  if (p.experiment !== 'harmonic' || !p.constraints) return null;
+  const values = new Set(p.constraints.map((c) => c.value));
+  if (p.constraints.length < 2 || values.size < 2) {
+    return `${p.constraints.length} constraint${p.constraints.length === 1 ? '' : 's'}: click ${p.constraints.length ? 'another vertex' : 'two vertices'} on the surface (a harmonic map needs two different values), or pick a preset.`;
+  }
+  return null;
 }
 
 function refreshParamVisibility() {
@@ -196,12 +336,54 @@ function refreshParamVisibility() {
   show('p-component', p.experiment === 'embedding' || p.experiment === 'eigenfunction');
   show('p-persistence', p.experiment === 'segmentation');
   show('p-constraints', p.experiment === 'harmonic');
-  $('click-hint').textContent = p.experiment === 'harmonic'
-    ? 'click the surface to add a constraint (vertex = click value)'
-    : 'click the surface to set the source / anchor';
-  $('t-val').textContent = tValue().toPrecision(3);
+  show('p-source', HAS_SOURCE.has(p.experiment));
+  $('guidance').textContent = GUIDANCE[p.experiment] || '';
+  if (document.activeElement !== $('t-num')) $('t-num').value = String(Number(tValue().toPrecision(3)));
   $('a-val').textContent = $('a').value;
   $('levels-val').textContent = $('levels').value;
+  $('click-value').disabled = $('click-mode').value !== 'fixed';
+  renderConstraintList();
+}
+
+// ---------- harmonic constraints ----------
+function shownConstraints() {
+  if (app.constraints) return app.constraints;
+  const h = app.field?.header;
+  return h && h.kind === 'harmonic' ? h.constraints : [];
+}
+function renderConstraintList() {
+  const ol = $('constraint-list');
+  ol.innerHTML = '';
+  const list = shownConstraints();
+  list.forEach((c, i) => {
+    const li = document.createElement('li');
+    li.textContent = `vertex ${c.vertex} = ${c.value}`;
+    const b = document.createElement('button');
+    b.textContent = '×'; b.title = 'remove this constraint';
+    b.dataset.index = String(i);
+    b.addEventListener('click', () => {
+      app.constraints = shownConstraints().map((x) => ({ vertex: x.vertex, value: x.value }));
+      app.constraints.splice(i, 1);
+      $('preset').value = 'clicks';
+      onInput({ target: { id: 'constraint-list' } });
+    });
+    li.appendChild(b);
+    ol.appendChild(li);
+  });
+  const why = harmonicMissing(params());
+  if (why) {
+    const li = document.createElement('li');
+    li.className = 'hint'; li.textContent = why;
+    ol.appendChild(li);
+  }
+}
+function addConstraint(v) {
+  const cur = shownConstraints().map((x) => ({ vertex: x.vertex, value: x.value }));
+  const value = $('click-mode').value === 'fixed' ? Number($('click-value').value) : (cur.length % 2 === 0 ? 0 : 1);
+  const at = cur.findIndex((c) => c.vertex === v);
+  if (at >= 0) cur[at].value = value; else cur.push({ vertex: v, value });
+  app.constraints = cur;
+  $('preset').value = 'clicks';
 }
 
 // ---------- mesh ----------
@@ -217,14 +399,25 @@ function describeInfo(r) {
   return lines.join('\n');
 }
 
-async function setMesh(reply) {
+async function setMesh(reply, fileName = null) {
   app.meshId = reply.mesh_id; app.n = reply.n; app.m = reply.m; app.info = reply.info;
   app.basisKey = null;
+  app.field = null;
+  app.framed = null;
+  app.constraints = null;
+  if ($('preset').value === 'clicks') $('preset').value = '2';
   $('info').textContent = describeInfo(reply);
-  const shapeName = String(reply.source).split(':')[0];
-  if ([...$('shape-select').options].some((o) => o.value === shapeName)) $('shape-select').value = shapeName;
-  $('k').max = String(reply.n);
-  if (parseInt($('k').value, 10) > reply.n) $('k').value = String(Math.min(reply.n, 100));
+  const sel = $('shape-select');
+  sel.querySelectorAll('option.file').forEach((o) => o.remove());
+  if (fileName) {
+    const o = document.createElement('option');
+    o.className = 'file'; o.value = ''; o.textContent = `file: ${fileName}`;
+    sel.prepend(o);
+    sel.value = '';
+  } else {
+    const shapeName = String(reply.source).split(':')[0];
+    if ([...sel.options].some((o) => o.value === shapeName)) sel.value = shapeName;
+  }
   $('source').value = ''; // the library's default source on the new mesh
   const buf = await api('GET', `/api/mesh/${app.meshId}/geometry`, undefined, true);
   const dv = new DataView(buf);
@@ -233,45 +426,77 @@ async function setMesh(reply) {
   app.triangles = new Uint32Array(buf, 8 + 12 * n, 3 * m);
   buildMeshObject();
   window.__meshLoaded = (window.__meshLoaded || 0) + 1;
+  showK(null);
   await requestUpdate();
 }
 
 function buildMeshObject() {
-  for (const o of [meshObj, levelObj, critObj, markerObj]) if (o) { scene.remove(o); o.geometry.dispose(); }
-  levelObj = critObj = markerObj = null;
+  if (meshObj) { scene.remove(meshObj); meshObj.geometry.dispose(); }
+  clearMarkers();
   const g = new THREE.BufferGeometry();
   g.setAttribute('position', new THREE.BufferAttribute(app.positions, 3));
   g.setIndex(new THREE.BufferAttribute(app.triangles, 1));
-  g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(app.positions.length).fill(0.8), 3));
+  g.setAttribute('scalar', new THREE.BufferAttribute(new Float32Array(app.n), 1));
   g.computeVertexNormals();
   g.computeBoundingSphere();
-  const mat = new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1 });
-  meshObj = new THREE.Mesh(g, mat);
+  app.normals = g.getAttribute('normal').array;
+  fieldMaterial.uniforms.hasField.value = 0;
+  meshObj = new THREE.Mesh(g, fieldMaterial);
   scene.add(meshObj);
   const s = g.boundingSphere;
-  bboxDiag = 2 * s.radius;
-  controls.target.copy(s.center);
-  camera.position.copy(s.center).add(new THREE.Vector3(0.4, 0.5, 1).normalize().multiplyScalar(s.radius * 4.2));
-  camera.near = s.radius / 100; camera.far = s.radius * 100;
+  radius = s.radius; center.copy(s.center);
+  app.radius = radius;
+  aimCamera(new THREE.Vector3(0.4, 0.5, 1).normalize());
+}
+
+function aimCamera(dir) {
+  controls.target.copy(center);
+  camera.position.copy(center).addScaledVector(dir, radius * 3.4);
+  camera.near = radius / 100; camera.far = radius * 100;
   camera.updateProjectionMatrix();
   controls.update();
-  render();
+}
+
+// Once per mesh: turn the camera so that the source is in sight (not on the hidden side).
+function frameSource(v) {
+  if (app.framed === app.meshId || v === null || v === undefined) return;
+  app.framed = app.meshId;
+  const p = new THREE.Vector3(app.positions[3 * v], app.positions[3 * v + 1], app.positions[3 * v + 2]);
+  const nrm = new THREE.Vector3(app.normals[3 * v], app.normals[3 * v + 1], app.normals[3 * v + 2]);
+  const base = new THREE.Vector3(0.4, 0.5, 1).normalize();
+  const out = p.clone().sub(center).normalize();
+  const candidates = [base, base.clone().multiplyScalar(-1), base.clone().add(out).normalize(),
+    base.clone().add(nrm).normalize(), nrm.clone(), out.clone()];
+  const ray = new THREE.Raycaster();
+  for (const dir of candidates) {
+    if (!(dir.lengthSq() > 0.5)) continue;
+    aimCamera(dir);
+    camera.updateMatrixWorld();
+    const toP = p.clone().sub(camera.position);
+    const dist = toP.length();
+    ray.set(camera.position, toP.normalize());
+    const hit = ray.intersectObject(meshObj)[0];
+    if (hit && Math.abs(hit.distance - dist) < 0.02 * radius) return;
+  }
+  aimCamera(base);
 }
 
 async function loadShape(spec) {
-  showError(null);
-  try { await setMesh(await api('POST', '/api/mesh', { shape: spec })); } catch (e) { showError(e.message); }
+  clearErrors();
+  app.lastControl = 'shape-spec';
+  try { await setMesh(await api('POST', '/api/mesh', { shape: spec })); } catch (e) { showError('shape-spec', e.message); }
 }
 
 async function loadFile(file) {
-  showError(null);
+  clearErrors();
+  app.lastControl = 'file-input';
   try {
     const r = await fetchWith('/api/mesh', {
       method: 'POST', body: file,
       headers: { 'Content-Type': 'application/octet-stream', 'X-Filename': file.name.replace(/[^\x20-\x7e]/g, '_') },
     }, false);
-    await setMesh(r);
-  } catch (e) { showError(`${file.name}: ${e.message}`); }
+    await setMesh(r, file.name);
+  } catch (e) { showError('file-input', `${file.name}: ${e.message}`); }
 }
 
 // ---------- basis ----------
@@ -303,20 +528,33 @@ function setProgress(st) {
   $('basis-status').textContent = `${st.laplacian || ''} k=${st.k || ''}: ${st.state} ${st.message || ''}`;
 }
 
+function showK(header) {
+  const want = kWanted();
+  let text = `k requested ${want}`;
+  if (header && header.k !== null && header.k !== undefined) {
+    text = `k used ${header.k} (of ${header.basis_k} held)`;
+    if (header.k < want) text += `: this mesh has ${app.n} vertices, ${want} requested`;
+  } else if (header) {
+    text = 'k: no eigenbasis used';
+  } else if (app.n && want > app.n) {
+    text = `k ${app.n} on this mesh (${app.n} vertices; ${want} requested)`;
+  }
+  $('k-used').textContent = text;
+}
+
 // ---------- field ----------
 function parseField(buf) {
   const dv = new DataView(buf);
   const hl = dv.getUint32(0, true);
   const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buf, 4, hl)));
-  const n = header.n;
-  const values = new Float32Array(buf, 4 + hl, n);
-  const segs = new Float32Array(buf, 4 + hl + 4 * n, (buf.byteLength - 4 - hl - 4 * n) / 4);
-  return { header, values, segs };
+  const values = new Float32Array(buf, 4 + hl, header.n);
+  return { header, values };
 }
 
+// One request in flight; inputs during it coalesce into one more request with the latest
+// values.
 async function requestUpdate() {
   if (!app.meshId) return;
-  app.inputTime = app.inputTime || performance.now();
   if (app.inFlight) { app.pending = true; return; }
   app.inFlight = true;
   try {
@@ -334,7 +572,13 @@ async function updateOnce() {
   const p = params();
   const t0 = app.inputTime || performance.now();
   app.inputTime = 0;
-  showError(null);
+  const control = app.lastControl;
+  const waiting = harmonicMissing(p);
+  if (waiting) {
+    clearErrors();
+    renderConstraintList();
+    return;
+  }
   try {
     const body = fieldRequest(p);
     const needsBasis = body.kind !== 'harmonic';
@@ -348,61 +592,101 @@ async function updateOnce() {
       await ensureBasis(p);
       buf = await api('POST', `/api/mesh/${app.meshId}/field`, body, true);
     }
+    if (app.pending) return; // a newer input: draw that one instead
     const t1 = performance.now();
     app.field = parseField(buf);
     app.field.params = p;
+    app.field.body = body;
+    clearErrors();
     drawField();
-    await new Promise((r) => requestAnimationFrame(() => r()));
+    await nextFrame();
     const t2 = performance.now();
-    const timing = { total_ms: t2 - t0, fetch_ms: t1 - t0, draw_ms: t2 - t1, server_ms: app.field.header.timing_ms.total, experiment: p.experiment };
+    const h = app.field.header;
+    const timing = { total_ms: t2 - t0, fetch_ms: t1 - t0, draw_ms: t2 - t1, server_ms: h.timing_ms.total, experiment: p.experiment, control };
     window.__timings.push(timing);
-    window.__lastField = { values: Array.from(app.field.values), header: app.field.header, params: p, body, timing };
+    window.__lastField = { values: app.field.values, header: h, params: p, body, timing };
     window.__fieldCount = (window.__fieldCount || 0) + 1;
-    $('field-stats').textContent = `min ${fmt(app.field.header.min)}  max ${fmt(app.field.header.max)}  ·  ${timing.total_ms.toFixed(0)} ms (server ${timing.server_ms.toFixed(0)} ms)`;
+    $('field-stats').textContent = `input to picture ${timing.total_ms.toFixed(0)} ms (server ${timing.server_ms.toFixed(0)} ms)`;
   } catch (e) {
-    showError(e.message);
-    window.__errorCount = (window.__errorCount || 0) + 1;
+    let at = control;
+    if (/\bk\b must|eigenbasis of k|pairs/.test(e.message) && !/constraint/.test(e.message)) at = 'k';
+    if (/expression|custom/.test(e.message)) at = 'custom';
+    if (/constraint/.test(e.message)) at = 'constraint-list';
+    showError(at, e.message);
   }
 }
+window.__lastFieldPlain = () => {
+  const f = window.__lastField;
+  return f && { ...f, values: Array.from(f.values) };
+};
 
-function fmt(x) { return Math.abs(x) >= 1e4 || (Math.abs(x) < 1e-3 && x !== 0) ? x.toExponential(3) : x.toFixed(4); }
+function fmt(x) {
+  if (!Number.isFinite(x)) return String(x);
+  return Math.abs(x) >= 1e4 || (Math.abs(x) < 1e-3 && x !== 0) ? x.toExponential(2) : x.toPrecision(4);
+}
+
+function drawColorbar() {
+  const h = app.field?.header;
+  const c = $('colorbar-canvas');
+  const g = c.getContext('2d');
+  const data = lut($('colormap').value);
+  const img = g.createImageData(256, 1);
+  img.data.set(data);
+  for (let y = 0; y < c.height; y++) g.putImageData(img, 0, y);
+  if (!h) return;
+  const { lo, hi } = colourRange(h);
+  const quantity = QUANTITY[h.kind] || h.kind;
+  $('colorbar-title').textContent = h.categorical ? `${quantity} (${h.max + 1} segments)` : quantity;
+  const ticks = hi > lo ? [lo, (lo + hi) / 2, hi] : [lo];
+  $('colorbar-ticks').innerHTML = ticks.map((v) => `<span>${fmt(v)}</span>`).join('');
+  const levels = $('show-levels').checked && !h.categorical ? parseInt($('levels').value, 10) : 0;
+  const flat = h.critical?.flat ? ' · constant field' : '';
+  $('colorbar-units').textContent = `${h.normalized ? 'shape scaled to unit area' : 'original size'} · ${h.laplacian}` +
+    `${h.k ? `, k = ${h.k}` : ''}${levels ? ` · ${levels} level sets, spacing ${fmt((h.max - h.min) / levels)}` : ''}${flat}`;
+}
+
+function colourRange(h) {
+  let lo = h.min, hi = h.max;
+  if ($('colormap').value === 'diverging' && lo < 0 && hi > 0) { const m = Math.max(-lo, hi); lo = -m; hi = m; }
+  return { lo, hi };
+}
+
+// Colours, levels, lines: uniforms only.
+function applyView() {
+  const h = app.field?.header;
+  const u = fieldMaterial.uniforms;
+  if (h) {
+    const { lo, hi } = colourRange(h);
+    u.lo.value = lo; u.hi.value = hi;
+  }
+  u.nLevels.value = parseInt($('levels').value, 10);
+  u.showLevels.value = $('show-levels').checked && !(h && h.categorical) ? 1 : 0;
+  drawColorbar();
+}
+
+function setColormap(name) {
+  cmapTexture.image.data.set(lut(name));
+  cmapTexture.needsUpdate = true;
+}
 
 function drawField() {
   if (!app.field || !meshObj) return;
-  const { header, values, segs } = app.field;
-  meshObj.geometry.setAttribute('color', new THREE.BufferAttribute(colorize(values, header.min, header.max, $('colormap').value), 3));
-  for (const o of [levelObj, critObj, markerObj]) if (o) { scene.remove(o); o.geometry.dispose(); }
-  levelObj = critObj = markerObj = null;
-  if ($('show-levels').checked && segs.length) {
-    const g = new THREE.BufferGeometry();
-    g.setAttribute('position', new THREE.BufferAttribute(segs, 3));
-    levelObj = new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color: 0x111111 }));
-    scene.add(levelObj);
-  }
-  const cp = header.critical;
-  if ($('show-critical').checked && cp) {
-    const pts = [], cols = [];
-    const add = (v, c) => { pts.push(app.positions[3 * v], app.positions[3 * v + 1], app.positions[3 * v + 2]); cols.push(...c); };
-    cp.points.minima.forEach((v) => add(v, [0.1, 0.2, 1]));
-    cp.points.maxima.forEach((v) => add(v, [1, 0.1, 0.1]));
-    cp.points.saddles.forEach(([v]) => add(v, [0, 0.7, 0.1]));
-    if (pts.length) {
-      const g = new THREE.BufferGeometry();
-      g.setAttribute('position', new THREE.Float32BufferAttribute(pts, 3));
-      g.setAttribute('color', new THREE.Float32BufferAttribute(cols, 3));
-      critObj = new THREE.Points(g, new THREE.PointsMaterial({ size: 9, sizeAttenuation: false, vertexColors: true, depthTest: true }));
-      scene.add(critObj);
-    }
-  }
-  if (header.source !== null && header.source !== undefined) {
-    const s = header.source;
-    const g = new THREE.BufferGeometry();
-    g.setAttribute('position', new THREE.Float32BufferAttribute([app.positions[3 * s], app.positions[3 * s + 1], app.positions[3 * s + 2]], 3));
-    markerObj = new THREE.Points(g, new THREE.PointsMaterial({ size: 14, sizeAttenuation: false, color: 0x000000 }));
-    scene.add(markerObj);
-  }
+  const { header, values } = app.field;
+  const attr = meshObj.geometry.getAttribute('scalar');
+  attr.array.set(values);
+  attr.needsUpdate = true;
+  fieldMaterial.uniforms.hasField.value = 1;
+  frameSource(header.source);
+  applyView();
+  drawMarkers();
+  showK(header);
+  renderConstraintList();
   const el = $('critical');
-  if (cp) {
+  const cp = header.critical;
+  if (cp && cp.flat) {
+    el.textContent = `constant field: the values agree within ${cp.flat_tolerance} of the largest (one plateau): no critical points`;
+    el.className = 'info small';
+  } else if (cp) {
     const what = cp.doubled ? '2(m − s + M) inside + (m − s + M) on the boundary' : 'minima − saddles + maxima';
     el.textContent = `minima ${cp.minima}  maxima ${cp.maxima}  saddles ${cp.points.saddles.length} (with multiplicity ${cp.saddles})\n` +
       `${cp.holds ? '✓' : '✗'} ${what} = ${cp.lhs}, ${cp.doubled ? '2χ' : 'χ'} = ${cp.rhs}`;
@@ -411,7 +695,25 @@ function drawField() {
     el.textContent = header.categorical ? `${header.max + 1} segments` : '';
     el.className = 'info small';
   }
+  const tr = header.truncation;
+  const te = $('truncation');
+  te.textContent = tr ? tr.message : '';
+  te.className = tr && tr.warning ? 'small warn' : 'small';
   render();
+}
+
+function drawMarkers() {
+  clearMarkers();
+  const h = app.field?.header;
+  if (!h) return;
+  const cp = h.critical;
+  if ($('show-critical').checked && cp) {
+    addMarkers('minimum', cp.points.minima);
+    addMarkers('maximum', cp.points.maxima);
+    addMarkers('saddle', cp.points.saddles.map(([v]) => v));
+  }
+  addMarkers('constraint', (h.constraints || []).map((c) => c.vertex));
+  if (h.source !== null && h.source !== undefined) addMarkers('source', [h.source]);
 }
 
 // ---------- picking ----------
@@ -423,7 +725,7 @@ renderer.domElement.addEventListener('pointerup', (e) => {
   pickAt(e.clientX, e.clientY);
 });
 
-function pickAt(clientX, clientY) {
+function vertexAt(clientX, clientY) {
   if (!meshObj) return null;
   const r = renderer.domElement.getBoundingClientRect();
   const ndc = new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
@@ -436,16 +738,23 @@ function pickAt(clientX, clientY) {
     const d = hit.point.distanceToSquared(new THREE.Vector3(app.positions[3 * v], app.positions[3 * v + 1], app.positions[3 * v + 2]));
     if (d < bd) { bd = d; best = v; }
   }
+  return best;
+}
+window.__vertexAt = vertexAt;
+
+function pickAt(clientX, clientY) {
+  const v = vertexAt(clientX, clientY);
+  if (v === null) return null;
   app.inputTime = performance.now();
   if ($('experiment').value === 'harmonic') {
-    const cur = $('constraints').value.trim();
-    const item = `${best}=${$('click-value').value}`;
-    $('constraints').value = /^[246]$/.test(cur) || cur === '' ? item : `${cur},${item}`;
+    addConstraint(v);
+    app.lastControl = 'constraint-list';
   } else {
-    $('source').value = String(best);
+    $('source').value = String(v);
+    app.lastControl = 'source';
   }
   requestUpdate();
-  return best;
+  return v;
 }
 window.__pickAt = pickAt;
 window.__screenOf = (v) => {
@@ -456,7 +765,7 @@ window.__screenOf = (v) => {
 
 // ---------- downloads ----------
 function downloadUrl(format) {
-  const body = { ...fieldRequest(params()), colormap: $('colormap').value };
+  const body = { ...fieldRequest(params(), parseInt($('levels').value, 10)), colormap: $('colormap').value };
   const q = new URLSearchParams({ format, body: JSON.stringify(body) });
   return `/api/mesh/${app.meshId}/download?${q}`;
 }
@@ -474,25 +783,67 @@ document.querySelectorAll('#downloads a').forEach((a) => {
       link.href = URL.createObjectURL(blob); link.download = name;
       document.body.appendChild(link); link.click(); link.remove();
       setTimeout(() => URL.revokeObjectURL(link.href), 10000);
-    } catch (err) { showError(`download ${a.dataset.format}: ${err.message}`); }
+    } catch (err) { showError('downloads', `download ${a.dataset.format}: ${err.message}`); }
   });
 });
 window.__downloadUrl = downloadUrl;
 
 // ---------- wiring ----------
-function onInput() { app.inputTime = performance.now(); refreshParamVisibility(); requestUpdate(); }
-for (const id of ['experiment', 'laplacian', 'filter', 'custom-kind', 'k', 'source', 'constraints', 'component', 'persistence', 'custom']) $(id).addEventListener('change', onInput);
-for (const id of ['t', 'a', 'levels']) $(id).addEventListener('input', onInput);
-$('colormap').addEventListener('change', () => { drawField(); });
-$('show-levels').addEventListener('change', () => drawField());
-$('show-critical').addEventListener('change', () => drawField());
+function onInput(e) {
+  app.inputTime = performance.now();
+  app.lastControl = e?.target?.id || null;
+  refreshParamVisibility();
+  requestUpdate();
+}
+// View-only changes: no request, recoloured on the GPU; timed from the input to the frame.
+async function onViewInput(e) {
+  const t0 = performance.now();
+  if (e.target.id === 'colormap') setColormap($('colormap').value);
+  $('levels-val').textContent = $('levels').value;
+  applyView();
+  if (e.target.id === 'show-critical') drawMarkers();
+  render();
+  await nextFrame();
+  window.__timings.push({ total_ms: performance.now() - t0, server_ms: 0, control: e.target.id });
+  window.__viewCount = (window.__viewCount || 0) + 1;
+}
+for (const id of ['experiment', 'laplacian', 'filter', 'custom-kind', 'k', 'source', 'component', 'persistence', 'custom']) $(id).addEventListener('change', onInput);
+for (const id of ['t', 'a']) $(id).addEventListener('input', (e) => { if (e.target.id === 't') tTyped = null; onInput(e); });
+$('t-num').addEventListener('change', (e) => {
+  const v = Number($('t-num').value);
+  if (!(v > 0) || !Number.isFinite(v)) { showError('t-num', `t must be a positive number; got '${$('t-num').value}'`); return; }
+  tTyped = v;
+  $('t').value = String(Math.min(Math.max(Math.log10(v), parseFloat($('t').min)), parseFloat($('t').max)));
+  onInput(e);
+});
+$('preset').addEventListener('change', (e) => {
+  if ($('preset').value !== 'clicks') app.constraints = null;
+  else if (!app.constraints) app.constraints = shownConstraints().map((c) => ({ vertex: c.vertex, value: c.value }));
+  onInput(e);
+});
+$('constraints-clear').addEventListener('click', (e) => {
+  app.constraints = [];
+  $('preset').value = 'clicks';
+  onInput(e);
+});
+$('click-mode').addEventListener('change', () => refreshParamVisibility());
+$('levels').addEventListener('input', onViewInput);
+$('colormap').addEventListener('change', onViewInput);
+$('show-levels').addEventListener('change', onViewInput);
+$('show-critical').addEventListener('change', onViewInput);
 $('shape-load').addEventListener('click', () => loadShape($('shape-spec').value));
-$('shape-select').addEventListener('change', () => { $('shape-spec').value = $('shape-select').value; loadShape($('shape-spec').value); });
+$('shape-select').addEventListener('change', () => {
+  if (!$('shape-select').value) return;
+  $('shape-spec').value = $('shape-select').value;
+  loadShape($('shape-spec').value);
+});
 $('file-input').addEventListener('change', (e) => { const f = e.target.files[0]; if (f) loadFile(f); });
 
 async function init() {
+  buildLegend();
   resize();
   refreshParamVisibility();
+  drawColorbar();
   try {
     const s = await api('GET', '/api/shapes');
     for (const sh of s.shapes) {
@@ -501,7 +852,7 @@ async function init() {
       $('shape-select').appendChild(o);
     }
     $('shape-select').value = $('shape-spec').value.split(':')[0];
-  } catch (e) { showError(e.message); }
+  } catch (e) { showError('shape-spec', e.message); }
   window.__ready = true;
   await loadShape($('shape-spec').value);
 }

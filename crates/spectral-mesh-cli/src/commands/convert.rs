@@ -35,7 +35,7 @@ pub fn run(args: Args) -> Result<()> {
     check_writable(&args.output, args.force)?;
     write_mesh(
         &args.output,
-        &input.mesh,
+        input.mesh("convert")?,
         &WriteOptions {
             format: args.format,
             binary: args.binary,
@@ -46,8 +46,8 @@ pub fn run(args: Args) -> Result<()> {
         "{} -> {}: {} vertices, {} triangles{}",
         input.label(),
         args.output.display(),
-        input.mesh.n_vertices(),
-        input.mesh.n_triangles(),
+        input.n(),
+        input.mesh("convert")?.n_triangles(),
         if input.info.polygons_triangulated > 0 {
             format!(
                 " ({} polygons triangulated)",

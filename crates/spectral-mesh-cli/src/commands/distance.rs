@@ -35,7 +35,8 @@ or the filter is refused.";
 /// Arguments of `distance`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (.xyz/.pts/.txt/.csv, or a PLY without faces) or
+    /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// Source vertex (default: the vertex of largest x, ties to the lowest index).
     #[arg(long)]
@@ -68,7 +69,7 @@ pub struct Args {
 /// Computes the distances and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
     let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
-    let n = input.mesh.n_vertices();
+    let n = input.n();
     let spec: DistanceSpec = args
         .distance
         .parse()
@@ -106,7 +107,7 @@ pub fn run(args: Args) -> Result<()> {
         k: args.basis.k,
     };
     let info = input.info;
-    let an = args.basis.analysis(input.mesh, !args.no_normalize)?;
+    let an = args.basis.analysis(input.shape, !args.no_normalize)?;
     let (field, seconds) = engine::field(&an, &request, args.basis.cache.as_deref())
         .map_err(|e| anyhow::anyhow!("--distance {}: {e:#}", args.distance))?;
     let source = field.marks[0];
@@ -125,7 +126,7 @@ pub fn run(args: Args) -> Result<()> {
     );
     println!("max distance {} at vertex {}", stats.max, stats.argmax);
     let figure = args.figure.options();
-    write_field(an.mesh(), &field, &args.out, figure)?;
+    write_field(&an, &field, &args.out, figure)?;
     if let (Some(p), Some(f)) = (&args.all_pairs, &filter) {
         let basis = engine::basis(&an, args.basis.k, None)?.basis;
         let m = all_pairs(basis.view(args.basis.k), f)?;

@@ -5,11 +5,11 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use spectral_mesh::Analysis;
 use spectral_mesh::experiments::paper::BasisReport;
 use spectral_mesh::spectral::eigenbasis::EigenParams;
 use spectral_mesh::spectral::filters::ZERO_EIGENVALUE_EPS;
 use spectral_mesh::spectral::store::{BasisMeta, save_npz};
+use spectral_mesh::{Analysis, AnalysisOptions};
 use spectral_mesh_render::figure::field_text;
 
 use crate::engine::{self, BasisArgs};
@@ -19,7 +19,8 @@ use crate::output::{check_writable, extension, write};
 /// Arguments of `eigs`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (.xyz/.pts/.txt/.csv, PLY without faces) or built-in
+    /// shape (default: the 3-torus).
     pub mesh: Option<String>,
     #[command(flatten)]
     pub basis: BasisArgs,
@@ -69,10 +70,11 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     let label = input.label();
-    let n = input.mesh.n_vertices();
+    let n = input.n();
     args.basis.check_k(n)?;
     // The options without Dirichlet vertices first: the boundary comes from the topology.
-    let mut an = Analysis::new(input.mesh, args.basis.options(false, None)?);
+    let options = args.basis.options(&input.shape, false, None)?;
+    let mut an = Analysis::from_input(input.shape, options)?;
     let dirichlet = if args.dirichlet_boundary {
         let b = an.topology().boundary_vertices();
         if b.is_empty() {
@@ -86,10 +88,14 @@ pub fn run(args: Args) -> Result<()> {
                 b.len()
             );
         }
-        an = Analysis::new(
-            an.mesh_arc().clone(),
-            args.basis.options(false, Some(b.clone()))?,
-        );
+        let options = AnalysisOptions {
+            eigen: EigenParams {
+                dirichlet: Some(b.clone()),
+                ..an.options().eigen.clone()
+            },
+            ..an.options().clone()
+        };
+        an = Analysis::with_operators(an.mesh_arc().clone(), an.operators().clone(), options);
         Some(b)
     } else {
         None
@@ -106,8 +112,18 @@ pub fn run(args: Args) -> Result<()> {
     );
     let mesh = an.mesh();
     println!(
-        "{label}: n = {n}, m = {}, {} discretization{}",
+        "{label}: {}n = {n}, m = {}{}, {} discretization{}",
+        if an.is_point_cloud() {
+            "point cloud, "
+        } else {
+            ""
+        },
         mesh.n_triangles(),
+        if an.is_point_cloud() {
+            " (triangle union)"
+        } else {
+            ""
+        },
         b.laplacian,
         if r.dirichlet_vertices > 0 {
             format!(", Dirichlet on {} boundary vertices", r.dirichlet_vertices)

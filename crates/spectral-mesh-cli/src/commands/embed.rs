@@ -16,7 +16,8 @@ use crate::output::{check_outputs, check_writable, write};
 /// Arguments of `embed`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (.xyz/.pts/.txt/.csv, or a PLY without faces) or
+    /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// The filter whose distance the embedding realizes (see below).
     #[arg(long, default_value_t = Filter::Biharmonic.to_string(), long_help = FILTER_HELP)]
@@ -59,10 +60,10 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(c) = &args.coords {
         check_writable(c, args.force)?;
     }
-    args.basis.check_k(input.mesh.n_vertices())?;
+    args.basis.check_k(input.n())?;
     let label = input.label();
     let k = args.basis.k;
-    let an = args.basis.analysis(input.mesh, !args.no_normalize)?;
+    let an = args.basis.analysis(input.shape, !args.no_normalize)?;
     let engine::Solved { basis, seconds, .. } = engine::basis(&an, k, args.basis.cache.as_deref())?;
     let view = basis.view(k);
     let mesh = an.mesh();

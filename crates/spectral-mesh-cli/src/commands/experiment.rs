@@ -17,9 +17,9 @@ use spectral_mesh::fields::harmonic::{Constraint, parse_constraint_arg, read_con
 use spectral_mesh::linalg::EigenProgress;
 use spectral_mesh::spectral::eigenbasis::EigenParams;
 use spectral_mesh::{CancelToken, Laplacian};
-use spectral_mesh_render::figure::{Figure, FigureOptions};
+use spectral_mesh_render::figure::{Figure, FigureOptions, POINT_RADIUS_FACTOR};
 
-use crate::engine::check_vertex;
+use crate::engine::{LAPLACIAN_HELP, LAPLACIAN_LONG_HELP, check_vertex, resolve_laplacian};
 use crate::figure::{FigureArgs, write_field_files};
 use crate::input::{self, Input};
 use crate::output::{check_experiment_file, prepare_outputs, save_experiment, write_json};
@@ -92,7 +92,8 @@ impl From<&Common> for Outputs {
 /// Arguments of `experiment harmonic`.
 #[derive(Debug, clap::Args)]
 pub struct HarmonicArgs {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (.xyz/.pts/.txt/.csv, or a PLY without faces) or
+    /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// Numbers of default constraints (min/max x, then y, then z), one map each.
     #[arg(long, value_delimiter = ',', default_values_t = vec![2usize, 4, 6])]
@@ -107,8 +108,8 @@ pub struct HarmonicArgs {
     #[arg(long, default_value_t = 1)]
     pub order: u32,
     /// Discretization (matters for the bi-harmonic map's mass).
-    #[arg(long, default_value_t = AnalysisOptions::default().laplacian)]
-    pub laplacian: Laplacian,
+    #[arg(long, help = LAPLACIAN_HELP, long_help = LAPLACIAN_LONG_HELP)]
+    pub laplacian: Option<Laplacian>,
     #[command(flatten)]
     pub common: Common,
 }
@@ -116,11 +117,12 @@ pub struct HarmonicArgs {
 /// Arguments of `experiment diffusion-basis`.
 #[derive(Debug, clap::Args)]
 pub struct DiffusionArgs {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (.xyz/.pts/.txt/.csv, or a PLY without faces) or
+    /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// Discretization: cot (K = X D_t X^T), voronoi-cot (X D_t X^T D), fem (X D_t X^T B).
-    #[arg(long, default_value_t = AnalysisOptions::default().laplacian)]
-    pub laplacian: Laplacian,
+    #[arg(long, help = LAPLACIAN_HELP, long_help = LAPLACIAN_LONG_HELP)]
+    pub laplacian: Option<Laplacian>,
     /// Diffusion time (for the shape scaled to unit area unless --no-normalize).
     #[arg(long, default_value_t = DEFAULT_HEAT_T)]
     pub t: f64,
@@ -140,15 +142,16 @@ pub struct DiffusionArgs {
 /// Arguments of `experiment spectral-distance`.
 #[derive(Debug, clap::Args)]
 pub struct DistanceArgs {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (.xyz/.pts/.txt/.csv, or a PLY without faces) or
+    /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// The filter: biharmonic, commute, diffusion:t=0.5, mix:a=0.5,t=0.5, poly:p=3,
     /// custom-w:EXPR;name=value, custom-phi:EXPR;..., or wfem-diffusion:t=0.5 (eq. 15).
     #[arg(long, default_value_t = DistanceSpec::default().to_string())]
     pub distance: String,
     /// Discretization.
-    #[arg(long, default_value_t = AnalysisOptions::default().laplacian)]
-    pub laplacian: Laplacian,
+    #[arg(long, help = LAPLACIAN_HELP, long_help = LAPLACIAN_LONG_HELP)]
+    pub laplacian: Option<Laplacian>,
     /// Number of eigenpairs.
     #[arg(long, short = 'k', default_value_t = DEFAULT_K)]
     pub k: usize,
@@ -165,7 +168,8 @@ pub struct DistanceArgs {
 /// Arguments of `experiment paper`.
 #[derive(Debug, clap::Args)]
 pub struct PaperArgs {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (.xyz/.pts/.txt/.csv, or a PLY without faces) or
+    /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     #[command(flatten)]
     pub common: Common,
@@ -246,15 +250,16 @@ pub struct FieldSetup {
     pub request: FieldRequest,
     /// Pairs to compute when more than the request's `k` (replays).
     pub basis_k: Option<usize>,
-    /// Discretization.
-    pub laplacian: Laplacian,
+    /// Discretization (`None`: fem for a mesh, robust for a point cloud).
+    pub laplacian: Option<Laplacian>,
     /// Shape scaled to unit area.
     pub normalize: bool,
 }
 
 /// Runs a field experiment on `input` and writes `STEM.{wrl,png,txt}` and `summary.json`.
 pub fn run_field(input: Input, setup: &FieldSetup, o: &Outputs) -> Result<()> {
-    let n = input.mesh.n_vertices();
+    let n = input.n();
+    let laplacian = resolve_laplacian(setup.laplacian, &input.shape)?;
     let request = &setup.request;
     request
         .validate()
@@ -282,15 +287,15 @@ pub fn run_field(input: Input, setup: &FieldSetup, o: &Outputs) -> Result<()> {
     ];
     let paths = prepare_outputs(&o.out, &all, o.force)?;
     check_experiment_file(o.save_experiment.as_ref(), o.force)?;
-    let Input { mesh, info } = input;
-    let an = Analysis::new(
-        mesh,
+    let Input { shape, info } = input;
+    let an = Analysis::from_input(
+        shape,
         AnalysisOptions {
-            laplacian: setup.laplacian,
+            laplacian,
             normalize: setup.normalize,
             eigen: EigenParams::default(),
         },
-    );
+    )?;
     let mesh_summary = info.summary(an.mesh(), an.topology());
     let bar = EigenBar::new(setup.basis_k.or(request.eigenpairs()).unwrap_or(0));
     let t0 = std::time::Instant::now();
@@ -310,13 +315,13 @@ pub fn run_field(input: Input, setup: &FieldSetup, o: &Outputs) -> Result<()> {
         &CancelToken::new(),
     )?;
     bar.finish();
-    write_field_files(an.mesh(), &run.field, &paths[..3], o.figure)?;
+    write_field_files(&an, &run.field, &paths[..3], o.figure)?;
     write_json(&paths[3], &run.summary)?;
     let basis_note = match &run.summary.basis {
         Some(b) => format!(
             ", k = {} ({}): eigenpairs in {solved:.2} s, max residual {:.1e}",
             b.k,
-            setup.laplacian,
+            laplacian,
             b.max_relative_residual.unwrap_or(f64::NAN)
         ),
         None => String::new(),
@@ -394,9 +399,10 @@ pub fn run_harmonic(
     input: Input,
     constraints: &HarmonicConstraints,
     order: u32,
-    laplacian: Laplacian,
+    laplacian: Option<Laplacian>,
     o: &Outputs,
 ) -> Result<()> {
+    let laplacian = resolve_laplacian(laplacian, &input.shape)?;
     if order != 1 && order != 2 {
         bail!("--order {order}: must be 1 (harmonic) or 2 (bi-harmonic)");
     }
@@ -409,15 +415,17 @@ pub fn run_harmonic(
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
     let paths = prepare_outputs(&o.out, &name_refs, o.force)?;
     check_experiment_file(o.save_experiment.as_ref(), o.force)?;
-    let Input { mesh, info } = input;
-    // The analysis holds the mesh, its topology and the hash; the maps need no basis.
-    let an = Analysis::new(
-        mesh,
+    let Input { shape, info } = input;
+    // The analysis holds the mesh (a point cloud's triangle union), its topology and the
+    // hash; the maps need no basis. On a point cloud the maps use the robust Laplacian of
+    // that union (the point-cloud Laplacian itself where its consensus set has no holes).
+    let an = Analysis::from_input(
+        shape,
         AnalysisOptions {
             laplacian,
             ..AnalysisOptions::default()
         },
-    );
+    )?;
     let run = paper::run_harmonic(
         an.mesh(),
         info.summary(an.mesh(), an.topology()),
@@ -436,6 +444,7 @@ pub fn run_harmonic(
                 ..o.figure
             },
         )?;
+        fig.point_radius = an.point_spacing().map(|h| POINT_RADIUS_FACTOR * h);
         if o.figure.critical_points {
             fig.critical = Some(map.critical.points.clone());
         }
@@ -483,7 +492,7 @@ fn run_paper(a: PaperArgs) -> Result<()> {
         ..common.clone()
     };
     let load = || input::load_repaired(a.mesh.as_deref(), common.repair);
-    let laplacian = AnalysisOptions::default().laplacian;
+    let laplacian = None;
     run_harmonic(
         load()?,
         &HarmonicConstraints::Counts(vec![2, 4, 6]),

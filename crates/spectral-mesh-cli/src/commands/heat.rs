@@ -23,7 +23,8 @@ fn kernel_parser() -> impl clap::builder::TypedValueParser<Value = Kernel> {
 /// Arguments of `heat`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (.xyz/.pts/.txt/.csv, or a PLY without faces) or
+    /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// Anchor vertex of the basis function K_t e_V (default: the vertex of largest x).
     #[arg(long)]
@@ -81,7 +82,7 @@ fn parse_indicator(text: &str) -> Result<(usize, f64)> {
 /// Computes the basis function or the diffusion and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
     let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
-    let n = input.mesh.n_vertices();
+    let n = input.n();
     // What is diffused: None = e_anchor.
     let (signal, what) = match (&args.signal, &args.indicator) {
         (Some(p), _) => (
@@ -126,7 +127,7 @@ pub fn run(args: Args) -> Result<()> {
     check_experiment_file(args.save_experiment.as_ref(), args.force)?;
     args.basis.warn_unrecorded(args.save_experiment.as_ref());
     let info = input.info;
-    let an = args.basis.analysis(input.mesh, !args.no_normalize)?;
+    let an = args.basis.analysis(input.shape, !args.no_normalize)?;
     let (field, seconds) = engine::field(&an, &request, args.basis.cache.as_deref())?;
     let f = &field.values;
     // The B-mass of what was diffused, and of the result.
@@ -172,7 +173,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     );
     let figure = args.figure.options();
-    write_field(an.mesh(), &field, &args.out, figure)?;
+    write_field(&an, &field, &args.out, figure)?;
     if let Some(file) = &args.save_experiment {
         engine::save_field_experiment(
             file,

@@ -13,7 +13,8 @@ use crate::input;
 /// Arguments of `info`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (.xyz/.pts/.txt/.csv, or a PLY without faces) or
+    /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// Repair the mesh (unreferenced vertices, duplicate and zero-area faces,
     /// non-manifold vertices, orientation) and report the result.
@@ -127,8 +128,9 @@ pub fn run(args: Args) -> Result<()> {
         return run_points(spec, &p, args.json);
     }
     let input = input::load_repaired(args.mesh.as_deref(), args.repair)?;
-    let r = report(&input.mesh);
-    let (suitable, why) = advice(&input.mesh, &r);
+    let mesh = input.mesh("info")?;
+    let r = report(mesh);
+    let (suitable, why) = advice(mesh, &r);
     if args.json {
         let mut v = serde_json::to_value(&r)?;
         if let Some(o) = v.as_object_mut() {

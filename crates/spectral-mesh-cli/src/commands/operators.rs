@@ -65,7 +65,7 @@ pub fn run(args: Args) -> Result<()> {
         return run_points(&args, spec, p);
     }
     let input = input::load_repaired(args.mesh.as_deref(), args.repair)?;
-    let mesh = &input.mesh;
+    let mesh = input.mesh("operators")?;
     let mut names = vec![
         "mesh.off",
         "S.mtx",

@@ -185,7 +185,7 @@ fn to_triangle(
 /// Applies the chain and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
     let input = input::load(args.mesh.as_deref())?;
-    let original = &input.mesh;
+    let original = input.mesh("perturb")?;
     let specs = args
         .apply
         .iter()

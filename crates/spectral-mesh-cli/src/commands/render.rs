@@ -4,7 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use spectral_mesh_render::figure::Figure;
+use spectral_mesh::Laplacian;
+use spectral_mesh::analysis::{Analysis, AnalysisInput, AnalysisOptions};
+use spectral_mesh_render::figure::{Figure, POINT_RADIUS_FACTOR};
 
 use crate::figure::FigureArgs;
 use crate::input::{self, read_field};
@@ -13,7 +15,8 @@ use crate::output::check_writable;
 /// Arguments of `render`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (drawn as discs) or built-in shape (default: the
+    /// 3-torus).
     pub mesh: Option<String>,
     /// Per-vertex values, one per line (the format every experiment writes). Without
     /// it the surface is coloured by height (z).
@@ -38,15 +41,31 @@ pub struct Args {
 /// Draws the field.
 pub fn run(args: Args) -> Result<()> {
     let input = input::load(args.mesh.as_deref())?;
-    let mesh = &input.mesh;
-    let n = mesh.n_vertices();
+    let label = input.label();
+    let n = input.n();
+    // A point cloud is drawn from its analysis (the triangle union carries the level sets
+    // and critical points; the points are discs).
+    let an = match &input.shape {
+        AnalysisInput::Points { .. } => Some(Analysis::from_input(
+            input.shape.clone(),
+            AnalysisOptions {
+                laplacian: Laplacian::Robust,
+                ..AnalysisOptions::default()
+            },
+        )?),
+        AnalysisInput::Mesh(_) => None,
+    };
+    let mesh = match &an {
+        Some(an) => an.mesh(),
+        None => input.mesh("render")?,
+    };
     let field = match &args.field {
         Some(p) => read_field(p, n)?,
         None => mesh.positions().iter().map(|p| p[2]).collect(),
     };
     for &m in &args.marks {
         if m >= n {
-            anyhow::bail!("--mark {m}: the mesh has only {n} vertices");
+            anyhow::bail!("--mark {m}: the input has only {n} vertices");
         }
     }
     let out = match &args.format {
@@ -54,8 +73,12 @@ pub fn run(args: Args) -> Result<()> {
         None => args.out.clone(),
     };
     check_writable(&out, args.force)?;
-    let fig = Figure::new(mesh, &field, args.marks.clone(), args.figure.options())?;
+    let mut fig = Figure::new(mesh, &field, args.marks.clone(), args.figure.options())?;
+    fig.point_radius = an
+        .as_ref()
+        .and_then(|a| a.point_spacing())
+        .map(|h| POINT_RADIUS_FACTOR * h);
     fig.write(&out)?;
-    println!("{} -> {}", input.label(), out.display());
+    println!("{label} -> {}", out.display());
     Ok(())
 }

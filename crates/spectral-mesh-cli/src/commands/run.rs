@@ -37,7 +37,7 @@ pub fn run(a: Args) -> Result<()> {
     let repair = f.repair.unwrap_or(false);
     let input = input::load_repaired(Some(&mesh), repair)
         .with_context(|| format!("{origin}: key 'mesh'"))?;
-    let hash = input.info.hash(&input.mesh);
+    let hash = input.info.hash_of(&input.shape);
     match &f.mesh_hash {
         Some(h) if !h.eq_ignore_ascii_case(&hash) => {
             if a.allow_changed_mesh {
@@ -66,7 +66,11 @@ pub fn run(a: Args) -> Result<()> {
         figure: FigureOptions::from_file(&f.figure.clone().unwrap_or_default())
             .with_context(|| origin.clone())?,
     };
-    let laplacian = f.laplacian()?;
+    // No `laplacian` key: the default of the input (fem for a mesh, robust for a cloud).
+    let laplacian = match f.laplacian {
+        Some(_) => Some(f.laplacian()?),
+        None => None,
+    };
     match f.experiment.as_str() {
         "harmonic" => experiment::run_harmonic(
             input,

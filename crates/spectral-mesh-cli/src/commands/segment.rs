@@ -27,7 +27,8 @@ Times are for the shape scaled to unit area unless --no-normalize.";
 /// Arguments of `segment`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (.xyz/.pts/.txt/.csv, or a PLY without faces) or
+    /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// The field to segment (see below).
     #[arg(long, default_value_t = SignatureSpec::default().to_string(), long_help = SIGNATURE_HELP)]
@@ -98,7 +99,7 @@ fn signature_request(spec: &SignatureSpec, k: usize) -> Option<FieldRequest> {
 /// Segments and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
     let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
-    let n = input.mesh.n_vertices();
+    let n = input.n();
     let spec = signature(&args.signature, n)?;
     let request = FieldRequest::Segmentation {
         signature: spec.clone(),
@@ -113,7 +114,7 @@ pub fn run(args: Args) -> Result<()> {
     check_experiment_file(args.save_experiment.as_ref(), args.force)?;
     args.basis.warn_unrecorded(args.save_experiment.as_ref());
     let info = input.info;
-    let an = args.basis.analysis(input.mesh, !args.no_normalize)?;
+    let an = args.basis.analysis(input.shape, !args.no_normalize)?;
     let (field, seconds) = engine::field(&an, &request, args.basis.cache.as_deref())
         .map_err(|e| anyhow::anyhow!("--signature {}: {e:#}", args.signature))?;
     let labels = field.labels.clone().unwrap_or_default();
@@ -145,7 +146,7 @@ pub fn run(args: Args) -> Result<()> {
         println!("  patch {i}: {s} vertices, maximum at vertex {m}, genus {g}");
     }
     let figure = args.figure.options();
-    write_field(an.mesh(), &field, &args.out, figure)?;
+    write_field(&an, &field, &args.out, figure)?;
     if let Some(p) = &args.field_out {
         let values = match (&spec, signature_request(&spec, args.basis.k)) {
             (SignatureSpec::Values(v), _) => v.clone(),

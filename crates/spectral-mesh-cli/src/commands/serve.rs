@@ -21,8 +21,8 @@ pub struct Args {
     /// Largest accepted upload, in MiB.
     #[arg(long, default_value_t = 64)]
     pub max_upload_mib: usize,
-    /// Folder holding npm's `node_modules` with three.js (default: `web/node_modules` of
-    /// the source tree; run `npm ci` in `web/` once).
+    /// Folder holding npm's `node_modules` with three.js, served instead of the copy
+    /// embedded in this binary at build time.
     #[arg(long)]
     pub node_modules: Option<PathBuf>,
 }

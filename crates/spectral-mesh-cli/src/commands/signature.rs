@@ -47,7 +47,8 @@ impl Kind {
 /// Arguments of `signature`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Mesh file or built-in shape (default: the 3-torus).
+    /// Mesh file, point-cloud file (.xyz/.pts/.txt/.csv, or a PLY without faces) or
+    /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// The signature.
     #[arg(long, value_enum, default_value = "hks")]
@@ -299,7 +300,7 @@ pub fn run(args: Args) -> Result<()> {
     args.basis.warn_unrecorded(args.save_experiment.as_ref());
     let info = input.info;
     let k = args.basis.k;
-    let an = args.basis.analysis(input.mesh, !args.no_normalize)?;
+    let an = args.basis.analysis(input.shape, !args.no_normalize)?;
     let engine::Solved { basis, seconds, .. } = engine::basis(&an, k, args.basis.cache.as_deref())?;
     let cols = columns(&args, plan, basis.view(k))?;
     for r in &cols.requests {
@@ -346,7 +347,7 @@ pub fn run(args: Args) -> Result<()> {
             println!("-> {}", o.display());
         }
     }
-    write_field(an.mesh(), &field, &single, figure)?;
+    write_field(&an, &field, &single, figure)?;
     if let Some(file) = &args.save_experiment {
         engine::save_field_experiment(
             file,

@@ -99,7 +99,7 @@ pub fn run(s: Study) -> Result<()> {
 fn run_truncation(a: TruncationArgs) -> Result<()> {
     let spec = a.mesh.as_deref().unwrap_or(TRUNCATION_DEFAULT_MESH);
     let input = input::load(Some(spec))?;
-    let mesh = &input.mesh;
+    let mesh = input.mesh("study truncation")?;
     let laplacians = a
         .laplacian
         .iter()
@@ -435,7 +435,8 @@ fn build_table(study: &ParsedStudy, ti: usize, base: &Path) -> Result<Vec<StudyM
         let path = resolve_mesh(m, base).with_context(|| format!("key '{key}'"))?;
         let mesh = input::load(Some(&path))
             .with_context(|| format!("key '{key}'"))?
-            .mesh;
+            .into_mesh("a study")?
+            .0;
         let mut perts = Vec::new();
         for (pi, p) in t.perturbations.iter().enumerate() {
             let pkey = format!("table[{ti}].perturbations[{pi}]");
@@ -443,7 +444,8 @@ fn build_table(study: &ParsedStudy, ti: usize, base: &Path) -> Result<Vec<StudyM
                 let path = resolve_mesh(spec, base).with_context(|| format!("key '{pkey}'"))?;
                 let other = input::load(Some(&path))
                     .with_context(|| format!("key '{pkey}'"))?
-                    .mesh;
+                    .into_mesh("a study")?
+                    .0;
                 resampled_as(&mesh, other, spec)
             } else {
                 let spec =

@@ -15,6 +15,14 @@
 //! shape. The cotangent stiffness is scale-invariant, so nothing else changes. Without it
 //! the shape is used as given (what `eigs` saves, comparable to SciPy on the raw operators).
 //!
+//! # Point clouds
+//!
+//! [`Analysis::from_input`] takes a mesh or a point cloud ([`AnalysisInput`]). A cloud is
+//! analysed with the point-cloud Laplacian ([`crate::operators::point_cloud`], the
+//! discretization [`Laplacian::Robust`]); its [`Analysis::mesh`] is the triangle union of
+//! that Laplacian (see [`points`] for why, and for what critical points mean on a cloud),
+//! and [`Analysis::point_cloud`] gives the points back. Every field request works on both.
+//!
 //! # Threads
 //!
 //! An `Analysis` is `Send + Sync`: fields are computed from a snapshot of the held basis
@@ -22,24 +30,29 @@
 //! is being computed.
 
 mod eval;
+pub mod hint;
+pub mod points;
 pub mod request;
 
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock, RwLock};
 
+pub use hint::{TRUNCATION_RATIO_WARNING, TruncationHint};
+pub use points::AnalysisInput;
 pub use request::{
     Constraints, DistanceSpec, FieldRequest, Kernel, RequestError, Signal, SignatureSpec,
 };
 
 use crate::cancel::CancelToken;
 use crate::fields::critical_points::{
-    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError,
+    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError, FLAT_RELATIVE_TOLERANCE,
 };
 use crate::fields::harmonic::{Constraint, FloatingComponent, HarmonicError, HarmonicSolver};
 use crate::fields::segmentation::SegmentationError;
 use crate::linalg::EigenProgress;
-use crate::mesh::Mesh;
 use crate::mesh::topology::Topology;
-use crate::operators::{Laplacian, Operators};
+use crate::mesh::{Mesh, PointCloud};
+use crate::operators::robust::RobustError;
+use crate::operators::{Laplacian, Operators, PointCloudParams, point_cloud_laplacian};
 use crate::spectral::Eigenbasis;
 use crate::spectral::distances::DistanceError;
 use crate::spectral::eigenbasis::{EigenError, EigenParams, EigenSolver};
@@ -136,6 +149,25 @@ pub enum AnalysisError {
     /// A spectral request reached evaluation without a basis (an internal error).
     #[error("internal error: a spectral field was evaluated without an eigenbasis")]
     NoBasis,
+    /// A discretization that needs triangles was asked for on a point cloud.
+    #[error(
+        "the {laplacian} Laplacian needs triangles and does not apply to a point cloud: use robust (the point-cloud Laplacian)"
+    )]
+    NotForPoints {
+        /// The discretization asked for.
+        laplacian: Laplacian,
+    },
+    /// The point-cloud Laplacian's parameters are out of range.
+    #[error("point-cloud Laplacian: {0}")]
+    PointCloud(#[from] RobustError),
+    /// The local triangulations of a point cloud found no triangle.
+    #[error(
+        "the point cloud ({n} points) has no triangle in its local triangulations: its points are collinear or coincident"
+    )]
+    NoTriangles {
+        /// Points.
+        n: usize,
+    },
     /// The field came out with non-finite values.
     #[error(
         "the {kind} field has non-finite values (at vertex {vertex}): try a larger t, fewer pairs or another filter"
@@ -175,7 +207,10 @@ pub struct Field {
 
 /// An analysis (see the module documentation).
 pub struct Analysis {
+    /// The mesh, or the triangle union of a point cloud's Laplacian.
     mesh: Arc<Mesh>,
+    /// The point cloud, when the input was one.
+    cloud: Option<Arc<PointCloud>>,
     options: AnalysisOptions,
     /// `1^T B 1` of the operators as assembled (before normalisation).
     input_mass: f64,
@@ -239,6 +274,7 @@ impl Analysis {
         let solver = EigenSolver::new(ops.clone(), options.eigen.clone());
         Self {
             mesh,
+            cloud: None,
             options,
             input_mass,
             ops,
@@ -251,7 +287,67 @@ impl Analysis {
         }
     }
 
-    /// The shape.
+    /// An analysis of a mesh or a point cloud: [`Analysis::new`] for a mesh,
+    /// [`Analysis::from_points`] for a cloud. The one constructor every face can use for
+    /// whatever the user gave (`Analysis::from_input(io::read_input(path)?, options)`).
+    pub fn from_input(
+        input: impl Into<AnalysisInput>,
+        options: AnalysisOptions,
+    ) -> Result<Self, AnalysisError> {
+        match input.into() {
+            AnalysisInput::Mesh(m) => Ok(Self::new(m, options)),
+            AnalysisInput::Points { cloud, params } => Self::from_points(cloud, &params, options),
+        }
+    }
+
+    /// An analysis of a point cloud with its point-cloud Laplacian (built now: O(n k log n)
+    /// for `k` neighbours). `options.laplacian` must be [`Laplacian::Robust`]
+    /// ([`AnalysisError::NotForPoints`] otherwise). The connectivity ([`Analysis::mesh`]) is
+    /// the Laplacian's triangle union, oriented consistently (see [`points`]).
+    pub fn from_points(
+        cloud: impl Into<Arc<PointCloud>>,
+        params: &PointCloudParams,
+        options: AnalysisOptions,
+    ) -> Result<Self, AnalysisError> {
+        if options.laplacian != Laplacian::Robust {
+            return Err(AnalysisError::NotForPoints {
+                laplacian: options.laplacian,
+            });
+        }
+        let cloud: Arc<PointCloud> = cloud.into();
+        let r = point_cloud_laplacian(&cloud, params)?;
+        let mesh =
+            points::connectivity_mesh(&cloud, r.triangles).ok_or(AnalysisError::NoTriangles {
+                n: cloud.n_points(),
+            })?;
+        let ops = Operators {
+            laplacian: Laplacian::Robust,
+            stiffness: r.stiffness,
+            mass: r.mass,
+        };
+        let mut an = Self::with_operators(mesh, ops, options);
+        an.cloud = Some(cloud);
+        Ok(an)
+    }
+
+    /// The point cloud, when the analysis is of one.
+    pub fn point_cloud(&self) -> Option<&PointCloud> {
+        self.cloud.as_deref()
+    }
+
+    /// True when the analysis is of a point cloud.
+    pub fn is_point_cloud(&self) -> bool {
+        self.cloud.is_some()
+    }
+
+    /// The mean neighbour spacing of a point cloud (the mean edge length of its triangle
+    /// union; pictures size their discs from it), `None` for a mesh.
+    pub fn point_spacing(&self) -> Option<f64> {
+        self.cloud.as_ref().map(|_| self.mesh.mean_edge_length())
+    }
+
+    /// The shape: the mesh, or for a point cloud the triangle union of its Laplacian (the
+    /// points are its vertices, in the same order).
     pub fn mesh(&self) -> &Mesh {
         &self.mesh
     }
@@ -413,6 +509,16 @@ impl Analysis {
         Ok(CriticalReport::new(cp, self.topology(), &excluded))
     }
 
+    /// How much the truncation of a heat or diffusion field weighs (the time of the
+    /// request against the held eigenvalues; see [`TruncationHint`]); `None` for fields
+    /// without a time or a basis.
+    pub fn truncation_hint(&self, field: &Field) -> Option<TruncationHint> {
+        let t = field.request.time()?;
+        let k = field.k?;
+        let basis = self.held_basis()?;
+        TruncationHint::new(&basis.values, k, t, self.n())
+    }
+
     /// The critical points of `values`, with the link edges built once per analysis.
     fn find_critical_points(&self, values: &[f64]) -> Result<CriticalPoints, AnalysisError> {
         Ok(self
@@ -469,8 +575,11 @@ impl Analysis {
 /// Critical points with the Euler characteristic check, as every face reports them.
 ///
 /// Components left out (those of a harmonic map that hold no constraint, see
-/// [`crate::fields::harmonic::FloatingComponent`]) contribute neither critical points nor
-/// Euler characteristic; every other component is checked on its own as well.
+/// [`crate::fields::harmonic::FloatingComponent`], and plateaus: components on which the
+/// field is constant within [`FLAT_RELATIVE_TOLERANCE`] of its largest magnitude, see
+/// [`crate::fields::critical_points`]) contribute neither critical points nor Euler
+/// characteristic; every other component is checked on its own as well. A field that is
+/// flat on every component reports no critical points and `flat = true`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CriticalReport {
     /// The critical points (those of left-out components removed).
@@ -495,8 +604,18 @@ pub struct CriticalReport {
     pub formula: &'static str,
     /// The check on each component counted.
     pub components: Vec<ComponentCheck>,
-    /// Components left out of the counts.
+    /// Components left out of the counts because the caller excluded them (a harmonic
+    /// map's unconstrained components).
     pub excluded_components: Vec<usize>,
+    /// Components left out because the field is constant on them within
+    /// `flat_tolerance` (plateaus, no critical points).
+    pub plateau_components: Vec<usize>,
+    /// The relative tolerance of plateaus: values within `flat_tolerance * max |f|` of
+    /// each other on a component are one plateau ([`FLAT_RELATIVE_TOLERANCE`]).
+    pub flat_tolerance: f64,
+    /// True when every component is a plateau or left out, and at least one is a
+    /// plateau: the field is constant (up to rounding), with no critical points.
+    pub flat: bool,
 }
 
 /// The Euler check on one connected component.
@@ -519,9 +638,18 @@ impl CriticalReport {
     /// `excluded`.
     pub fn new(cp: CriticalPoints, topo: &Topology, excluded: &[usize]) -> Self {
         let nc = topo.n_components();
+        let mut plateau_components: Vec<usize> = cp
+            .plateaus
+            .iter()
+            .filter_map(|p| topo.vertex_component.get(p.first_vertex).copied())
+            .filter(|&c| c < nc && !excluded.contains(&c))
+            .collect();
+        plateau_components.sort_unstable();
+        plateau_components.dedup();
+        let left_out = |c: usize| excluded.contains(&c) || plateau_components.contains(&c);
         let counted = |v: usize| {
             let c = topo.vertex_component.get(v).copied().unwrap_or(usize::MAX);
-            c < nc && !excluded.contains(&c)
+            c < nc && !left_out(c)
         };
         let mut cp = cp;
         cp.minima.retain(|&v| counted(v));
@@ -529,7 +657,7 @@ impl CriticalReport {
         cp.saddles.retain(|&(v, _)| counted(v));
         cp.on_boundary.retain(|&v| counted(v));
         cp.non_manifold.retain(|&v| counted(v));
-        let included: Vec<usize> = (0..nc).filter(|c| !excluded.contains(c)).collect();
+        let included: Vec<usize> = (0..nc).filter(|&c| !left_out(c)).collect();
         let doubled = included.iter().any(|&c| !topo.components[c].closed);
         // Doubled across the boundary: interior points count twice, boundary ones once.
         let weight = |v: usize| -> i64 {
@@ -578,8 +706,11 @@ impl CriticalReport {
             } else {
                 "m - s + M = chi"
             },
+            flat: included.is_empty() && !plateau_components.is_empty(),
             components,
             excluded_components: excluded.to_vec(),
+            plateau_components,
+            flat_tolerance: FLAT_RELATIVE_TOLERANCE,
         }
     }
 }

@@ -260,6 +260,54 @@ fn a_component_without_constraints_floats_and_is_left_out_of_the_critical_points
     // The constrained torus alone: m - s + M = 0.
     assert_eq!(rep.components.len(), 1);
     assert!(rep.holds && rep.chi == 0, "{rep:?}");
-    // Counting the constant torus too would add its symbolic-perturbation extrema.
-    assert!(all.minima + all.maxima > rep.minima + rep.maxima);
+    // Without the exclusion, the constant torus is a plateau: left out all the same.
+    assert_eq!(all.plateau_components, vec![field.floating[0].component]);
+    assert!(rep.plateau_components.is_empty() && !rep.flat && !all.flat);
+    assert_eq!(
+        (all.minima, all.maxima, all.saddles, all.holds),
+        (rep.minima, rep.maxima, rep.saddles, true)
+    );
+}
+
+#[test]
+fn a_heat_kernel_at_a_huge_time_is_flat_and_the_hint_follows_t() {
+    // t = 1e12: the kernel is the constant 1 (unit area) up to rounding.
+    let an = analysis("sphere:res=3", true);
+    let heat = |t: f64| {
+        an.field(&FieldRequest::Heat {
+            anchor: Some(0),
+            t,
+            kernel: Kernel::Wfem,
+            k: 50,
+        })
+        .unwrap()
+    };
+    let flat = heat(1e12);
+    let rep = an.field_critical_points(&flat).unwrap();
+    assert!(rep.flat, "{rep:?}");
+    assert_eq!((rep.minima, rep.maxima, rep.saddles), (0, 0, 0));
+    assert_eq!(rep.plateau_components, vec![0]);
+    assert_eq!(rep.flat_tolerance, FLAT_RELATIVE_TOLERANCE);
+    // The same kernel at t = 0.05 is not flat: one maximum at the anchor.
+    let peaked = heat(0.05);
+    let rep = an.field_critical_points(&peaked).unwrap();
+    assert!(
+        !rep.flat && rep.holds && rep.points.maxima == vec![0],
+        "{rep:?}"
+    );
+    // The hint: the eigenvalues the analysis holds, the warning at a tiny t only.
+    let b = an.held_basis().unwrap();
+    let h = an.truncation_hint(&peaked).unwrap();
+    assert_eq!(h.k, 50);
+    assert!(!h.exact && h.lambda_omitted == b.values[49]);
+    assert!(h.lambda_first == b.values[1] && !h.warning);
+    let tiny = heat(1e-4);
+    let h = an.truncation_hint(&tiny).unwrap();
+    assert!(
+        h.warning && h.t_needed > 1e-4 && h.k_needed.unwrap() > 50,
+        "{h:?}"
+    );
+    // No time, no hint.
+    let d = an.field(&FieldRequest::default_with_k(50)).unwrap();
+    assert!(an.truncation_hint(&d).is_none());
 }

@@ -145,6 +145,17 @@ pub struct CriticalSummary {
     /// (they hold a constant; see `unconstrained_components`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub excluded_components: Vec<usize>,
+    /// Values within this fraction of the field's largest magnitude of each other on a
+    /// component make it one plateau, without critical points
+    /// ([`crate::fields::critical_points::FLAT_RELATIVE_TOLERANCE`]).
+    pub flat_relative_tolerance: f64,
+    /// Components on which the field is constant within that tolerance (left out of the
+    /// counts and the check).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub plateau_components: Vec<usize>,
+    /// True when the field is constant within the tolerance on every component counted:
+    /// no critical points.
+    pub flat: bool,
 }
 
 impl From<&CriticalReport> for CriticalSummary {
@@ -168,6 +179,9 @@ impl From<&CriticalReport> for CriticalSummary {
                 Vec::new()
             },
             excluded_components: r.excluded_components.clone(),
+            flat_relative_tolerance: r.flat_tolerance,
+            plateau_components: r.plateau_components.clone(),
+            flat: r.flat,
         }
     }
 }
@@ -642,7 +656,8 @@ pub struct BasisReport {
     pub near_zero: usize,
     /// Connected components of the mesh.
     pub components: usize,
-    /// Near-zero eigenvalues expected: components touching no Dirichlet vertex.
+    /// Near-zero eigenvalues expected: components touching no Dirichlet vertex, at most
+    /// `k` (the pairs computed).
     pub expected_near_zero: usize,
     /// The relative gap of [`eigenvalue_clusters`].
     pub cluster_tolerance: f64,
@@ -708,7 +723,7 @@ impl BasisReport {
             orthonormality_error: orthogonality.unwrap_or_else(|| basis.orthogonality_error()),
             near_zero,
             components: topology.n_components(),
-            expected_near_zero: pinned.iter().filter(|p| !**p).count(),
+            expected_near_zero: pinned.iter().filter(|p| !**p).count().min(basis.k()),
             cluster_tolerance,
             last_cluster_reaches_k: clusters.last().is_some_and(|&(i, c)| i + c == basis.k()),
             clusters,

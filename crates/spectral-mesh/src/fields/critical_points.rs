@@ -43,11 +43,32 @@
 //!
 //! Vertices no triangle uses are never critical. Several components are handled
 //! naturally: pass the total Euler characteristic (the sum over components) to the checks.
+//!
+//! ## Flat fields: plateaus
+//! A connected component on which the field is constant up to rounding is one plateau,
+//! not a pattern of critical points drawn by rounding noise (or by the index rule). The
+//! rule, applied before any vertex is classified: with `scale = max |f|` over the finite
+//! values of the whole field, a component whose values are all finite and lie within
+//! `FLAT_RELATIVE_TOLERANCE * scale` of each other (`max - min <= 1e-10 * scale`) is a
+//! [`Plateau`]: none of its vertices is critical, and the Euler checks leave it out
+//! (see [`crate::analysis::CriticalReport`]). A field that is zero everywhere is flat. A
+//! plateau that covers only part of a component is classified by the rules above (ties
+//! broken by index): before classification the values are rounded to multiples of
+//! `FLAT_RELATIVE_TOLERANCE * scale` above the field's minimum, so differences below the
+//! tolerance are ties everywhere, not only on whole-component plateaus. Every face (CLI summaries, pictures, the web app) takes its critical
+//! points from here, so all of them agree.
 
 use rayon::prelude::*;
 
 use crate::mesh::Mesh;
 use crate::mesh::topology::{UnionFind, VertexTriangles};
+
+/// Values of a connected component that lie within `FLAT_RELATIVE_TOLERANCE * max |f|` of
+/// each other (`max |f|` over the whole field) make the component one [`Plateau`] without
+/// critical points. Rounding noise of a field computed in f64 from a few hundred terms is
+/// around `1e-14` of its largest value; a picture (8-bit colours, f32 values) cannot show
+/// relative differences below about `1e-7`.
+pub const FLAT_RELATIVE_TOLERANCE: f64 = 1e-10;
 
 /// How boundary vertices are classified (see the module documentation).
 #[derive(
@@ -90,6 +111,25 @@ pub struct CriticalPoints {
     pub non_manifold: Vec<usize>,
     /// The boundary rule used.
     pub boundary_rule: BoundaryRule,
+    /// Connected components on which the field is constant within
+    /// [`FLAT_RELATIVE_TOLERANCE`]: none of their vertices is critical. Ascending by
+    /// their lowest vertex.
+    pub plateaus: Vec<Plateau>,
+}
+
+/// A connected component on which the field is constant within
+/// [`FLAT_RELATIVE_TOLERANCE`] of the field's largest magnitude (see the module
+/// documentation).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Plateau {
+    /// The component's lowest vertex (identifies it whatever the component numbering).
+    pub first_vertex: usize,
+    /// Vertices of the component.
+    pub vertices: usize,
+    /// The smallest value on it.
+    pub min: f64,
+    /// The largest value on it.
+    pub max: f64,
 }
 
 impl CriticalPoints {
@@ -167,6 +207,11 @@ pub struct CriticalPointFinder {
     /// True when the link of the vertex is one simple cycle (every interior vertex of a
     /// manifold mesh): classified from the edges whose ends differ, without ordering.
     simple: Vec<bool>,
+    /// Connected component of each vertex (through triangles), numbered by lowest vertex;
+    /// `u32::MAX` for a vertex no triangle uses.
+    component: Vec<u32>,
+    /// `(lowest vertex, vertices)` of each component.
+    components: Vec<(usize, usize)>,
 }
 
 /// Vertices per parallel task of [`CriticalPointFinder::find`].
@@ -194,11 +239,77 @@ impl CriticalPointFinder {
             .with_min_len(FIND_CHUNK)
             .map(|v| is_simple_cycle(&edges[offsets[v]..offsets[v + 1]]))
             .collect();
+        let mut uf = UnionFind::new(n);
+        for t in tris {
+            uf.union(t[0], t[1]);
+            uf.union(t[0], t[2]);
+        }
+        // Numbered in the order of their lowest vertex.
+        let mut root_id: Vec<u32> = vec![u32::MAX; n];
+        let mut component = vec![u32::MAX; n];
+        let mut components: Vec<(usize, usize)> = Vec::new();
+        for v in 0..n {
+            if offsets[v] == offsets[v + 1] {
+                continue;
+            }
+            let r = uf.find(v);
+            if root_id[r] == u32::MAX {
+                root_id[r] = components.len() as u32;
+                components.push((v, 0));
+            }
+            component[v] = root_id[r];
+            components[root_id[r] as usize].1 += 1;
+        }
         Self {
             offsets,
             edges,
             simple,
+            component,
+            components,
         }
+    }
+
+    /// The components of `field` that are plateaus (see the module documentation), and
+    /// for each vertex whether it lies on one.
+    fn plateaus(&self, field: &[f64]) -> (Vec<Plateau>, Vec<bool>) {
+        let scale = field
+            .iter()
+            .filter(|x| x.is_finite())
+            .fold(0.0f64, |m, x| m.max(x.abs()));
+        let tol = FLAT_RELATIVE_TOLERANCE * scale;
+        let nc = self.components.len();
+        let mut lo = vec![f64::INFINITY; nc];
+        let mut hi = vec![f64::NEG_INFINITY; nc];
+        let mut finite = vec![true; nc];
+        for (v, &c) in self.component.iter().enumerate() {
+            if c == u32::MAX {
+                continue;
+            }
+            let c = c as usize;
+            let x = field[v];
+            if x.is_finite() {
+                lo[c] = lo[c].min(x);
+                hi[c] = hi[c].max(x);
+            } else {
+                finite[c] = false;
+            }
+        }
+        let flat: Vec<bool> = (0..nc).map(|c| finite[c] && hi[c] - lo[c] <= tol).collect();
+        let plateaus = (0..nc)
+            .filter(|&c| flat[c])
+            .map(|c| Plateau {
+                first_vertex: self.components[c].0,
+                vertices: self.components[c].1,
+                min: lo[c],
+                max: hi[c],
+            })
+            .collect();
+        let on = self
+            .component
+            .iter()
+            .map(|&c| c != u32::MAX && flat[c as usize])
+            .collect();
+        (plateaus, on)
     }
 
     /// Number of vertices of the mesh it was built for.
@@ -234,10 +345,15 @@ impl CriticalPointFinder {
                 got: field.len(),
             });
         }
+        let (plateaus, on_plateau) = self.plateaus(field);
+        let q = quantized(field);
+        let field = &q[..];
         // (vertex, kind, open link, non-manifold) of every vertex that is critical or
         // non-manifold, ascending.
         let one = |v: usize| -> Option<(usize, Kind, bool, bool)> {
             let (kind, open, nonman) = self.classify_vertex(v, field, rule, fast)?;
+            // A plateau has no critical points (its non-manifold vertices are listed).
+            let kind = if on_plateau[v] { Kind::Regular } else { kind };
             (kind != Kind::Regular || nonman).then_some((v, kind, open, nonman))
         };
         let found: Vec<(usize, Kind, bool, bool)> = if parallel {
@@ -251,6 +367,7 @@ impl CriticalPointFinder {
         };
         let mut out = CriticalPoints {
             boundary_rule: rule,
+            plateaus,
             ..Default::default()
         };
         for (v, kind, open, nonman) in found {
@@ -300,6 +417,22 @@ impl CriticalPointFinder {
         }
         Some(classify(edges, &above, rule))
     }
+}
+
+/// `field` rounded to multiples of `FLAT_RELATIVE_TOLERANCE * max |f|` above its minimum
+/// (differences below the tolerance become ties); unchanged when that step is zero (a
+/// field of zeros or without finite values).
+fn quantized(field: &[f64]) -> Vec<f64> {
+    let (mut lo, mut scale) = (f64::INFINITY, 0.0f64);
+    for &x in field.iter().filter(|x| x.is_finite()) {
+        lo = lo.min(x);
+        scale = scale.max(x.abs());
+    }
+    let tol = FLAT_RELATIVE_TOLERANCE * scale;
+    if tol <= 0.0 || !tol.is_finite() {
+        return field.to_vec();
+    }
+    field.iter().map(|&x| ((x - lo) / tol).round()).collect()
 }
 
 /// True when the link edges form one simple cycle (see [`simple_cycle_changes`]).
@@ -652,8 +785,13 @@ mod tests {
             })),
             "saddle3"
         );
-        // Ties broken by index: all neighbours equal to the centre (index 0) are above.
-        assert_eq!(kind_of_center(ring(&|_| 0.0)), "min");
+        // Ties broken by index: neighbours equal to the centre (index 0) are above.
+        assert_eq!(
+            kind_of_center(ring(&|i| if i == 3 { 1.0 } else { 0.0 })),
+            "min"
+        );
+        // A constant field is one plateau: nothing is critical.
+        assert_eq!(kind_of_center(ring(&|_| 0.0)), "regular");
     }
 
     #[test]
@@ -670,6 +808,73 @@ mod tests {
         let ll = critical_points_with(&m, &g, BoundaryRule::LowerLink).unwrap();
         assert!(!ll.maxima.contains(&0) && !ll.saddles.iter().any(|s| s.0 == 0));
         assert!(critical_points(&m, &[0.0]).is_err());
+    }
+
+    /// Rounding noise on a constant is one plateau; a component is judged against the
+    /// largest magnitude of the whole field; a range just above the tolerance is classified.
+    #[test]
+    fn flat_components_are_plateaus_without_critical_points() {
+        let sphere = crate::shapes::build_str("sphere:res=3").unwrap();
+        let n = sphere.n_vertices();
+        // 1 + noise of a few ulps, as a heat kernel at a very large time.
+        let noisy: Vec<f64> = (0..n)
+            .map(|i| 1.0 + ((i * 7919) % 13) as f64 * 1e-16)
+            .collect();
+        for f in [noisy.clone(), vec![0.0; n]] {
+            let cp = critical_points(&sphere, &f).unwrap();
+            assert!(cp.minima.is_empty() && cp.maxima.is_empty() && cp.saddles.is_empty());
+            assert_eq!(cp.plateaus.len(), 1);
+            assert_eq!(
+                (cp.plateaus[0].first_vertex, cp.plateaus[0].vertices),
+                (0, n)
+            );
+        }
+        // Without the rule the noise makes many critical points: what the rule removes.
+        let without = classify_all(&sphere, &noisy, BoundaryRule::Double, true).unwrap();
+        assert!(without.minima.len() + without.maxima.len() > 10);
+        // A relative range of 1e-8 is above the tolerance: a real (if faint) field.
+        let faint: Vec<f64> = sphere
+            .positions()
+            .iter()
+            .map(|p| 1.0 + 1e-8 * p[2])
+            .collect();
+        let cp = critical_points(&sphere, &faint).unwrap();
+        assert!(cp.plateaus.is_empty());
+        assert_eq!(
+            (cp.minima.len(), cp.maxima.len(), cp.saddle_count()),
+            (1, 1, 0)
+        );
+        // Two components: the second holds 1e-12 (flat against the first's values of
+        // order 1), the first varies.
+        let a = crate::shapes::build_str("sphere:res=2").unwrap();
+        let b = a.map_positions(|p| [p[0] + 5.0, p[1], p[2]]).unwrap();
+        let na = a.n_vertices();
+        let mut p = a.positions().to_vec();
+        p.extend(b.positions());
+        let mut t = a.triangles().to_vec();
+        t.extend(b.triangles().iter().map(|tri| tri.map(|v| v + na)));
+        let two = Mesh::new(p, t).unwrap();
+        let f: Vec<f64> = (0..two.n_vertices())
+            .map(|v| {
+                if v < na {
+                    two.positions()[v][2]
+                } else {
+                    1e-12 * (v % 3) as f64
+                }
+            })
+            .collect();
+        let cp = critical_points(&two, &f).unwrap();
+        assert_eq!(cp.plateaus.len(), 1);
+        assert_eq!(cp.plateaus[0].first_vertex, na);
+        assert_eq!(
+            (cp.minima.len(), cp.maxima.len(), cp.saddle_count()),
+            (1, 1, 0)
+        );
+        assert!(cp.minima[0] < na && cp.maxima[0] < na);
+        // Non-finite values: never a plateau.
+        let mut g = vec![1.0; n];
+        g[5] = f64::NAN;
+        assert!(critical_points(&sphere, &g).unwrap().plateaus.is_empty());
     }
 
     /// The shortcut for simple-cycle links gives exactly what ordering every link gives,

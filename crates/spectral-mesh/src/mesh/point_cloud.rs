@@ -99,6 +99,19 @@ impl PointCloud {
             .map_or(0, |nr| nr.iter().filter(|v| norm(**v) > 0.0).count())
     }
 
+    /// The content hash every face uses to name a point cloud: blake3 (64 hex digits) of
+    /// the positions as little-endian `f64` (normals are not included). Equal to
+    /// [`super::Mesh::content_hash`] of the same positions with no triangles.
+    pub fn content_hash(&self) -> String {
+        let mut h = blake3::Hasher::new();
+        for p in &self.positions {
+            for c in p {
+                h.update(&c.to_le_bytes());
+            }
+        }
+        h.finalize().to_hex().to_string()
+    }
+
     /// Drops the normals.
     pub fn without_normals(self) -> Self {
         Self {

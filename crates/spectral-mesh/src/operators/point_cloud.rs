@@ -192,6 +192,10 @@ pub struct PointCloudLaplacian {
     pub mass: SparseMatrix,
     /// What the pipeline did.
     pub stats: PointCloudStats,
+    /// The distinct triangles the robust pipeline ran on (each sorted ascending, in order
+    /// of first appearance; orientation arbitrary): the connectivity of `S` apart from the
+    /// attachments of [`PointCloudStats::isolated_points`].
+    pub triangles: Vec<[usize; 3]>,
 }
 
 /// The k nearest other points of every point, nearest first (ties by index), `n` lists of
@@ -787,6 +791,16 @@ pub fn point_cloud_laplacian(
         }
     }
     stats.isolated_points = (0..n).filter(|&i| !used[i]).collect();
+    let mut seen = std::collections::HashSet::with_capacity(tris.len());
+    let distinct: Vec<[usize; 3]> = tris
+        .iter()
+        .map(|t| {
+            let mut t = *t;
+            t.sort_unstable();
+            t
+        })
+        .filter(|t| seen.insert(*t))
+        .collect();
     if !stats.isolated_points.is_empty() {
         let mut extra: Vec<(usize, usize, f64)> = Vec::new();
         for &i in &stats.isolated_points {
@@ -806,6 +820,7 @@ pub fn point_cloud_laplacian(
         stiffness,
         mass: SparseMatrix::diagonal(&mass_diag),
         stats,
+        triangles: distinct,
     })
 }
 

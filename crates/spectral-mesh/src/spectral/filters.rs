@@ -82,7 +82,9 @@ pub enum FilterError {
         k: usize,
     },
     /// The spectrum is empty or has only zero eigenvalues.
-    #[error("the spectrum has no non-zero eigenvalue to filter")]
+    #[error(
+        "the spectrum has no non-zero eigenvalue to filter: every pair computed is a zero one (a shape with c separate pieces has c zero eigenvalues; ask for more than c pairs)"
+    )]
     EmptySpectrum,
     /// The filter text could not be parsed.
     #[error("cannot parse filter '{text}': {message}")]

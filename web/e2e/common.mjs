@@ -1,0 +1,56 @@
+// Shared by the end-to-end tests: Debian's Chromium driven by playwright-core, and small
+// mesh files written on the fly.
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { chromium } from 'playwright-core';
+
+// Headless Chromium with a fresh profile (the flags that work on a closed network; see
+// the machine notes). Rendering is in software (SwiftShader): no GPU.
+export async function launch() {
+  const userDir = fs.mkdtempSync(path.join(os.tmpdir(), 'sm-chromium-'));
+  const context = await chromium.launchPersistentContext(userDir, {
+    executablePath: process.env.SPECTRAL_MESH_CHROMIUM || '/usr/bin/chromium',
+    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+      '--disable-background-networking', '--disable-component-update', '--disable-sync'],
+    viewport: { width: 1280, height: 800 },
+    acceptDownloads: true,
+  });
+  const page = context.pages()[0] || await context.newPage();
+  return {
+    page,
+    async close() {
+      await context.close();
+      fs.rmSync(userDir, { recursive: true, force: true });
+    },
+  };
+}
+
+// A square pyramid: 5 vertices, 6 triangles, closed.
+export function writePyramidOff(file) {
+  fs.writeFileSync(file, 'OFF\n5 6 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 0.8\n'
+    + '3 0 2 1\n3 0 3 2\n3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n');
+  return file;
+}
+
+// A torus of nu x nv vertices (radii 1 and 0.35), as an OFF file.
+export function writeTorusOff(file, nu, nv) {
+  const lines = [`OFF\n${nu * nv} ${2 * nu * nv} 0`];
+  for (let i = 0; i < nu; i++) {
+    const u = (2 * Math.PI * i) / nu;
+    for (let j = 0; j < nv; j++) {
+      const v = (2 * Math.PI * j) / nv;
+      const r = 1 + 0.35 * Math.cos(v);
+      lines.push(`${(r * Math.cos(u)).toFixed(7)} ${(r * Math.sin(u)).toFixed(7)} ${(0.35 * Math.sin(v)).toFixed(7)}`);
+    }
+  }
+  const id = (i, j) => ((i + nu) % nu) * nv + ((j + nv) % nv);
+  for (let i = 0; i < nu; i++) {
+    for (let j = 0; j < nv; j++) {
+      lines.push(`3 ${id(i, j)} ${id(i + 1, j)} ${id(i + 1, j + 1)}`);
+      lines.push(`3 ${id(i, j)} ${id(i + 1, j + 1)} ${id(i, j + 1)}`);
+    }
+  }
+  fs.writeFileSync(file, lines.join('\n') + '\n');
+  return file;
+}
