@@ -6,6 +6,11 @@
 #
 # Real meshes: SPECTRAL_MESH_SHARED_MESHES as for scripts/test.sh (unset: those tests are
 # skipped and say so).
+#
+# Cost in CI: the release build of the library and the bindings took 315 s after a merge of
+# main (spectral-mesh, its renderer and the extension recompiled; load rising to 11 on the
+# 2-core machine), pytest 43 s; with the venv's extra pip packages (maturin, pytest, lapy,
+# matplotlib) about 6-8 minutes on top of the rest of scripts/test.sh.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 py="$(bash "$root/scripts/setup-python.sh")"
