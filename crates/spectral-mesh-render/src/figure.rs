@@ -14,7 +14,7 @@ use crate::raster::{
     Background, ColorBar, Marker, MarkerKind, RenderOptions, Scene, View, field_colors,
     field_range, render_scene,
 };
-use crate::{Colormap, RenderError, extract_level_sets, level_values, write_vrml};
+use crate::{Colormap, Image, RenderError, extract_level_sets, level_values, write_vrml};
 
 /// How to draw a field. `Default` is what every face draws unless told otherwise.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -259,8 +259,8 @@ impl<'a> Figure<'a> {
         scene
     }
 
-    /// The PNG picture.
-    pub fn png(&self) -> Result<Vec<u8>, FigureError> {
+    /// The picture as RGBA pixels (what [`Figure::png`] encodes).
+    pub fn image(&self) -> Result<Image, FigureError> {
         let opts = RenderOptions {
             width: self.options.size,
             height: self.options.size,
@@ -272,7 +272,12 @@ impl<'a> Figure<'a> {
             },
             ..RenderOptions::default()
         };
-        let img = render_scene(&self.scene(), &opts)?;
+        Ok(render_scene(&self.scene(), &opts)?)
+    }
+
+    /// The PNG picture.
+    pub fn png(&self) -> Result<Vec<u8>, FigureError> {
+        let img = self.image()?;
         let mut buf = Vec::new();
         img.write_png(&mut buf)?;
         Ok(buf)

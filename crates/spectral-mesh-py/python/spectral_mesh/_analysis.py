@@ -1,0 +1,689 @@
+"""The analysis object: one mesh, its operators, the factorization and a basis that grows
+with ``k``, answering every field of the paper."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from . import _arrays, _native
+from ._api import _labels, _marks, _view_text
+from ._defaults import ANALYSIS, FIGURE, K, REQUESTS, SEED, TOL
+
+_R = REQUESTS
+
+
+@dataclass(frozen=True)
+class CriticalPoints:
+    """The critical points of a piecewise-linear field (Banchoff's rule, ties broken by
+    vertex index), with the Euler characteristic check.
+
+    ``minima``, ``maxima``, ``saddles``: int64 vertex indices, ascending;
+    ``multiplicities``: the multiplicity of each saddle (1 for a simple saddle, ``m`` for a
+    monkey saddle of ``2m + 2`` sign changes); ``on_boundary``: the critical points on the
+    boundary; ``non_manifold``: non-manifold vertices met. The check: ``lhs == rhs``
+    (``minima - saddles + maxima = chi`` on a closed surface, ``formula`` states the
+    bordered form).
+    """
+
+    minima: np.ndarray
+    maxima: np.ndarray
+    saddles: np.ndarray
+    multiplicities: np.ndarray
+    on_boundary: np.ndarray
+    non_manifold: np.ndarray
+    chi: int
+    lhs: int
+    rhs: int
+    holds: bool
+    formula: str
+
+    @property
+    def saddle_count(self) -> int:
+        """Saddles counted with multiplicity."""
+        return int(self.multiplicities.sum())
+
+
+@dataclass(frozen=True)
+class LevelSet:
+    """The level set ``{f = value}``: ``segments`` is ``(s, 2, 3)`` float64, the end points
+    of its ``s`` straight pieces (one per triangle it crosses)."""
+
+    value: float
+    segments: np.ndarray = field(repr=False)
+
+
+def _signal(signal: Any, n: int) -> tuple[dict, np.ndarray | None]:
+    """A diffusion signal as (its serde form, per-vertex values or None)."""
+    if isinstance(signal, (int, np.integer)) and not isinstance(signal, bool):
+        return {"impulse": _arrays.count(signal, "signal vertex")}, None
+    if isinstance(signal, dict):
+        if set(signal) != {"vertex", "radius"}:
+            raise ValueError(
+                "a ball signal is {'vertex': v, 'radius': r} (the indicator of the Euclidean "
+                f"ball of radius r around vertex v), got keys {sorted(signal)}"
+            )
+        return {
+            "ball": {
+                "vertex": _arrays.count(signal["vertex"], "signal vertex"),
+                "radius": _arrays.real(signal["radius"], "radius"),
+            }
+        }, None
+    return {"values": []}, _arrays.per_vertex(signal, n, "signal")
+
+
+def _constraints(c: Any) -> Any:
+    """Harmonic constraints as their serde form: a preset count or a list of tables."""
+    if isinstance(c, (int, np.integer)) and not isinstance(c, bool):
+        return int(c)
+    if isinstance(c, dict):
+        items = list(c.items())
+    else:
+        try:
+            items = list(c)
+        except TypeError:
+            raise ValueError(
+                "constraints: 2, 4 or 6 (the paper's presets), {vertex: value, ...}, "
+                f"[(vertex, value), ...] or (vertices, values), got {c!r}"
+            ) from None
+        if len(items) == 2 and all(np.ndim(x) == 1 for x in items):
+            verts, vals = (np.asarray(x) for x in items)
+            if verts.shape != vals.shape:
+                raise ValueError(
+                    f"constraints: {verts.shape[0]} vertices but {vals.shape[0]} values"
+                )
+            items = list(zip(verts.tolist(), vals.tolist(), strict=True))
+    out = []
+    for item in items:
+        try:
+            v, x = item
+        except (TypeError, ValueError):
+            raise ValueError(f"constraint {item!r}: expected (vertex, value)") from None
+        out.append(
+            {
+                "vertex": _arrays.count(v, "constraint vertex"),
+                "value": _arrays.real(x, "constraint value"),
+            }
+        )
+    return out
+
+
+#: Eigenvalues with ``|lambda| <= ZERO_EIGENVALUE_EPS * lambda_max`` count as zero and are
+#: skipped by the filters (the library's rule, also pyFM's WKS cut-off).
+ZERO_EIGENVALUE_EPS = 1e-8
+
+
+def _callable_weights(w: Any, evals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(indices of the pairs used, their weights) of a Python weight function ``w(s)``,
+    applied to the non-zero eigenvalues; refused unless strictly positive and finite."""
+    lmax = float(np.abs(evals).max()) if evals.size else 0.0
+    used = np.flatnonzero(np.abs(evals) > ZERO_EIGENVALUE_EPS * lmax)
+    if used.size == 0:
+        raise ValueError("the spectrum has no non-zero eigenvalue to filter")
+    s = evals[used]
+    weights = np.asarray(w(s.copy()), dtype=np.float64)
+    if weights.shape != s.shape:
+        weights = np.broadcast_to(weights, s.shape).astype(np.float64)
+    bad = np.flatnonzero(~(np.isfinite(weights) & (weights > 0)))
+    if bad.size:
+        j = int(bad[0])
+        raise ValueError(
+            f"the filter is not strictly positive and finite on the spectrum: w({s[j]}) = "
+            f"{weights[j]} at eigenpair index {int(used[j])}"
+        )
+    return used, weights
+
+
+class Analysis:
+    """One mesh analysed: its operators ``(S, B)``, the factorization, an eigenbasis that
+    grows with ``k``, and every field of the paper computed from them.
+
+    ``Analysis(V, F)`` assembles the operators (cheap); the first spectral request computes
+    the basis, later requests with the same or a smaller ``k`` reuse it, a larger ``k``
+    computes a larger basis (the pairs for a given ``k`` never depend on what was asked
+    before). Fields come back as NumPy arrays of one value per vertex, ``(n,)`` float64.
+
+    **Scale.** ``normalize=True`` (the default, the paper's and the library's) analyses
+    the shape as if scaled to unit total area: ``B`` is divided by the area ``A``, so the
+    eigenvalues are ``A`` times those of the mesh as given and every time ``t`` (heat,
+    diffusion, HKS) is a time on the unit-area shape, comparable across meshes of any
+    size (pyFM and DiffusionNet rescale to unit area too). ``normalize=False`` uses the
+    mesh as given (LaPy's and libigl's times).
+
+    Defaults of every field (``k = 100`` pairs, ``t = 0.5``, the bi-harmonic filter, the
+    source at the vertex of largest x, 2 harmonic constraints) come from the library's
+    request type, the same as the command line's, the web app's and experiment files'.
+
+    Thread-safe: several Python threads may query one analysis at once (the GIL is
+    released during computations). Ctrl-C stops a computation with ``KeyboardInterrupt``.
+
+    Parameters
+    ----------
+    V : ``(n, 3)`` real array of vertex positions (float32 or float64, any order).
+    F : ``(m, 3)`` integer array of 0-based vertex indices (int32 or int64, any order).
+    kind : the discretization, see :func:`spectral_mesh.laplacian` (default ``"fem"``).
+    normalize : analyse the unit-area shape (default ``True``, see above).
+    tol, seed, dirichlet, method : the eigensolver's, see :func:`spectral_mesh.eigenbasis`.
+    """
+
+    def __init__(
+        self,
+        V: Any,
+        F: Any,
+        kind: str = ANALYSIS["kind"],
+        *,
+        normalize: bool = ANALYSIS["normalize"],
+        tol: float = TOL,
+        seed: int = SEED,
+        dirichlet: Sequence[int] | None = None,
+        method: str = ANALYSIS["method"],
+    ):
+        V, F = _arrays.mesh(V, F)
+        d = None if dirichlet is None else [_arrays.count(i, "dirichlet vertex") for i in dirichlet]
+        self._a = _native.Analysis(
+            V,
+            F,
+            str(kind),
+            bool(normalize),
+            _arrays.real(tol, "tol"),
+            _arrays.count(seed, "seed"),
+            d,
+            str(method),
+        )
+        # Own read-only copies: the analysis does not change when the caller's arrays do.
+        self._V = V.copy()
+        self._F = F.copy()
+        self._V.setflags(write=False)
+        self._F.setflags(write=False)
+        self._info: dict = {}
+        self._last: Any = None
+
+    @classmethod
+    def from_file(
+        cls, path: str | os.PathLike[str], kind: str = ANALYSIS["kind"], **options: Any
+    ) -> Analysis:
+        """The analysis of a mesh file (see :func:`spectral_mesh.read_mesh`)."""
+        from ._api import read_mesh
+
+        return cls(*read_mesh(path), kind, **options)
+
+    @classmethod
+    def from_shape(cls, spec: str, kind: str = ANALYSIS["kind"], **options: Any) -> Analysis:
+        """The analysis of a built-in shape (see :func:`spectral_mesh.shape`)."""
+        from ._api import shape
+
+        return cls(*shape(spec), kind, **options)
+
+    # ------------------------------------------------------------------ properties
+
+    @property
+    def V(self) -> np.ndarray:
+        """``(n, 3)`` float64 vertex positions as given (not scaled; a read-only copy)."""
+        return self._V
+
+    @property
+    def F(self) -> np.ndarray:
+        """``(m, 3)`` int64 triangles (a read-only copy)."""
+        return self._F
+
+    @property
+    def n(self) -> int:
+        """Number of vertices."""
+        return self._a.n
+
+    @property
+    def kind(self) -> str:
+        """The discretization."""
+        return self._a.kind
+
+    @property
+    def normalized(self) -> bool:
+        """True when the shape is analysed at unit total area."""
+        return self._a.normalized
+
+    @property
+    def area(self) -> float:
+        """``A = 1^T B 1`` of the mass as assembled: the surface area for the area-based
+        masses (``n`` for ``cot`` and ``uniform``). Normalization divides ``B`` by it."""
+        return self._a.input_total_mass
+
+    @property
+    def held_k(self) -> int:
+        """The number of eigenpairs held (0 before the first spectral request)."""
+        return self._a.held_k
+
+    @property
+    def factorizations(self) -> int:
+        """How many times ``S - sigma B`` was factored for eigenbases (a counter)."""
+        return self._a.factorizations
+
+    @property
+    def default_source(self) -> int:
+        """The default source and anchor: the vertex of largest x (lowest index on ties)."""
+        return self._a.default_source
+
+    @property
+    def last_info(self) -> dict:
+        """What the last field request resolved: the request with every default filled in
+        (source, anchor, constraints), the marked vertices, ``k`` used and held."""
+        return self._info
+
+    def __repr__(self) -> str:
+        return self._a.__repr__()
+
+    # ------------------------------------------------------------------ operators, basis
+
+    def operators(self):
+        """``(S, B)`` in use, ``scipy.sparse.csr_matrix`` (``B / area`` when normalized);
+        conventions as :func:`spectral_mesh.laplacian`."""
+        s, b = self._a.operators()
+        return _arrays.csr_from_parts(s, self.n), _arrays.csr_from_parts(b, self.n)
+
+    def basis(
+        self, k: int = K, *, progress: Callable[[dict], Any] | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The first ``k`` eigenpairs ``(evals (k,), evecs (n, k))`` of the operators in
+        use (copies): ascending, B-orthonormal, signs as :func:`spectral_mesh.eigenbasis`.
+        Computed, or grown, when fewer than ``k`` are held; ``progress`` as in
+        :func:`spectral_mesh.eigenbasis`."""
+        return self._a.basis(self._k(k), progress)
+
+    def eigenvalues(self, k: int = K) -> np.ndarray:
+        """The first ``k`` eigenvalues ``(k,)``."""
+        return self.basis(k)[0]
+
+    def residuals(self) -> np.ndarray:
+        """Relative residuals of the held pairs (``(held_k,)``)."""
+        return self._a.residuals()
+
+    def set_basis(self, evals: Any, evecs: Any) -> None:
+        """Hold a basis computed elsewhere (LaPy, SciPy, a file): ``evals`` ``(k,)``
+        ascending and ``evecs`` ``(n, k)`` orthonormal for this analysis' mass (remember
+        ``normalize``: eigenvalues of the raw mesh times the area, vectors times
+        ``sqrt(area)``). Fields then use it."""
+        self._a.set_basis(_arrays.vector(evals, "evals"), _arrays.columns_t(evecs, "evecs"))
+
+    def save_basis(self, path: str | os.PathLike[str]) -> None:
+        """Save the held basis as a ``.npz`` archive (see :func:`spectral_mesh.save_basis`)
+        with the mesh's hash and the solver parameters."""
+        self._a.save_basis(os.fspath(path))
+
+    def load_basis(self, path: str | os.PathLike[str]) -> int:
+        """Hold the basis of an archive saved for this mesh, discretization and
+        normalization (refused with ``ValueError`` otherwise). Returns its ``k``."""
+        return self._a.load_basis(os.fspath(path))
+
+    # ------------------------------------------------------------------ fields
+
+    def _k(self, k: Any) -> int:
+        k = _arrays.count(k, "k", 1)
+        if k > self.n:
+            raise ValueError(
+                f"k = {k} eigenpairs asked for, but the mesh has only {self.n} vertices"
+            )
+        return k
+
+    def field(self, kind: str, *, return_info: bool = False, **params: Any):
+        """Any field by its request kind and parameters, exactly as in experiment files
+        and the web app (``kind`` is one of ``harmonic``, ``heat``, ``diffusion``,
+        ``distance``, ``spectral-function``, ``hks``, ``wks``, ``adf``, ``segmentation``,
+        ``embedding``, ``eigenfunction``, ``green``; unknown parameters are refused by
+        name). Returns the ``(n,)`` values, or ``(values, info)`` with
+        ``return_info=True`` (``info``: see :attr:`last_info`). A segmentation returns its
+        int64 labels."""
+        values = params.pop("_values", None)
+        req = {"kind": str(kind)}
+        for key, v in params.items():
+            if v is not None:
+                req[key] = _arrays.plain(v, key)
+        vals, labels, info = self._a.field(req, values)
+        info.pop("values", None)
+        info.pop("labels", None)
+        self._info = info
+        out = labels if labels is not None else vals
+        self._last = out
+        return (out, info) if return_info else out
+
+    def _weights(self, w: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
+        return _callable_weights(w, self.eigenvalues(k))
+
+    def _embedding_of(self, used: np.ndarray, weights: np.ndarray, k: int) -> np.ndarray:
+        _, X = self.basis(k)
+        return X[:, used] * np.sqrt(weights)
+
+    def heat(
+        self,
+        anchor: int | None = None,
+        *,
+        t: float = _R["heat"]["t"],
+        kernel: str = _R["heat"]["kernel"],
+        k: int = _R["heat"]["k"],
+    ) -> np.ndarray:
+        """The heat kernel basis function ``K_t e_anchor`` (the paper's diffusion basis,
+        eq. 8): ``(n,)``. ``kernel``: ``"wfem"`` (default, ``X D_t X^T B``, conserves the
+        B-mass), ``"voronoi-cot"`` (``X D_t X^T D``, D lumped) or ``"standard"``
+        (``X D_t X^T``, LaPy's and pyFM's ``heat kernel`` columns). ``D_t =
+        diag(exp(-lambda t))`` over the first ``k`` pairs. ``anchor`` defaults to the
+        vertex of largest x."""
+        return self.field("heat", anchor=anchor, t=t, kernel=kernel, k=self._k(k))
+
+    def diffuse(
+        self,
+        signal: Any,
+        *,
+        t: float = _R["diffusion"]["t"],
+        kernel: str = _R["diffusion"]["kernel"],
+        k: int = _R["diffusion"]["k"],
+    ) -> np.ndarray:
+        """The diffusion ``K_t f`` of a signal (the solution at time ``t`` of
+        ``B F' + S F = 0``, ``F(0) = f``, truncated to ``k`` pairs): ``(n,)``.
+        ``signal``: ``(n,)`` values, a vertex index (the unit impulse there), or
+        ``{"vertex": v, "radius": r}`` (the indicator of the Euclidean ball of radius
+        ``r``, in mesh units, around ``v``). ``kernel`` as in :meth:`heat`."""
+        sig, values = _signal(signal, self.n)
+        return self.field("diffusion", signal=sig, t=t, kernel=kernel, k=self._k(k), _values=values)
+
+    def distance(
+        self,
+        source: int | Sequence[int] | None = None,
+        *,
+        distance: str = _R["distance"]["distance"],
+        k: int = _R["distance"]["k"],
+    ) -> np.ndarray:
+        """Filtered spectral distances from ``source`` (eq. 13), ``(n,)``; from several
+        sources ``(n, len(source))``.
+
+        ``d(p, q)^2 = sum_{lambda_j > 0} w(lambda_j) (x_j(p) - x_j(q))^2`` over the first
+        ``k`` pairs, zero eigenvalues skipped, with the weight ``w = 1/phi``:
+
+        - ``"biharmonic"`` (default) ``w = 1/s^2``; ``"commute"`` ``w = 1/s``;
+          ``"diffusion:t=0.5"`` ``w = exp(-t s)``; ``"mix:a=0.5,t=0.5"``
+          ``w = (1-a) exp(-t s) + a/s^2``; ``"poly:p=2"`` ``w = s^-p``; ``"band:1,4"``
+          band suppression of those pairs;
+        - custom filters: ``"custom-w:EXPR;name=value,..."`` gives the weight ``w(s)``,
+          ``"custom-phi:EXPR;..."`` the filter map ``phi(s) = 1/w(s)``; EXPR uses ``s``,
+          ``pi``, the named parameters, ``+ - * / ^``, ``exp log sqrt abs sin cos tanh
+          pow min max``, e.g. ``"custom-w:exp(-s*t)/s;t=0.1"``;
+        - ``"wfem-diffusion:t=0.5"``: the wFEM diffusion distance of eq. 15,
+          ``d_t(i, j)^2 = (e_i - e_j)^T B X D_t X^T B (e_i - e_j)``.
+
+        ``source`` defaults to the vertex of largest x. A Python function of the
+        eigenvalues (``distance=lambda s: 1 / s**3``, vectorized over a NumPy array) is a
+        custom weight ``w(s)`` too, evaluated here with NumPy on the basis.
+        """
+        k = self._k(k)
+        if callable(distance):
+            used, weights = self._weights(distance, k)
+            E = self._embedding_of(used, weights, k)
+            one = source is None or isinstance(source, (int, np.integer))
+            if source is None:
+                srcs = [self.default_source]
+            elif isinstance(source, (int, np.integer)):
+                srcs = [_arrays.count(source, "source")]
+            else:
+                srcs = [_arrays.count(x, "source") for x in source]
+            for x in srcs:
+                if x >= self.n:
+                    raise ValueError(f"source {x} is out of range: the mesh has {self.n} vertices")
+            d = (
+                np.column_stack([np.linalg.norm(E - E[x], axis=1) for x in srcs])
+                if srcs
+                else np.zeros((self.n, 0))
+            )
+            return d[:, 0] if one else d
+        if source is not None and not isinstance(source, (int, np.integer)):
+            sources = [_arrays.count(s, "source") for s in source]
+            if str(distance).strip().startswith("wfem-diffusion"):
+                return (
+                    np.column_stack(
+                        [self.field("distance", source=s, distance=distance, k=k) for s in sources]
+                    )
+                    if sources
+                    else np.zeros((self.n, 0))
+                )
+            return self._a.distances_many(sources, str(distance), k)
+        return self.field("distance", source=source, distance=distance, k=k)
+
+    def spectral_function(
+        self,
+        filter: str = _R["spectral-function"]["filter"],
+        *,
+        k: int = _R["spectral-function"]["k"],
+    ) -> np.ndarray:
+        """The generalized spectral function ``G(p, p) = sum_{lambda > 0} w(lambda) x(p)^2``
+        of a filter (see :meth:`distance` for filters, text or a Python function): ``(n,)``."""
+        if callable(filter):
+            used, weights = self._weights(filter, self._k(k))
+            return np.sum(self._embedding_of(used, weights, self._k(k)) ** 2, axis=1)
+        return self.field("spectral-function", filter=filter, k=self._k(k))
+
+    def green(
+        self,
+        source: int | None = None,
+        *,
+        filter: str = _R["green"]["filter"],
+        k: int = _R["green"]["k"],
+    ) -> np.ndarray:
+        """A row ``G(source, .)`` of the generalized Green kernel ``X diag(w) X^T``
+        (zero eigenvalues skipped): ``(n,)``. ``filter``: text or a Python function
+        (see :meth:`distance`)."""
+        if callable(filter):
+            used, weights = self._weights(filter, self._k(k))
+            E = self._embedding_of(used, weights, self._k(k))
+            s = self.default_source if source is None else _arrays.count(source, "source")
+            if s >= self.n:
+                raise ValueError(f"source {s} is out of range: the mesh has {self.n} vertices")
+            return E @ E[s]
+        return self.field("green", source=source, filter=filter, k=self._k(k))
+
+    def hks(
+        self,
+        t: float | Sequence[float] = _R["hks"]["t"],
+        *,
+        scaled: bool = _R["hks"]["scaled"],
+        k: int = _R["hks"]["k"],
+    ) -> np.ndarray:
+        """The heat kernel signature ``hks_t(p) = sum_j exp(-lambda_j t) x_j(p)^2`` over
+        all ``k`` pairs (the zero eigenvalue included, pyFM's ``HKS``); ``scaled`` divides
+        by the heat trace ``sum_j exp(-lambda_j t)``. A number ``t`` gives ``(n,)``, a
+        sequence of times ``(n, len(t))``."""
+        k = self._k(k)
+        if np.ndim(t) == 0:
+            return self.field("hks", t=t, scaled=bool(scaled), k=k)
+        times = [_arrays.real(x, "t") for x in np.asarray(t).ravel()]
+        return self._a.hks_many(times, bool(scaled), k)
+
+    def hks_times(self, n_times: int, *, k: int = _R["hks"]["k"]) -> np.ndarray:
+        """pyFM's automatic HKS times: ``n_times`` values geometrically spaced from
+        ``4 ln 10 / lambda_max`` to ``4 ln 10 / lambda_1`` (the first non-zero)."""
+        return np.asarray(self._a.hks_auto_times(_arrays.count(n_times, "n_times", 1), self._k(k)))
+
+    def auto_hks(self, n_times: int, *, scaled: bool = True, k: int = _R["hks"]["k"]) -> np.ndarray:
+        """pyFM's ``auto_HKS``: the HKS at :meth:`hks_times`, ``(n, n_times)``
+        (scaled by default, as pyFM)."""
+        times = self.hks_times(n_times, k=k)
+        return self._a.hks_many([float(x) for x in times], bool(scaled), self._k(k))
+
+    def wks(
+        self,
+        energy: float | Sequence[float],
+        *,
+        sigma: float = _R["wks"]["sigma"],
+        scaled: bool = _R["wks"]["scaled"],
+        k: int = _R["wks"]["k"],
+    ) -> np.ndarray:
+        """The wave kernel signature at energy ``e`` (a log-eigenvalue):
+        ``wks_e(p) = sum_j c_j(e) x_j(p)^2``, ``c_j(e) = exp(-(e - ln lambda_j)^2 / (2 sigma^2))``,
+        pairs with ``lambda <= 1e-8 lambda_max`` dropped (pyFM's ``WKS``); ``scaled``
+        divides by ``sum_j c_j(e)``. A number gives ``(n,)``, a sequence ``(n, len)``."""
+        k = self._k(k)
+        if np.ndim(energy) == 0:
+            return self.field("wks", energy=energy, sigma=sigma, scaled=bool(scaled), k=k)
+        es = [_arrays.real(x, "energy") for x in np.asarray(energy).ravel()]
+        return self._a.wks_many(es, _arrays.real(sigma, "sigma"), bool(scaled), k)
+
+    def wks_energies(self, n_energies: int, *, k: int = _R["wks"]["k"]) -> tuple[np.ndarray, float]:
+        """pyFM's automatic WKS energies and bandwidth: ``sigma = 7 (e_max - e_min) / n``,
+        ``n`` energies evenly spaced from ``ln lambda_1 + 2 sigma`` to
+        ``ln lambda_max - 2 sigma``. Returns ``(energies, sigma)``."""
+        e, s = self._a.wks_auto_energies(_arrays.count(n_energies, "n_energies", 1), self._k(k))
+        return np.asarray(e), s
+
+    def auto_wks(
+        self, n_energies: int, *, scaled: bool = True, k: int = _R["wks"]["k"]
+    ) -> np.ndarray:
+        """pyFM's ``auto_WKS``: the WKS at :meth:`wks_energies`, ``(n, n_energies)``
+        (scaled by default, as pyFM)."""
+        e, s = self.wks_energies(n_energies, k=k)
+        return self._a.wks_many([float(x) for x in e], float(s), bool(scaled), self._k(k))
+
+    def adf(self, t: float = _R["adf"]["t"], *, k: int = _R["adf"]["k"]) -> np.ndarray:
+        """The auto-diffusion function ``G(p, p)`` with the weight ``exp(-t s)``, zero
+        eigenvalues skipped: ``(n,)``."""
+        return self.field("adf", t=t, k=self._k(k))
+
+    def eigenfunction(
+        self, index: int = _R["eigenfunction"]["index"], *, k: int = _R["eigenfunction"]["k"]
+    ) -> np.ndarray:
+        """Eigenfunction ``x_index`` (0-based; default 1, the first after the constant):
+        ``(n,)``."""
+        return self.field("eigenfunction", index=index, k=self._k(k))
+
+    def embedding(
+        self,
+        filter: str = _R["embedding"]["filter"],
+        *,
+        component: int | None = None,
+        k: int = _R["embedding"]["k"],
+    ) -> np.ndarray:
+        """The filtered spectral embedding ``p -> (sqrt(w(lambda_j)) x_j(p))_j``, whose
+        Euclidean distances are the filtered distances of :meth:`distance`: ``(n, d)``
+        with one column per pair of non-zero weight (zero eigenvalues skipped). With
+        ``component=j``, only the coordinate of pair ``j`` (0-based, in basis order):
+        ``(n,)``. ``filter``: text or a Python function (see :meth:`distance`)."""
+        k = self._k(k)
+        if callable(filter):
+            used, weights = self._weights(filter, k)
+            E = self._embedding_of(used, weights, k)
+            if component is None:
+                return E
+            c = _arrays.count(component, "component")
+            if c >= k:
+                raise ValueError(f"component: {c}: out of range for k = {k} pairs (0-based)")
+            hit = np.flatnonzero(used == c)
+            return E[:, hit[0]] if hit.size else np.zeros(self.n)
+        if component is None:
+            return self._a.embedding_matrix(str(filter), k)
+        return self.field("embedding", filter=filter, component=component, k=k)
+
+    def segmentation(
+        self,
+        signature: Any = _R["segmentation"]["signature"],
+        *,
+        persistence: float = _R["segmentation"]["persistence"],
+        k: int = _R["segmentation"]["k"],
+    ) -> np.ndarray:
+        """Segmentation into the watershed basins of a signature's maxima, merged by
+        persistence (relative to the field's range): ``(n,)`` int64 patch labels.
+        ``signature``: ``"hks:t=0.1"`` (default), ``"adf:t=0.1"``,
+        ``"wks:e=E,sigma=0.5"``, ``"biharmonic-function"``, ``"commute-function"``,
+        ``"spectral-function:FILTER"``, or ``(n,)`` values of any field."""
+        if isinstance(signature, str):
+            return self.field(
+                "segmentation", signature=signature, persistence=persistence, k=self._k(k)
+            )
+        values = _arrays.per_vertex(signature, self.n, "signature")
+        return self.field(
+            "segmentation", signature=[], persistence=persistence, k=self._k(k), _values=values
+        )
+
+    def harmonic(
+        self,
+        constraints: Any = _R["harmonic"]["constraints"],
+        *,
+        order: int = _R["harmonic"]["order"],
+    ) -> np.ndarray:
+        """The harmonic (``order=1``: ``S f = 0``) or bi-harmonic (``order=2``:
+        ``S B^-1 S f = 0``, lumped B) map with Dirichlet constraints: ``(n,)``. No
+        eigenbasis is needed; the factorization is kept for the same constrained vertices.
+
+        ``constraints``: ``2`` (default, the paper's: the vertex of min x -> 0, of max
+        x -> 1), ``4`` (adds min/max y), ``6`` (adds z); or explicit ``{vertex: value}``,
+        ``[(vertex, value), ...]`` or ``(vertices, values)``. Every connected component
+        needs a constraint."""
+        return self.field("harmonic", constraints=_constraints(constraints), order=order)
+
+    def critical_points(self, values: Any) -> CriticalPoints:
+        """The minima, maxima and saddles of a field ``(n,)``, with the Euler check."""
+        r = self._a.critical_points(_arrays.per_vertex(values, self.n))
+        p = r["points"]
+        sad = np.asarray(p["saddles"], dtype=np.int64).reshape(-1, 2)
+        ints = lambda x: np.asarray(x, dtype=np.int64)  # noqa: E731
+        return CriticalPoints(
+            minima=ints(p["minima"]),
+            maxima=ints(p["maxima"]),
+            saddles=sad[:, 0].copy(),
+            multiplicities=sad[:, 1].copy(),
+            on_boundary=ints(p["on_boundary"]),
+            non_manifold=ints(p["non_manifold"]),
+            chi=r["chi"],
+            lhs=r["lhs"],
+            rhs=r["rhs"],
+            holds=r["holds"],
+            formula=r["formula"],
+        )
+
+    def level_sets(
+        self, values: Any, levels: int | Sequence[float] = FIGURE["levels"]
+    ) -> list[LevelSet]:
+        """Level sets of a field ``(n,)``: at ``levels`` evenly spaced values inside its
+        range (the centres of ``levels`` equal bins, as the figures draw them), or at the
+        given values. Each
+        :class:`LevelSet` holds its segments ``(s, 2, 3)``."""
+        vals = _arrays.per_vertex(values, self.n)
+        if np.ndim(levels) == 0:
+            sets = self._a.level_sets(vals, [], _arrays.count(levels, "levels"))
+        else:
+            sets = self._a.level_sets(
+                vals, [_arrays.real(x, "level") for x in np.asarray(levels).ravel()]
+            )
+        return [LevelSet(v, seg.reshape(-1, 2, 3)) for v, seg in sets]
+
+    # ------------------------------------------------------------------ pictures
+
+    def render(
+        self,
+        values: Any,
+        path: str | os.PathLike[str] | None = None,
+        *,
+        marks: Any = None,
+        labels: Any = None,
+        levels: int = FIGURE["levels"],
+        colormap: str = FIGURE["colormap"],
+        view: str | tuple[float, float] = FIGURE["view"],
+        size: int = FIGURE["size"],
+        transparent: bool = FIGURE["transparent"],
+        critical_points: bool = FIGURE["critical_points"],
+        colorbar: bool = FIGURE["colorbar"],
+    ):
+        """Draw a field on this mesh; see :func:`spectral_mesh.render`. ``marks=None``
+        marks the vertices of the last field request (its source, anchor or constraints)
+        when ``values`` is the array that request returned."""
+        if marks is None:
+            marks = self._info.get("marks", []) if values is self._last else []
+        return self._a.render(
+            _arrays.per_vertex(values, self.n),
+            _marks(marks),
+            _labels(labels, self.n),
+            _arrays.count(levels, "levels"),
+            str(colormap),
+            _view_text(view),
+            _arrays.count(size, "size", 1),
+            bool(transparent),
+            bool(critical_points),
+            bool(colorbar),
+            None if path is None else os.fspath(path),
+        )

@@ -1,0 +1,175 @@
+"""Type stubs of the private native module ``spectral_mesh._native`` (Rust, PyO3).
+
+The public API is the pure-Python layer (``spectral_mesh``), which normalizes input to the
+layouts taken here: ``V`` C-contiguous ``(n, 3)`` float64, ``F`` C-contiguous ``(m, 3)``
+int64, per-vertex values ``(n,)`` float64, ``n x k`` matrices given as their C-contiguous
+``(k, n)`` transpose, requests and reports as dicts (the library's serde forms), sparse matrices as CSC arrays ``(data float64, indices int64,
+indptr int64)`` (for the symmetric operators these are also their CSR arrays). Returned
+``(n, k)`` matrices are Fortran-ordered. Every function releases the GIL, runs on a
+worker thread, raises ``KeyboardInterrupt`` on Ctrl-C and never lets a Rust panic through
+(``InternalError``).
+"""
+
+from os import PathLike
+from typing import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+Csc = tuple[F64, I64, I64]
+
+__version__: str
+
+def read_mesh(path: str | PathLike[str]) -> tuple[F64, I64, dict]:
+    """``(V (n, 3), F (m, 3), info)``; info: format, polygons triangulated, warnings."""
+
+def write_mesh(path: str | PathLike[str], v: F64, f: I64) -> None: ...
+def shape(spec: str) -> tuple[F64, I64]: ...
+def shape_names() -> list[dict]:
+    """The built-in shapes."""
+
+def laplacian(v: F64, f: I64, kind: str, normalize: bool) -> tuple[Csc, Csc, float]:
+    """``(S, B, A)``: S positive semi-definite, B the mass (``/ A`` when normalizing), A =
+    ``1^T B 1`` as assembled."""
+
+def read_points(path: str | PathLike[str]) -> tuple[F64, F64 | None, dict]:
+    """``(P (n, 3), normals (n, 3) or None, info)``; info: format, warnings."""
+
+def point_laplacian(
+    p: F64, normals: F64 | None, neighbors: int, mollify_factor: float, normalize: bool
+) -> tuple[Csc, Csc, float]:
+    """``(S, B, A)`` of a point cloud (B diagonal), A = ``1^T B 1`` as assembled."""
+
+def eigenbasis(
+    v: F64,
+    f: I64,
+    k: int,
+    kind: str,
+    normalize: bool,
+    tol: float,
+    seed: int,
+    dirichlet: list[int] | None,
+    method: str,
+    progress: Callable[[dict], object] | None = None,
+) -> tuple[F64, F64]:
+    """``(evals (k,), evecs (n, k) Fortran order)``, ``evecs.T @ B @ evecs = I``;
+    ``progress`` is called with a dict per solver event."""
+
+def eigsh(
+    n: int,
+    a: Csc,
+    m: Csc | None,
+    k: int,
+    tol: float,
+    seed: int,
+    method: str,
+    progress: Callable[[dict], object] | None = None,
+) -> tuple[F64, F64]:
+    """The ``k`` smallest pairs of ``A x = w M x`` (A PSD, M SPD or the identity)."""
+
+def save_basis(
+    path: str | PathLike[str],
+    evals: F64,
+    evecs_t: F64,
+    mass: Csc,
+    kind: str,
+    v: F64 | None = None,
+    f: I64 | None = None,
+) -> None: ...
+def load_basis(path: str | PathLike[str]) -> tuple[F64, F64, Csc, dict]:
+    """``(evals, evecs (n, k), mass CSC arrays, meta)``."""
+
+def render(
+    v: F64,
+    f: I64,
+    values: F64,
+    marks: list[int],
+    labels: list[int] | None,
+    levels: int,
+    colormap: str,
+    view: str,
+    size: int,
+    transparent: bool,
+    critical_points: bool,
+    colorbar: bool,
+    path: str | PathLike[str] | None,
+) -> NDArray[np.uint8] | None:
+    """Writes ``path`` (format from its extension) and returns None, or returns the
+    ``(size, size, 4)`` RGBA picture."""
+
+def defaults() -> dict:
+    """The library's defaults (requests, analysis, figure, names)."""
+
+def num_threads() -> int: ...
+def _panic_for_tests(message: str) -> None: ...
+def _work_for_tests(seconds: float, checks: bool) -> float: ...
+
+class Analysis:
+    """The library's ``Analysis``: one mesh, its operators, the factorization and a basis
+    that grows with ``k``."""
+
+    def __new__(
+        cls,
+        v: F64,
+        f: I64,
+        kind: str,
+        normalize: bool,
+        tol: float,
+        seed: int,
+        dirichlet: list[int] | None,
+        method: str,
+    ) -> Analysis: ...
+    @property
+    def n(self) -> int: ...
+    @property
+    def held_k(self) -> int: ...
+    @property
+    def normalized(self) -> bool: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def input_total_mass(self) -> float: ...
+    @property
+    def factorizations(self) -> int: ...
+    @property
+    def default_source(self) -> int: ...
+    def mesh(self) -> tuple[F64, I64]: ...
+    def operators(self) -> tuple[Csc, Csc]: ...
+    def basis(
+        self, k: int, progress: Callable[[dict], object] | None = None
+    ) -> tuple[F64, F64]: ...
+    def residuals(self) -> F64: ...
+    def field(self, request: dict, values: F64 | None = None) -> tuple[F64, I64 | None, dict]:
+        """A ``FieldRequest`` in its serde form (a dict tagged by ``kind``): ``(values
+        (n,), labels (n,) or None, info)``."""
+    def critical_points(self, values: F64) -> dict: ...
+    def level_sets(
+        self, values: F64, levels: list[float], count: int | None = None
+    ) -> list[tuple[float, F64]]: ...
+    def hks_many(self, times: list[float], scaled: bool, k: int) -> F64: ...
+    def hks_auto_times(self, count: int, k: int) -> list[float]: ...
+    def wks_many(self, energies: list[float], sigma: float, scaled: bool, k: int) -> F64: ...
+    def wks_auto_energies(self, count: int, k: int) -> tuple[list[float], float]: ...
+    def embedding_matrix(self, filter: str, k: int) -> F64: ...
+    def distances_many(self, sources: list[int], filter: str, k: int) -> F64: ...
+    def set_basis(self, evals: F64, evecs_t: F64) -> None: ...
+    def save_basis(self, path: str | PathLike[str]) -> None: ...
+    def load_basis(self, path: str | PathLike[str]) -> int: ...
+    def render(
+        self,
+        values: F64,
+        marks: list[int],
+        labels: list[int] | None,
+        levels: int,
+        colormap: str,
+        view: str,
+        size: int,
+        transparent: bool,
+        critical_points: bool,
+        colorbar: bool,
+        path: str | PathLike[str] | None,
+    ) -> NDArray[np.uint8] | None: ...
+    def options(self) -> dict: ...
+    def __repr__(self) -> str: ...

@@ -1,0 +1,577 @@
+//! The library's [`Analysis`] as a Python class: one mesh, its operators, the
+//! factorization and a basis that grows with `k`, answering field requests.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyTuple;
+use serde_json::json;
+use spectral_mesh::analysis::{AnalysisOptions, Signal, SignatureSpec};
+use spectral_mesh::spectral::BasisView;
+use spectral_mesh::spectral::distances::distances_from_many;
+use spectral_mesh::spectral::embedding::spectral_embedding;
+use spectral_mesh::spectral::filters::Filter;
+use spectral_mesh::spectral::signatures::{hks, hks_auto_times, wks, wks_auto_energies};
+use spectral_mesh::spectral::store::{BasisMeta, load_npz, save_npz};
+use spectral_mesh::{Analysis, CancelToken, Eigenbasis, FieldRequest};
+
+use crate::arrays::{
+    self, FieldOut, MeshArrays, Pairs, csc_parts, csc_to_py, mesh_from, to_columns, to_rows,
+    to_vector,
+};
+use crate::errors::Failure;
+use crate::pyjson;
+use crate::run::{Progress, run};
+use crate::{draw, eigen_params, figure_options, laplacian_of, with_values};
+
+/// A `ValueError` from a serde message.
+fn request_error(e: serde_json::Error) -> Failure {
+    let s = e.to_string();
+    let s = s.split(" at line ").next().unwrap_or(&s).to_string();
+    Failure::value(format!("invalid request: {s}"))
+}
+
+/// The analysis object (see the module documentation).
+#[pyclass(frozen, name = "Analysis", module = "spectral_mesh._native")]
+pub struct PyAnalysis {
+    inner: Arc<Analysis>,
+}
+
+impl PyAnalysis {
+    /// Runs `f` on the first `k` pairs of the basis (computed when needed).
+    fn with_basis<T, F>(&self, py: Python<'_>, k: usize, f: F) -> PyResult<T>
+    where
+        T: Send + 'static,
+        F: FnOnce(BasisView<'_>) -> Result<T, Failure> + Send + 'static,
+    {
+        self.with_basis_progress(py, k, Progress::default(), f)
+    }
+
+    /// [`PyAnalysis::with_basis`] reporting the eigensolve to a Python callback.
+    fn with_basis_progress<T, F>(
+        &self,
+        py: Python<'_>,
+        k: usize,
+        progress: Progress,
+        f: F,
+    ) -> PyResult<T>
+    where
+        T: Send + 'static,
+        F: FnOnce(BasisView<'_>) -> Result<T, Failure> + Send + 'static,
+    {
+        let an = self.inner.clone();
+        run(py, move |token: &CancelToken| {
+            let b = an.basis(k, &mut |p| progress.report(&p, token), token);
+            let b = progress.finish(b.map_err(Failure::from))?;
+            f(b.view(k))
+        })
+    }
+}
+
+#[pymethods]
+impl PyAnalysis {
+    /// Builds the analysis of `(V, F)` (assembles the operators; nothing is factored yet).
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (v, f, kind, normalize, tol, seed, dirichlet, method))]
+    fn new(
+        py: Python<'_>,
+        v: PyReadonlyArray2<'_, f64>,
+        f: PyReadonlyArray2<'_, i64>,
+        kind: &str,
+        normalize: bool,
+        tol: f64,
+        seed: u64,
+        dirichlet: Option<Vec<usize>>,
+        method: &str,
+    ) -> PyResult<Self> {
+        let prepare = || -> Result<_, Failure> {
+            Ok((
+                mesh_from(&v, &f)?,
+                AnalysisOptions {
+                    laplacian: laplacian_of(kind)?,
+                    normalize,
+                    eigen: eigen_params(tol, seed, dirichlet, method)?,
+                },
+            ))
+        };
+        let (mesh, options) = prepare().map_err(|e| e.into_pyerr(py))?;
+        let inner = run(py, move |_| Ok(Arc::new(Analysis::new(mesh, options))))?;
+        Ok(Self { inner })
+    }
+
+    /// Number of vertices.
+    #[getter]
+    fn n(&self) -> usize {
+        self.inner.n()
+    }
+
+    /// Eigenpairs held (0 before the first spectral request).
+    #[getter]
+    fn held_k(&self) -> usize {
+        self.inner.held_k()
+    }
+
+    /// Whether the operators are normalized to unit total mass.
+    #[getter]
+    fn normalized(&self) -> bool {
+        self.inner.options().normalize
+    }
+
+    /// The discretization's name.
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.inner.options().laplacian.name()
+    }
+
+    /// `1^T B 1` of the mass as assembled (the area for area-based masses).
+    #[getter]
+    fn input_total_mass(&self) -> f64 {
+        self.inner.input_total_mass()
+    }
+
+    /// How many times the shifted pencil was factored.
+    #[getter]
+    fn factorizations(&self) -> usize {
+        self.inner.factorizations()
+    }
+
+    /// The vertex of largest x (lowest index on ties): the default source and anchor.
+    #[getter]
+    fn default_source(&self) -> usize {
+        self.inner.default_source()
+    }
+
+    /// `(V, F)` of the mesh (copies).
+    fn mesh<'py>(&self, py: Python<'py>) -> PyResult<MeshArrays<'py>> {
+        let (v, f) = arrays::mesh_arrays(self.inner.mesh());
+        let (n, m) = (v.len() / 3, f.len() / 3);
+        Ok((to_rows(py, n, 3, v)?, to_rows(py, m, 3, f)?))
+    }
+
+    /// The operators in use `(S, B)` as CSC arrays (`B / A` when normalizing).
+    fn operators<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyTuple>)> {
+        let ops = self.inner.operators();
+        Ok((
+            csc_to_py(py, csc_parts(&ops.stiffness))?,
+            csc_to_py(py, csc_parts(&ops.mass))?,
+        ))
+    }
+
+    /// The first `k` pairs `(evals (k,), evecs (n, k))` (copies; the basis is computed or
+    /// grown when it holds fewer), the solve reported to `progress` when given.
+    #[pyo3(signature = (k, progress=None))]
+    fn basis<'py>(
+        &self,
+        py: Python<'py>,
+        k: usize,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Pairs<'py>> {
+        let progress = Progress::new(progress);
+        let (n, values, vectors) = self.with_basis_progress(py, k, progress, move |b| {
+            Ok((b.n, b.values.to_vec(), b.vectors.to_vec()))
+        })?;
+        Ok((to_vector(py, values), to_columns(py, n, k, vectors)?))
+    }
+
+    /// Relative residuals of the held basis' pairs (empty without a basis).
+    fn residuals<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let r = self
+            .inner
+            .held_basis()
+            .map(|b| b.residuals.clone())
+            .unwrap_or_default();
+        to_vector(py, r)
+    }
+
+    /// Evaluates a field request (the library's serde form, as a dict); `values` replaces
+    /// a diffusion's signal or a segmentation's field. Returns `(values, labels, info)`.
+    #[pyo3(signature = (request, values=None))]
+    fn field<'py>(
+        &self,
+        py: Python<'py>,
+        request: &Bound<'py, PyAny>,
+        values: Option<PyReadonlyArray1<'_, f64>>,
+    ) -> PyResult<FieldOut<'py>> {
+        let prepare = || -> Result<FieldRequest, Failure> {
+            let value = pyjson::from_py(request, "request")?;
+            let mut req: FieldRequest = serde_json::from_value(value).map_err(request_error)?;
+            if let Some(v) = &values {
+                with_values(&mut req, arrays::values(v, "values")?)?;
+            }
+            Ok(req)
+        };
+        let req = prepare().map_err(|e| e.into_pyerr(py))?;
+        let an = self.inner.clone();
+        let (values, labels, info) = run(py, move |token| {
+            let mut field = an.field_with(&req, &mut |_| {}, token)?;
+            let values = std::mem::take(&mut field.values);
+            let labels = field.labels.take();
+            // Per-vertex payloads stay out of the info.
+            match &mut field.request {
+                FieldRequest::Diffusion { signal, .. } if matches!(signal, Signal::Values(_)) => {
+                    *signal = Signal::Values(Vec::new())
+                }
+                FieldRequest::Segmentation { signature, .. }
+                    if matches!(signature, SignatureSpec::Values(_)) =>
+                {
+                    *signature = SignatureSpec::Values(Vec::new())
+                }
+                _ => {}
+            }
+            let info =
+                serde_json::to_value(&field).map_err(|e| Failure::Internal(e.to_string()))?;
+            Ok((values, labels, info))
+        })?;
+        let labels = labels.map(|l| to_vector(py, l.into_iter().map(|x| x as i64).collect()));
+        Ok((to_vector(py, values), labels, pyjson::to_py(py, &info)?))
+    }
+
+    /// Critical points of a field with the Euler check, as a dict.
+    fn critical_points<'py>(
+        &self,
+        py: Python<'py>,
+        values: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let values = arrays::values(&values, "values").map_err(|e| e.into_pyerr(py))?;
+        let an = self.inner.clone();
+        let report = run(py, move |_| {
+            let report = an.critical_points(&values)?;
+            serde_json::to_value(&report).map_err(|e| Failure::Internal(e.to_string()))
+        })?;
+        pyjson::to_py(py, &report)
+    }
+
+    /// Level sets of a field at `levels`, or at `count` evenly spaced values inside its
+    /// range (the library's `level_values`, as figures draw them): a list of
+    /// `(value, segments)` with the segments as an `(s, 6)` array of end points.
+    #[pyo3(signature = (values, levels, count=None))]
+    fn level_sets<'py>(
+        &self,
+        py: Python<'py>,
+        values: PyReadonlyArray1<'_, f64>,
+        levels: Vec<f64>,
+        count: Option<usize>,
+    ) -> PyResult<Vec<(f64, Bound<'py, PyArray2<f64>>)>> {
+        let values = arrays::values(&values, "values").map_err(|e| e.into_pyerr(py))?;
+        let an = self.inner.clone();
+        let sets = run(py, move |_| {
+            let n = an.n();
+            if values.len() != n {
+                return Err(Failure::value(format!(
+                    "values has {} entries but the mesh has {n} vertices",
+                    values.len()
+                )));
+            }
+            if let Some(l) = levels.iter().find(|l| !l.is_finite()) {
+                return Err(Failure::value(format!("level {l} is not finite")));
+            }
+            let levels = match count {
+                Some(c) => {
+                    let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+                    let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    spectral_mesh::fields::level_sets::level_values(lo, hi, c)
+                }
+                None => levels,
+            };
+            let sets =
+                spectral_mesh::fields::level_sets::extract_level_sets(an.mesh(), &values, &levels);
+            Ok(sets
+                .into_iter()
+                .map(|s| {
+                    let flat: Vec<f64> = s.segments.iter().flatten().flatten().copied().collect();
+                    (s.value, flat)
+                })
+                .collect::<Vec<_>>())
+        })?;
+        sets.into_iter()
+            .map(|(v, flat)| {
+                let s = flat.len() / 6;
+                Ok((v, to_rows(py, s, 6, flat)?))
+            })
+            .collect()
+    }
+
+    /// HKS at each time: `(n, len(times))` (pyFM's convention: every pair, the zero
+    /// eigenvalue included; `scaled` divides by the heat trace).
+    fn hks_many<'py>(
+        &self,
+        py: Python<'py>,
+        times: Vec<f64>,
+        scaled: bool,
+        k: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        if let Some(t) = times.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+            return Err(
+                Failure::value(format!("t = {t}: times must be finite and > 0")).into_pyerr(py),
+            );
+        }
+        let (n, cols) = (self.inner.n(), times.len());
+        let data = self.with_basis(py, k, move |b| Ok(hks(b, &times, scaled).concat()))?;
+        to_columns(py, n, cols, data)
+    }
+
+    /// pyFM's automatic HKS times for the first `k` pairs.
+    fn hks_auto_times(&self, py: Python<'_>, count: usize, k: usize) -> PyResult<Vec<f64>> {
+        self.with_basis(py, k, move |b| {
+            hks_auto_times(b, count).map_err(|e| Failure::value(e.to_string()))
+        })
+    }
+
+    /// WKS at each energy: `(n, len(energies))` (pyFM's convention).
+    fn wks_many<'py>(
+        &self,
+        py: Python<'py>,
+        energies: Vec<f64>,
+        sigma: f64,
+        scaled: bool,
+        k: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        if let Some(e) = energies.iter().find(|e| !e.is_finite()) {
+            return Err(Failure::value(format!("energy {e} is not finite")).into_pyerr(py));
+        }
+        let (n, cols) = (self.inner.n(), energies.len());
+        let data = self.with_basis(py, k, move |b| {
+            Ok(wks(b, &energies, sigma, scaled)
+                .map_err(|e| Failure::value(e.to_string()))?
+                .concat())
+        })?;
+        to_columns(py, n, cols, data)
+    }
+
+    /// pyFM's automatic WKS energies and bandwidth for the first `k` pairs.
+    fn wks_auto_energies(
+        &self,
+        py: Python<'_>,
+        count: usize,
+        k: usize,
+    ) -> PyResult<(Vec<f64>, f64)> {
+        self.with_basis(py, k, move |b| {
+            wks_auto_energies(b, count).map_err(|e| Failure::value(e.to_string()))
+        })
+    }
+
+    /// The spectral embedding of a filter: `(n, d)`, `d` = pairs with non-zero weight.
+    fn embedding_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        filter: &str,
+        k: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let filter: Filter =
+            filter
+                .parse()
+                .map_err(|e: spectral_mesh::spectral::filters::FilterError| {
+                    Failure::value(format!("filter: {e}")).into_pyerr(py)
+                })?;
+        let (n, d, data) = self.with_basis(py, k, move |b| {
+            let rows = spectral_embedding(b, &filter, usize::MAX)
+                .map_err(|e| Failure::value(e.to_string()))?;
+            let d = rows.first().map_or(0, Vec::len);
+            Ok((rows.len(), d, rows.concat()))
+        })?;
+        to_rows(py, n, d, data)
+    }
+
+    /// Filtered spectral distances from several sources: `(n, len(sources))`.
+    fn distances_many<'py>(
+        &self,
+        py: Python<'py>,
+        sources: Vec<usize>,
+        filter: &str,
+        k: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let filter: Filter =
+            filter
+                .parse()
+                .map_err(|e: spectral_mesh::spectral::filters::FilterError| {
+                    Failure::value(format!("distance: {e}")).into_pyerr(py)
+                })?;
+        let (n, cols) = (self.inner.n(), sources.len());
+        let data = self.with_basis(py, k, move |b| {
+            Ok(distances_from_many(b, &sources, &filter)
+                .map_err(|e| Failure::value(e.to_string()))?
+                .concat())
+        })?;
+        to_columns(py, n, cols, data)
+    }
+
+    /// Installs a basis given as arrays: eigenvalues `(k,)` and the eigenvectors' `(k, n)`
+    /// transpose, B-orthonormal for this analysis' mass.
+    fn set_basis(
+        &self,
+        py: Python<'_>,
+        evals: PyReadonlyArray1<'_, f64>,
+        evecs_t: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<()> {
+        let prepare = || -> Result<Eigenbasis, Failure> {
+            let values = arrays::values(&evals, "evals")?;
+            let (n, k, vectors) = arrays::columns(&evecs_t, "evecs")?;
+            if k != values.len() {
+                return Err(Failure::value(format!(
+                    "evecs has {k} columns but evals has {} values",
+                    values.len()
+                )));
+            }
+            if k == 0 {
+                return Err(Failure::value("the basis is empty (k = 0)"));
+            }
+            if values.windows(2).any(|w| w[1] < w[0]) {
+                return Err(Failure::value("evals must be ascending"));
+            }
+            let ops = self.inner.operators();
+            let mut b = Eigenbasis {
+                laplacian: ops.laplacian,
+                n,
+                values,
+                vectors,
+                mass: ops.mass.clone(),
+                residuals: Vec::new(),
+            };
+            if n == self.inner.n() {
+                b.residuals = b.compute_residuals(&ops.stiffness);
+            }
+            Ok(b)
+        };
+        let basis = prepare().map_err(|e| e.into_pyerr(py))?;
+        let an = self.inner.clone();
+        run(py, move |_| Ok(an.set_basis(basis)?))
+    }
+
+    /// Saves the held basis (with the mesh hash and the solver parameters).
+    fn save_basis(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let an = self.inner.clone();
+        run(py, move |_| {
+            let b = an
+                .held_basis()
+                .ok_or_else(|| Failure::value("no basis to save: ask for one first (basis(k))"))?;
+            let params = spectral_mesh::spectral::eigenbasis::EigenParams {
+                k: b.k(),
+                ..an.options().eigen.clone()
+            };
+            let meta = BasisMeta::new(&b, Some(an.mesh()), &params);
+            save_npz(&b, &path, &meta)?;
+            Ok(())
+        })
+    }
+
+    /// Loads a basis saved for this mesh, discretization and normalisation (refused
+    /// otherwise) and holds it. Returns the number of pairs.
+    fn load_basis(&self, py: Python<'_>, path: PathBuf) -> PyResult<usize> {
+        let an = self.inner.clone();
+        run(py, move |_| {
+            let (basis, meta) = load_npz(&path)?;
+            let p = path.display();
+            if basis.n != an.n() {
+                return Err(Failure::value(format!(
+                    "{p}: the basis has {} vertices but the mesh has {}",
+                    basis.n,
+                    an.n()
+                )));
+            }
+            if basis.laplacian != an.options().laplacian {
+                return Err(Failure::value(format!(
+                    "{p}: the basis is for the '{}' discretization, this analysis uses '{}'",
+                    basis.laplacian.name(),
+                    an.options().laplacian.name()
+                )));
+            }
+            if !meta.mesh_hash.is_empty() && meta.mesh_hash != an.mesh().content_hash() {
+                return Err(Failure::value(format!(
+                    "{p}: the basis was computed for another mesh (its hash differs)"
+                )));
+            }
+            let ours = &an.operators().mass;
+            let same_mass = basis.mass.col_ptr() == ours.col_ptr()
+                && basis.mass.row_idx() == ours.row_idx()
+                && basis
+                    .mass
+                    .values()
+                    .iter()
+                    .zip(ours.values())
+                    .all(|(a, b)| (a - b).abs() <= 1e-12 * b.abs().max(f64::MIN_POSITIVE));
+            if !same_mass {
+                return Err(Failure::value(format!(
+                    "{p}: the basis was computed with another mass matrix (normalize = {} here; was it saved with the other setting?)",
+                    an.options().normalize
+                )));
+            }
+            let k = basis.k();
+            an.set_basis(basis)?;
+            Ok(k)
+        })
+    }
+
+    /// Draws a field on this mesh (see the module-level `render`).
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (values, marks, labels, levels, colormap, view, size, transparent, critical_points, colorbar, path))]
+    fn render(
+        &self,
+        py: Python<'_>,
+        values: PyReadonlyArray1<'_, f64>,
+        marks: Vec<usize>,
+        labels: Option<Vec<usize>>,
+        levels: usize,
+        colormap: &str,
+        view: &str,
+        size: u32,
+        transparent: bool,
+        critical_points: bool,
+        colorbar: bool,
+        path: Option<PathBuf>,
+    ) -> PyResult<Py<PyAny>> {
+        let prepare = || -> Result<_, Failure> {
+            Ok((
+                arrays::values(&values, "values")?,
+                figure_options(
+                    levels,
+                    colormap,
+                    view,
+                    size,
+                    transparent,
+                    critical_points,
+                    colorbar,
+                )?,
+            ))
+        };
+        let (values, options) = prepare().map_err(|e| e.into_pyerr(py))?;
+        draw(
+            py,
+            self.inner.mesh_arc().clone(),
+            values,
+            marks,
+            labels,
+            options,
+            path,
+        )
+    }
+
+    fn __repr__(&self) -> String {
+        let o = self.inner.options();
+        format!(
+            "Analysis(n={}, kind='{}', normalize={}, held_k={})",
+            self.inner.n(),
+            o.laplacian.name(),
+            if o.normalize { "True" } else { "False" },
+            self.inner.held_k()
+        )
+    }
+
+    /// The analysis' options as a dict.
+    fn options<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let o = self.inner.options();
+        let v = json!({
+            "kind": o.laplacian.name(),
+            "normalize": o.normalize,
+            "tol": o.eigen.tolerance,
+            "seed": o.eigen.seed,
+            "dirichlet": o.eigen.dirichlet,
+        });
+        pyjson::to_py(py, &v)
+    }
+}

@@ -1,0 +1,166 @@
+//! Every computation runs here: on a worker thread, with the GIL released, watched by the
+//! calling thread for signals.
+//!
+//! - **GIL**: the calling thread waits with the GIL released, so other Python threads run
+//!   (and call the library) meanwhile; the work itself never touches Python objects.
+//! - **Threads**: the work uses the library's rayon pool (all cores unless
+//!   `RAYON_NUM_THREADS` says otherwise).
+//! - **Ctrl-C**: every [`POLL`] the calling thread takes the GIL back for a moment and
+//!   runs Python's signal handlers (`PyErr_CheckSignals`, only effective on the main
+//!   thread). When one raises (`KeyboardInterrupt` for Ctrl-C) the work's
+//!   [`CancelToken`] is cancelled, the worker is given [`GRACE`] to stop, and the
+//!   exception is raised — whether or not the worker has stopped by then: a worker that
+//!   has not finishes in the background and its result is dropped (a computation that
+//!   checks the token stops at its next check).
+//! - **Panics** are caught on the worker and become `spectral_mesh.InternalError`; they
+//!   never unwind into Python.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::mpsc::{RecvTimeoutError, channel};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use spectral_mesh::CancelToken;
+use spectral_mesh::linalg::EigenProgress;
+
+use crate::errors::Failure;
+
+/// How often the waiting thread checks for signals.
+pub const POLL: Duration = Duration::from_millis(50);
+/// How long a cancelled worker is waited for before the exception is raised anyway.
+pub const GRACE: Duration = Duration::from_millis(500);
+
+/// Runs `work` as described in the module documentation and returns its result.
+pub fn run<T, F>(py: Python<'_>, work: F) -> PyResult<T>
+where
+    T: Send + 'static,
+    F: FnOnce(&CancelToken) -> Result<T, Failure> + Send + 'static,
+{
+    let token = CancelToken::new();
+    let worker_token = token.clone();
+    let (tx, rx) = channel();
+    std::thread::Builder::new()
+        .name("spectral-mesh".into())
+        .spawn(move || {
+            let out = catch_unwind(AssertUnwindSafe(|| work(&worker_token)))
+                .unwrap_or_else(|payload| Err(Failure::Internal(panic_message(&payload))));
+            // The receiver is gone only when the caller gave up after a signal.
+            let _ = tx.send(out);
+        })
+        .map_err(|e| {
+            Failure::Internal(format!("cannot start a worker thread: {e}")).into_pyerr(py)
+        })?;
+    let mut rx = rx;
+    loop {
+        // The receiver is moved in and out: it is `Send` but not `Sync`.
+        let (got, back) = py.detach(move || (rx.recv_timeout(POLL), rx));
+        rx = back;
+        match got {
+            Ok(out) => return out.map_err(|f| f.into_pyerr(py)),
+            Err(RecvTimeoutError::Timeout) => {
+                if let Err(signal) = py.check_signals() {
+                    token.cancel();
+                    let _ = py.detach(move || rx.recv_timeout(GRACE).map(|_| ()));
+                    return Err(signal);
+                }
+            }
+            Err(RecvTimeoutError::Disconnected) => {
+                return Err(Failure::Internal("the worker thread vanished".into()).into_pyerr(py));
+            }
+        }
+    }
+}
+
+/// The text of a panic payload.
+pub fn panic_message(payload: &Box<dyn std::any::Any + Send>) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        (*s).to_string()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "a panic without a message".to_string()
+    }
+}
+
+/// A Python progress callback of an eigensolve, called on the worker thread (which takes
+/// the GIL for the call). An exception it raises cancels the computation and is raised
+/// in its place.
+#[derive(Clone, Default)]
+pub struct Progress {
+    callback: Option<Arc<Py<PyAny>>>,
+    error: Arc<Mutex<Option<PyErr>>>,
+}
+
+impl Progress {
+    /// Calls `callback` (when given) with a dict per progress event.
+    pub fn new(callback: Option<Py<PyAny>>) -> Self {
+        Self {
+            callback: callback.map(Arc::new),
+            error: Arc::default(),
+        }
+    }
+
+    /// Reports one event; cancels `token` when the callback raises.
+    pub fn report(&self, event: &EigenProgress, token: &CancelToken) {
+        let Some(cb) = &self.callback else { return };
+        let mut error = self.error.lock().unwrap_or_else(|p| p.into_inner());
+        if error.is_some() {
+            return;
+        }
+        let outcome = Python::attach(|py| -> PyResult<()> {
+            let d = PyDict::new(py);
+            match event {
+                EigenProgress::Dense { n } => {
+                    d.set_item("stage", "dense")?;
+                    d.set_item("n", n)?;
+                }
+                EigenProgress::Factorization { n, shift } => {
+                    d.set_item("stage", "factorization")?;
+                    d.set_item("n", n)?;
+                    d.set_item("shift", shift)?;
+                }
+                EigenProgress::Iteration {
+                    iteration,
+                    converged,
+                    wanted,
+                    basis,
+                } => {
+                    d.set_item("stage", "iteration")?;
+                    d.set_item("iteration", iteration)?;
+                    d.set_item("converged", converged)?;
+                    d.set_item("wanted", wanted)?;
+                    d.set_item("basis", basis)?;
+                }
+                EigenProgress::Finished {
+                    iterations,
+                    solves,
+                    max_residual,
+                    orthogonality_error,
+                } => {
+                    d.set_item("stage", "finished")?;
+                    d.set_item("iterations", iterations)?;
+                    d.set_item("solves", solves)?;
+                    d.set_item("max_residual", max_residual)?;
+                    d.set_item("orthogonality_error", orthogonality_error)?;
+                }
+            }
+            cb.call1(py, (d,))?;
+            Ok(())
+        });
+        if let Err(e) = outcome {
+            *error = Some(e);
+            token.cancel();
+        }
+    }
+
+    /// `result`, or the exception the callback raised.
+    pub fn finish<T>(&self, result: Result<T, Failure>) -> Result<T, Failure> {
+        let raised = self.error.lock().unwrap_or_else(|p| p.into_inner()).take();
+        match raised {
+            Some(e) => Err(Failure::Python(e)),
+            None => result,
+        }
+    }
+}
