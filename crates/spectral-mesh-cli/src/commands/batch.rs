@@ -252,7 +252,7 @@ fn shapes_bar(len: usize) -> ProgressBar {
 /// What a worker thread reports to the main thread.
 enum Event {
     /// The row of shape `i`.
-    Done(usize, BatchRecord),
+    Done(usize, Box<BatchRecord>),
     /// The worker died on shape `i`, which goes back to the queue.
     Retry(usize, String),
 }
@@ -296,7 +296,7 @@ fn run_workers(
                                     .lock()
                                     .unwrap_or_else(|p| p.into_inner())
                                     .get_or_insert(e);
-                                let _ = tx.send(Event::Done(i, rec));
+                                let _ = tx.send(Event::Done(i, Box::new(rec)));
                                 continue;
                             }
                         }
@@ -304,7 +304,7 @@ fn run_workers(
                     let Some(w) = worker.as_mut() else { continue };
                     match w.process(input) {
                         Ok(rec) => {
-                            let _ = tx.send(Event::Done(i, rec));
+                            let _ = tx.send(Event::Done(i, Box::new(rec)));
                         }
                         Err(death) => {
                             let died = worker.take().map(Worker::finish).unwrap_or_default();
@@ -324,7 +324,7 @@ fn run_workers(
                                     params_hash,
                                     format!("{message}, {ATTEMPTS} times: out of memory or a crash"),
                                 );
-                                let _ = tx.send(Event::Done(i, rec));
+                                let _ = tx.send(Event::Done(i, Box::new(rec)));
                             }
                         }
                     }
@@ -344,7 +344,7 @@ fn run_workers(
                         Status::Skipped => skipped += 1,
                         Status::Failed => failed += 1,
                     }
-                    records[i] = Some(rec);
+                    records[i] = Some(*rec);
                     bar.inc(1);
                     bar.set_message(format!("{ok} computed, {skipped} skipped, {failed} failed"));
                 }
