@@ -66,6 +66,8 @@ enum Command {
     Study(commands::study::Study),
     /// The interactive web app on http://127.0.0.1:8000 (pick a shape, click, move sliders).
     Serve(commands::serve::Args),
+    /// Eigenbases and descriptors of a whole collection of shapes, resumable, in parallel.
+    Batch(commands::batch::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -102,6 +104,7 @@ fn main() -> std::process::ExitCode {
         Command::Run(a) => commands::run::run(a),
         Command::Study(s) => commands::study::run(s),
         Command::Serve(a) => commands::serve::run(a),
+        Command::Batch(a) => commands::batch::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -26,6 +26,7 @@ use spectral_mesh_render::{Colormap, Figure, FigureOptions, View};
 
 mod analysis;
 mod arrays;
+mod batch;
 mod errors;
 mod pyjson;
 mod run;
@@ -662,6 +663,12 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(defaults, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_params, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_inputs, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_prepare, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_one, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_failed, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_summary, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     m.add_function(wrap_pyfunction!(_work_for_tests, m)?)?;
     m.add_class::<analysis::PyAnalysis>()?;

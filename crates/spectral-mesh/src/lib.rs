@@ -8,6 +8,7 @@
 //! Conventions are those of the project's `MATH.md`.
 
 pub mod analysis;
+pub mod batch;
 pub mod cancel;
 pub mod experiments;
 pub mod fields;

@@ -1,5 +1,6 @@
 //! One module per subcommand: an `Args` struct (clap) and a `run` function.
 
+pub mod batch;
 pub mod convert;
 pub mod distance;
 pub mod eigs;

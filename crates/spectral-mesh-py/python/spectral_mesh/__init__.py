@@ -30,6 +30,7 @@ from __future__ import annotations
 
 from . import _native
 from ._analysis import Analysis, CriticalPoints, LevelSet
+from ._batch import batch
 from ._api import (
     eigenbasis,
     eigsh,
@@ -67,6 +68,7 @@ __all__ = [
     "SolverError",
     "SpectralMeshError",
     "__version__",
+    "batch",
     "eigenbasis",
     "eigsh",
     "laplacian",

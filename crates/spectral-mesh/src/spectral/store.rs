@@ -157,6 +157,21 @@ fn npy_u8(data: &[u8]) -> std::io::Result<Vec<u8>> {
 /// arrays deflated; see the module documentation for the arrays). The file is written to a temporary name and renamed,
 /// so a crash never leaves a truncated archive under `path`.
 pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(), StoreError> {
+    save_npz_with(basis, path, meta, true, &[])
+}
+
+/// [`save_npz`] with any metadata (`meta`, serialized as the `meta` JSON array), the
+/// eigenvectors and mass left out when `vectors` is false (an eigenvalues-only archive,
+/// which [`load_npz`] refuses), and `extra` arrays appended: `(name, .npy bytes)` pairs
+/// (see [`npy_f64`]), stored as `name.npy`, deflated. The archive is deterministic: the
+/// same arguments give the same bytes (entries dated 1980-01-01, as NumPy's `savez`).
+pub fn save_npz_with(
+    basis: &Eigenbasis,
+    path: &Path,
+    meta: &impl serde::Serialize,
+    vectors: bool,
+    extra: &[(String, Vec<u8>)],
+) -> Result<(), StoreError> {
     let (n, k) = (basis.n, basis.k());
     let e = io_err(path);
     let meta_json = serde_json::to_vec(meta).map_err(|err| StoreError::Format {
@@ -168,34 +183,41 @@ pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(),
     // The small arrays are compressed; the eigenvectors (n x k doubles, which deflate
     // shrinks by only about a fifth at a cost of seconds per 100 MB) are stored and
     // streamed into the archive without a copy, as NumPy's `savez` stores every array.
-    let small: Vec<(&str, Vec<u8>)> = vec![
-        (
-            "eigenvalues",
-            npy_f64(&basis.values, &[k as u64], false).map_err(&e)?,
-        ),
-        (
-            "mass_data",
-            npy_f64(m.values(), &[m.nnz() as u64], false).map_err(&e)?,
-        ),
-        ("mass_indices", npy_i64(&to_i64(m.row_idx())).map_err(&e)?),
-        ("mass_indptr", npy_i64(&to_i64(m.col_ptr())).map_err(&e)?),
-        (
-            "mass_shape",
-            npy_i64(&[m.nrows() as i64, m.ncols() as i64]).map_err(&e)?,
-        ),
+    let mut small: Vec<(&str, Vec<u8>)> = vec![(
+        "eigenvalues",
+        npy_f64(&basis.values, &[k as u64], false).map_err(&e)?,
+    )];
+    if vectors {
+        small.extend([
+            (
+                "mass_data",
+                npy_f64(m.values(), &[m.nnz() as u64], false).map_err(&e)?,
+            ),
+            ("mass_indices", npy_i64(&to_i64(m.row_idx())).map_err(&e)?),
+            ("mass_indptr", npy_i64(&to_i64(m.col_ptr())).map_err(&e)?),
+            (
+                "mass_shape",
+                npy_i64(&[m.nrows() as i64, m.ncols() as i64]).map_err(&e)?,
+            ),
+        ]);
+    }
+    small.extend([
         (
             "residuals",
             npy_f64(&basis.residuals, &[basis.residuals.len() as u64], false).map_err(&e)?,
         ),
         ("meta", npy_u8(&meta_json).map_err(&e)?),
-    ];
+    ]);
     crate::io::write_atomic_with(path, |file| {
         let mut zip = zip::ZipWriter::new(std::io::BufWriter::new(file));
+        let date = zip::DateTime::default();
         let deflated = zip::write::SimpleFileOptions::default()
             .compression_method(zip::CompressionMethod::Deflated)
+            .last_modified_time(date)
             .large_file(true);
         let stored = zip::write::SimpleFileOptions::default()
             .compression_method(zip::CompressionMethod::Stored)
+            .last_modified_time(date)
             .large_file(true);
         let (first, rest) = small.split_at(1);
         for (name, bytes) in first {
@@ -203,15 +225,19 @@ pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(),
                 .map_err(std::io::Error::other)?;
             zip.write_all(bytes)?;
         }
-        zip.start_file("eigenvectors.npy", stored)
-            .map_err(std::io::Error::other)?;
-        write_npy_f64(
-            &mut zip,
-            &basis.vectors[..n * k],
-            &[n as u64, k as u64],
-            true,
-        )?;
-        for (name, bytes) in rest {
+        if vectors {
+            zip.start_file("eigenvectors.npy", stored)
+                .map_err(std::io::Error::other)?;
+            write_npy_f64(
+                &mut zip,
+                &basis.vectors[..n * k],
+                &[n as u64, k as u64],
+                true,
+            )?;
+        }
+        let rest = rest.iter().map(|(name, b)| (*name, b.as_slice()));
+        let extra = extra.iter().map(|(name, b)| (name.as_str(), b.as_slice()));
+        for (name, bytes) in rest.chain(extra) {
             zip.start_file(format!("{name}.npy"), deflated)
                 .map_err(std::io::Error::other)?;
             zip.write_all(bytes)?;
@@ -220,6 +246,27 @@ pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(),
         inner.flush()
     })
     .map_err(|err| e(err.source))
+}
+
+/// The `meta` array of an `.npz` archive as raw JSON bytes, without reading the other
+/// arrays (a quick look at what an archive holds).
+pub fn read_npz_meta(path: &Path) -> Result<Vec<u8>, StoreError> {
+    let e = io_err(path);
+    let fmt = |reason: String| StoreError::Format {
+        path: path.display().to_string(),
+        reason,
+    };
+    let file = std::fs::File::open(path).map_err(&e)?;
+    let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
+        .map_err(|err| fmt(format!("not a zip archive ({err})")))?;
+    let mut entry = zip
+        .by_name("meta.npy")
+        .map_err(|_| fmt("missing array 'meta'".to_string()))?;
+    let mut bytes = Vec::new();
+    entry.read_to_end(&mut bytes).map_err(&e)?;
+    npyz::NpyFile::new(std::io::Cursor::new(bytes))
+        .and_then(|f| f.into_vec::<u8>())
+        .map_err(|err| fmt(format!("array 'meta': {err}")))
 }
 
 /// Reads an archive written by [`save_npz`] (or by NumPy with the same arrays; the

@@ -1,0 +1,155 @@
+"""spectral_mesh.batch: a local process pool and a local Dask cluster (a scheduler and two
+worker processes on 127.0.0.1, no dashboard) with one worker killed mid-run; the outputs
+equal a local run's bit for bit; reruns do no work; an edited input recomputes exactly
+that shape."""
+
+from __future__ import annotations
+
+import csv
+import os
+import shutil
+import signal
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+import spectral_mesh as sm
+
+SHARED = ["cow.off", "elephant.off", "hand.off", "knot1.off", "homer.off", "cactus.off"]
+BROKEN = {
+    "bad-index.off": ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n", "9"),
+    "empty.off": ("", "empty.off"),
+    "words.obj": ("this is not a mesh\n", "words.obj"),
+}
+PARAMS = dict(k=20, hks="auto:4", wks=3)
+
+
+def make_set(root: Path, shared_dir: str | None, generated: int) -> Path:
+    """Shared meshes (when the folder is given), generated ones, and broken files."""
+    src = root / "set"
+    src.mkdir()
+    if shared_dir:
+        for name in SHARED:
+            shutil.copy(Path(shared_dir) / name, src / name)
+    for i in range(generated):
+        V, F = sm.shape(f"torus:res=3,R={1.2 + 0.1 * i},r=0.4")
+        sm.write_mesh(src / f"gen{i}.off", V, F)
+    for name, (text, _) in BROKEN.items():
+        (src / name).write_text(text)
+    return src
+
+
+def results(out: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(out.glob("*.npz"))}
+
+
+def by_name(records):
+    return {r["name"]: r for r in records}
+
+
+def check_rows(records, src: Path, out: Path):
+    rows = by_name(records)
+    assert set(rows) == {p.name for p in src.iterdir()}
+    for name, (_, reason) in BROKEN.items():
+        r = rows[name]
+        assert r["status"] == "failed", r
+        assert name in r["error"] and reason in r["error"], r["error"]
+    good = [n for n in rows if n not in BROKEN]
+    for n in good:
+        assert rows[n]["status"] in ("ok", "skipped"), rows[n]
+        assert rows[n]["k"] == PARAMS["k"]
+        assert (out / f"{n}.npz").is_file()
+    with open(out / "summary.csv", newline="") as f:
+        summary = {r["name"]: r for r in csv.DictReader(f)}
+    assert set(summary) == set(rows)
+    for n, r in rows.items():
+        assert summary[n]["status"] == r["status"]
+    return good
+
+
+def test_local_pool_resumes_and_isolates_a_crash(tmp_path, monkeypatch):
+    shared = os.environ.get("SPECTRAL_MESH_SHARED_MESHES")
+    src = make_set(tmp_path, shared, 3)
+    # A valid mesh whose worker process aborts (the test hook): retried once, then its row.
+    V, F = sm.shape("sphere:res=2")
+    sm.write_mesh(src / "crash.off", V, F)
+    monkeypatch.setenv("SPECTRAL_MESH_BATCH_TEST_ABORT", "crash.off")
+    out = tmp_path / "out"
+    first = sm.batch(src, out, processes=2, **PARAMS)
+    rows = by_name(first)
+    assert rows["crash.off"]["status"] == "failed"
+    assert "died" in rows["crash.off"]["error"], rows["crash.off"]
+    monkeypatch.delenv("SPECTRAL_MESH_BATCH_TEST_ABORT")
+    # Good shapes computed, broken ones failed with their reason.
+    for n, r in rows.items():
+        if n in BROKEN or n == "crash.off":
+            assert r["status"] == "failed"
+        else:
+            assert r["status"] == "ok", r
+    before = results(out)
+    # Again: no work for the good and broken shapes; the crash (no marker) is tried again
+    # and now succeeds (the hook is off).
+    second = by_name(sm.batch(src, out, processes=2, **PARAMS))
+    for n, r in second.items():
+        if n in BROKEN:
+            assert (r["status"], r["reused"]) == ("failed", True)
+        elif n == "crash.off":
+            assert r["status"] == "ok"
+        else:
+            assert r["status"] == "skipped", r
+    after = results(out)
+    assert {n: b for n, b in after.items() if n != "crash.off.npz"} == before
+    # An edited input (a comment appended): exactly that shape computed again.
+    edited = "gen1.off"
+    with open(src / edited, "a") as f:
+        f.write("# edited\n")
+    third = by_name(sm.batch(src, out, processes=2, **PARAMS))
+    changed = sorted(n for n, r in third.items() if r["status"] == "ok")
+    assert changed == [edited]
+
+
+def _kill_one_worker_when_started(client, out: Path, killed: list, deadline: float):
+    while time.monotonic() < deadline:
+        if any(out.glob("*.npz")):
+            pids = client.run(os.getpid)
+            pid = sorted(pids.values())[0]
+            os.kill(pid, signal.SIGKILL)
+            killed.append(pid)
+            return
+        time.sleep(0.01)
+
+
+def test_dask_cluster_with_a_killed_worker_gives_the_local_results(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    shared = os.environ.get("SPECTRAL_MESH_SHARED_MESHES")
+    src = make_set(tmp_path, shared, 6)
+    local = tmp_path / "local"
+    reference = sm.batch(src, local, processes=2, **PARAMS)
+    good = check_rows(reference, src, local)
+    out = tmp_path / "dask"
+    with distributed.LocalCluster(host="127.0.0.1", n_workers=2, threads_per_worker=1,
+                                  processes=True, dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        killed: list = []
+        killer = threading.Thread(target=_kill_one_worker_when_started,
+                                  args=(client, out, killed, time.monotonic() + 60))
+        killer.start()
+        records = sm.batch(src, out, client=client, timeout=240, **PARAMS)
+        killer.join()
+        assert killed, "no worker was killed"
+        assert check_rows(records, src, out) == good
+        assert all(by_name(records)[n]["status"] == "ok" for n in good)
+        # Bit for bit the local run's results.
+        assert results(out) == results(local)
+        # A second run does no work.
+        again = by_name(sm.batch(src, out, client=client, timeout=120, **PARAMS))
+        assert sorted(n for n, r in again.items() if r["status"] == "ok") == []
+        assert all(again[n]["status"] == "skipped" for n in good)
+        # Editing one input recomputes exactly that shape.
+        edited = "gen2.off"
+        with open(src / edited, "a") as f:
+            f.write("# edited\n")
+        third = by_name(sm.batch(src, out, client=client, timeout=120, **PARAMS))
+        assert sorted(n for n, r in third.items() if r["status"] == "ok") == [edited]
