@@ -12,33 +12,14 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
 use pyo3::prelude::*;
-use spectral_mesh::Mesh;
 use spectral_mesh::batch::{
-    BatchInput, BatchParams, BatchRecord, JobOptions, Schedule, Thumbnailer, prepare_output,
-    process_one, remove_stale_temporaries, resolve_inputs, write_summary,
+    BatchInput, BatchParams, BatchRecord, JobOptions, Schedule, prepare_output, process_one,
+    remove_stale_temporaries, resolve_inputs, write_summary,
 };
-use spectral_mesh_render::{Figure, FigureOptions};
+use spectral_mesh_render::Thumbnails;
 
 use crate::errors::Failure;
 use crate::run::run;
-
-/// Thumbnails drawn with the render crate's figure, as the command line draws them.
-struct Thumbnails;
-
-impl Thumbnailer for Thumbnails {
-    fn png(&self, mesh: &Mesh, values: &[f64], size: u32) -> Result<Vec<u8>, String> {
-        let options = FigureOptions {
-            size,
-            levels: 10,
-            critical_points: false,
-            colorbar: false,
-            ..FigureOptions::default()
-        };
-        Figure::new(mesh, values, Vec::new(), options)
-            .and_then(|f| f.png())
-            .map_err(|e| e.to_string())
-    }
-}
 
 /// The shared pool of `threads` threads.
 fn pool(threads: usize) -> Result<Arc<rayon::ThreadPool>, Failure> {

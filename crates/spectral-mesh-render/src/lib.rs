@@ -17,6 +17,7 @@ pub mod figure;
 pub mod plots;
 pub mod raster;
 mod text;
+pub mod thumbnail;
 pub mod vrml;
 
 pub use colormap::Colormap;
@@ -27,6 +28,7 @@ pub use raster::{
 };
 pub use spectral_mesh::fields::level_sets::{LevelSet, Polyline, extract_level_sets, level_values};
 pub use text::format_number;
+pub use thumbnail::Thumbnails;
 pub use vrml::{VrmlSummary, parse_vrml_summary, write_vrml};
 
 use std::io::Write;

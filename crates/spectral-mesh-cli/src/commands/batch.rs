@@ -20,15 +20,14 @@ use std::sync::{Arc, Mutex, mpsc};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use spectral_mesh::Mesh;
 use spectral_mesh::analysis::request::DEFAULT_K;
 use spectral_mesh::batch::{
-    BatchError, BatchInput, BatchParams, BatchRecord, JobOptions, Schedule, Status, Thumbnailer,
-    prepare_output, process_one, remove_stale_temporaries, resolve_inputs, write_summary,
+    BatchError, BatchInput, BatchParams, BatchRecord, JobOptions, Schedule, Status, prepare_output,
+    process_one, remove_stale_temporaries, resolve_inputs, write_summary,
 };
 use spectral_mesh::operators::Laplacian;
 use spectral_mesh::spectral::eigenbasis::EigenParams;
-use spectral_mesh_render::{Figure, FigureOptions};
+use spectral_mesh_render::Thumbnails;
 
 /// How many times a shape is given to a worker that then dies before it is reported
 /// failed.
@@ -118,25 +117,6 @@ struct WorkerConfig {
 struct WorkerJob {
     path: PathBuf,
     name: String,
-}
-
-/// Thumbnails drawn with the render crate's figure: the field in the paper's colours, a
-/// few level sets, no markers and no colour bar.
-struct Thumbnails;
-
-impl Thumbnailer for Thumbnails {
-    fn png(&self, mesh: &Mesh, values: &[f64], size: u32) -> Result<Vec<u8>, String> {
-        let options = FigureOptions {
-            size,
-            levels: 10,
-            critical_points: false,
-            colorbar: false,
-            ..FigureOptions::default()
-        };
-        Figure::new(mesh, values, Vec::new(), options)
-            .and_then(|f| f.png())
-            .map_err(|e| e.to_string())
-    }
 }
 
 impl Args {

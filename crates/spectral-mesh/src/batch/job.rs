@@ -26,8 +26,8 @@ use super::{BatchInput, FAILURE_SUFFIX, THUMBNAIL_SUFFIX};
 
 /// Draws the thumbnail of a batch result. The library draws no pictures (it does not
 /// depend on the render crate): a face passes an implementation drawing with
-/// `spectral_mesh_render::Figure` (the command line's draws the field without level sets,
-/// markers or colour bar).
+/// `spectral_mesh_render::Figure`: both faces pass `spectral_mesh_render::Thumbnails` (the
+/// field with 10 level sets, no markers, no colour bar).
 pub trait Thumbnailer: Sync {
     /// PNG bytes of the per-vertex `values` (`n` entries) on `mesh`, `size x size` pixels.
     fn png(&self, mesh: &Mesh, values: &[f64], size: u32) -> Result<Vec<u8>, String>;
