@@ -14,6 +14,8 @@
 set -uo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 cd "$here"
+# No `npm ci` from the web crate's build script (as scripts/fuzz-smoke.sh).
+export SPECTRAL_MESH_NO_NPM=1
 seconds="${1:?usage: fuzz/long-run.sh SECONDS [TARGET ...]}"
 shift
 san="${FUZZ_SANITIZER:-none}"

@@ -21,6 +21,8 @@
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 cd "$here"
+# No `npm ci` from the web crate's build script (as scripts/fuzz-smoke.sh).
+export SPECTRAL_MESH_NO_NPM=1
 target="${1:?usage: fuzz/run.sh TARGET SECONDS [LIBFUZZER_OPTION ...]}"
 seconds="${2:?usage: fuzz/run.sh TARGET SECONDS [LIBFUZZER_OPTION ...]}"
 shift 2

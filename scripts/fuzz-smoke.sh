@@ -37,6 +37,10 @@
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root/fuzz"
+# The web crate's build script would run `npm ci` for the page's three.js when
+# web/node_modules is missing: the fuzz targets do not serve the page (the same setting in
+# fuzz/run.sh and fuzz/long-run.sh, so that they share one build).
+export SPECTRAL_MESH_NO_NPM=1
 t0=$SECONDS
 budget="${FUZZ_BUDGET:-180}"
 min_seconds="${FUZZ_MIN_SECONDS:-3}"
