@@ -29,8 +29,9 @@
 //! - a download (200) is what its type says: a PNG, VRML or PLY file, one finite value
 //!   per vertex (`txt`, read back with `io::read_field_text`), or an experiment file that
 //!   `ExperimentFile::parse` accepts (`toml`);
-//! - a basis request answers a job (`state`), which ends `done` on the built-in meshes
-//!   (or `error`/`cancelled` on a shape this input loaded) within 1.5 s;
+//! - a basis request answers a job (`state`), which ends within 1.5 s: `done` on the
+//!   built-in meshes (`error` or `cancelled` with a message allowed on a shape this input
+//!   loaded; on any mesh, a 404 when the job's memory evicted the mesh);
 //! - a shape answers `mesh_id` (16 hex digits), `n` and `m` within the limits.
 #![no_main]
 
@@ -406,7 +407,8 @@ fn url_encode(bytes: &[u8]) -> String {
 }
 
 /// Polls the basis job of mesh `id` until it is neither queued nor running (1.5 s at
-/// most): its final JSON.
+/// most): its final JSON, or `{"state": "evicted"}` when the mesh left the cache (the
+/// job's memory may have evicted it: a 404 with its message).
 async fn wait_job(app: &Router, id: &str) -> Value {
     let start = Instant::now();
     loop {
@@ -415,6 +417,10 @@ async fn wait_job(app: &Router, id: &str) -> Value {
             request(Method::GET, &format!("/api/mesh/{id}/basis/status"), Vec::new(), true),
         )
         .await;
+        if r.status == StatusCode::NOT_FOUND {
+            check_refusal("basis status", &r, None);
+            return json!({"state": "evicted", "message": r.json()["error"]});
+        }
         assert_eq!(r.status, StatusCode::OK, "basis status");
         let j = r.json();
         let state = j["state"].as_str().expect("a job state").to_string();
@@ -509,11 +515,11 @@ fuzz_target!(|data: &[u8]| {
                             j
                         };
                         let end = done["state"].as_str().unwrap_or("");
-                        if builtin {
+                        if builtin && end != "evicted" {
                             assert_eq!(end, "done", "{what}: basis job on a built-in mesh: {done}");
                         } else {
                             assert!(
-                                ["done", "error", "cancelled"].contains(&end),
+                                ["done", "error", "cancelled", "evicted"].contains(&end),
                                 "{what}: job ended as {done}"
                             );
                         }
