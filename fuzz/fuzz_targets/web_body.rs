@@ -109,7 +109,11 @@ fn request(method: Method, uri: &str, body: Vec<u8>, content_length: bool) -> Re
 }
 
 async fn send(app: &Router, req: Request<Body>) -> Reply {
-    let r = app.clone().oneshot(req).await.expect("the router is infallible");
+    let r = app
+        .clone()
+        .oneshot(req)
+        .await
+        .expect("the router is infallible");
     let status = r.status();
     let content_type = r
         .headers()
@@ -127,7 +131,6 @@ async fn send(app: &Router, req: Request<Body>) -> Reply {
         body,
     }
 }
-
 
 /// A built-in mesh: its id and what its basis is made from.
 struct Builtin {
@@ -183,7 +186,11 @@ fn setup() -> Fixture {
         for (shape, k) in MESHES {
             let id = load_shape(&app, shape).await;
             let mesh = Arc::new(spectral_mesh::shapes::build_str(shape).expect("a built-in shape"));
-            assert_eq!(&mesh.content_hash()[..16], id, "{shape}: the id is the content hash");
+            assert_eq!(
+                &mesh.content_hash()[..16],
+                id,
+                "{shape}: the id is the content hash"
+            );
             let ops = Operators::new(&mesh, Laplacian::Fem);
             let analysis = Analysis::with_operators(mesh.clone(), ops.clone(), fem());
             let basis = analysis
@@ -204,11 +211,7 @@ fn setup() -> Fixture {
         }
         out
     });
-    Fixture {
-        rt,
-        config,
-        meshes,
-    }
+    Fixture { rt, config, meshes }
 }
 
 /// A fresh server state with the built-in meshes loaded through the router and their
@@ -278,7 +281,11 @@ fn check_refusal(what: &str, r: &Reply, body: Option<&Value>) {
             String::from_utf8_lossy(&r.body)
         )
     });
-    assert!(!msg.trim().is_empty(), "{what}: {} with an empty message", r.status);
+    assert!(
+        !msg.trim().is_empty(),
+        "{what}: {} with an empty message",
+        r.status
+    );
     let Some(body) = body.filter(|b| b.is_object()) else {
         return;
     };
@@ -378,7 +385,8 @@ fn check_download(what: &str, r: &Reply, n: usize) {
         "application/octet-stream" => assert!(b.starts_with(b"ply"), "{what}: not a PLY"),
         "application/toml" => {
             let text = std::str::from_utf8(b).expect("TOML is UTF-8");
-            if let Err(e) = spectral_mesh::experiments::file::ExperimentFile::parse(text, "download")
+            if let Err(e) =
+                spectral_mesh::experiments::file::ExperimentFile::parse(text, "download")
             {
                 panic!("{what}: the experiment file does not parse: {e}\n{text}");
             }
@@ -414,7 +422,12 @@ async fn wait_job(app: &Router, id: &str) -> Value {
     loop {
         let r = send(
             app,
-            request(Method::GET, &format!("/api/mesh/{id}/basis/status"), Vec::new(), true),
+            request(
+                Method::GET,
+                &format!("/api/mesh/{id}/basis/status"),
+                Vec::new(),
+                true,
+            ),
         )
         .await;
         if r.status == StatusCode::NOT_FOUND {
@@ -500,8 +513,11 @@ fuzz_target!(|data: &[u8]| {
                 }
                 3 => {
                     let uri = format!("/api/mesh/{id}/basis");
-                    let r = send(&app, request(Method::POST, &uri, body.to_vec(), with_length))
-                        .await;
+                    let r = send(
+                        &app,
+                        request(Method::POST, &uri, body.to_vec(), with_length),
+                    )
+                    .await;
                     if accepted(&what, &r, parsed.as_ref()) {
                         let j = r.json();
                         let st = j["state"].as_str().unwrap_or_else(|| {
@@ -550,7 +566,9 @@ fuzz_target!(|data: &[u8]| {
                         };
                         let l = &f.config.limits;
                         assert!(
-                            vn >= 3 && vn as usize <= l.max_vertices && vm >= 1
+                            vn >= 3
+                                && vn as usize <= l.max_vertices
+                                && vm >= 1
                                 && vm as usize <= l.max_faces,
                             "{what}: a mesh of {vn} vertices and {vm} triangles was accepted"
                         );
@@ -571,8 +589,11 @@ fuzz_target!(|data: &[u8]| {
                 }
                 _ => {
                     let uri = format!("/api/mesh/{id}/field");
-                    let r = send(&app, request(Method::POST, &uri, body.to_vec(), with_length))
-                        .await;
+                    let r = send(
+                        &app,
+                        request(Method::POST, &uri, body.to_vec(), with_length),
+                    )
+                    .await;
                     if !accepted(&what, &r, parsed.as_ref()) {
                         continue;
                     }
