@@ -29,14 +29,14 @@
 //! - a download (200) is what its type says: a PNG, VRML or PLY file, one finite value
 //!   per vertex (`txt`, read back with `io::read_field_text`), or an experiment file that
 //!   `ExperimentFile::parse` accepts (`toml`);
-//! - a basis request answers a job (`state`), which ends within 1.5 s: `done` on the
+//! - a basis request answers a job (`state`), which ends (polled): `done` on the
 //!   built-in meshes (`error` or `cancelled` with a message allowed on a shape this input
 //!   loaded; on any mesh, a 404 when the job's memory evicted the mesh);
 //! - a shape answers `mesh_id` (16 hex digits), `n` and `m` within the limits.
 #![no_main]
 
 use std::sync::{Arc, OnceLock};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use axum::Router;
 use axum::body::Body;
@@ -414,11 +414,10 @@ fn url_encode(bytes: &[u8]) -> String {
     s
 }
 
-/// Polls the basis job of mesh `id` until it is neither queued nor running (1.5 s at
-/// most): its final JSON, or `{"state": "evicted"}` when the mesh left the cache (the
+/// Polls the basis job of mesh `id` until it is neither queued nor running (a job that
+/// never ends is a hang for libFuzzer's `-timeout`): its final JSON, or `{"state": "evicted"}` when the mesh left the cache (the
 /// job's memory may have evicted it: a 404 with its message).
 async fn wait_job(app: &Router, id: &str) -> Value {
-    let start = Instant::now();
     loop {
         let r = send(
             app,
@@ -440,10 +439,6 @@ async fn wait_job(app: &Router, id: &str) -> Value {
         if state != "queued" && state != "running" {
             return j;
         }
-        assert!(
-            start.elapsed() < Duration::from_millis(1500),
-            "a basis job on a small mesh did not end within 1.5 s: {j}"
-        );
         tokio::time::sleep(Duration::from_millis(2)).await;
     }
 }
