@@ -14,13 +14,13 @@ use http_body_util::BodyExt;
 use serde::Deserialize;
 use serde_json::json;
 use spectral_mesh::analysis::{Analysis, AnalysisError, AnalysisInput};
+use spectral_mesh::experiments::file::ExperimentFile;
 use spectral_mesh::io::{Input, LoadedPoints};
+use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::operators::PointCloudParams;
 use spectral_mesh::shapes::ShapeError;
-use spectral_mesh::{Laplacian, Mesh};
-use spectral_mesh::experiments::file::ExperimentFile;
-use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::spectral::eigenbasis::EigenError;
+use spectral_mesh::{Laplacian, Mesh};
 use spectral_mesh_render::figure::Figure;
 
 use crate::body::{self, BodyError, FieldBody};
@@ -491,7 +491,11 @@ fn info_json(mesh: &Mesh, topo: &Topology) -> serde_json::Value {
 /// The info panel of a point cloud: the points as read, and what its point-cloud
 /// Laplacian (the analysis `an`, built at upload) found: the triangle union it uses for
 /// connectivity, its pieces (as many zero eigenvalues), the mean point spacing.
-fn cloud_info(cloud: &spectral_mesh::PointCloud, params: &PointCloudParams, an: &Analysis) -> serde_json::Value {
+fn cloud_info(
+    cloud: &spectral_mesh::PointCloud,
+    params: &PointCloudParams,
+    an: &Analysis,
+) -> serde_json::Value {
     let (lo, hi) = cloud.bounding_box();
     let topo = an.topology();
     let union = an.mesh();
@@ -673,11 +677,13 @@ async fn insert_cloud(
             laplacian: Laplacian::Robust,
             normalize: true,
         };
-        let an = s2.analysis(&entry, &key).map_err(|e| {
-            ApiError::unprocessable(format!("'{}': {e}", entry.source))
-        })?;
+        let an = s2
+            .analysis(&entry, &key)
+            .map_err(|e| ApiError::unprocessable(format!("'{}': {e}", entry.source)))?;
         let mut info = match &entry.input {
-            Loaded::Points(AnalysisInput::Points { cloud, params }) => cloud_info(cloud, params, &an),
+            Loaded::Points(AnalysisInput::Points { cloud, params }) => {
+                cloud_info(cloud, params, &an)
+            }
             _ => serde_json::Value::Null,
         };
         info["reader_notes"] = json!(points.warnings);
@@ -698,7 +704,11 @@ fn shape_error(text: &str, cap: usize, e: ShapeError) -> ApiError {
             StatusCode::PAYLOAD_TOO_LARGE,
             format!(
                 "shape '{text}' would have {vertices} vertices{}, more than this server's limit of {cap} (--max-vertices): lower res",
-                if text.contains("irregular") { " (at most)" } else { "" }
+                if text.contains("irregular") {
+                    " (at most)"
+                } else {
+                    ""
+                }
             ),
         ),
         e => ApiError::bad(format!("shape '{text}': {e}")),
@@ -1002,7 +1012,9 @@ async fn compute(
     let item = get_mesh(s, id)?;
     let e = entry(&item)?;
     let n = e.n();
-    let laplacian = e.laplacian(body.laplacian).map_err(ApiError::unprocessable)?;
+    let laplacian = e
+        .laplacian(body.laplacian)
+        .map_err(ApiError::unprocessable)?;
     let key = AnalysisKey {
         id: id.to_string(),
         laplacian,

@@ -91,7 +91,11 @@ impl MeshEntry {
 
     /// `"vertices"` or `"points"`, for messages.
     pub fn noun(&self) -> &'static str {
-        if self.is_points() { "points" } else { "vertices" }
+        if self.is_points() {
+            "points"
+        } else {
+            "vertices"
+        }
     }
 
     /// The discretizations that apply: all for a mesh, robust only for a point cloud.

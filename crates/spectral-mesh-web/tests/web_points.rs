@@ -278,7 +278,10 @@ async fn uploaded_clouds_give_the_librarys_fields() {
     let r = post_json(addr, &format!("/api/mesh/{id}/download"), ply).await;
     assert_eq!(r.status, 200, "{}", r.text());
     let head = String::from_utf8_lossy(&r.body[..r.body.len().min(400)]).into_owned();
-    assert!(head.starts_with("ply") && head.contains("element vertex 600"), "{head}");
+    assert!(
+        head.starts_with("ply") && head.contains("element vertex 600"),
+        "{head}"
+    );
     assert!(!head.contains("element face 1"), "a point set: {head}");
     let mut toml = body.clone();
     toml["format"] = json!("toml");
