@@ -140,7 +140,10 @@ def test_dask_cluster_with_a_killed_worker_gives_the_local_results(tmp_path):
         killer.join()
         assert killed, "no worker was killed"
         assert check_rows(records, src, out) == good
-        assert all(by_name(records)[n]["status"] == "ok" for n in good)
+        # A task whose worker died after it wrote its result (before the scheduler gathered
+        # the record) runs again elsewhere and finds that result up to date: "skipped".
+        assert all(by_name(records)[n]["status"] in ("ok", "skipped") for n in good)
+        assert any(by_name(records)[n]["status"] == "ok" for n in good)
         # Bit for bit the local run's results.
         assert results(out) == results(local)
         # A second run does no work.
