@@ -56,15 +56,14 @@ pub struct BasisArgs {
 #[derive(Debug, Clone, Default, clap::Args)]
 #[command(next_help_heading = "Point clouds")]
 pub struct CloudArgs {
-    /// Point clouds: neighbours per point of the point-cloud Laplacian (at least 2).
+    // Help (with the library's default) from `cloud_help`.
     #[arg(long, value_name = "K", help = cloud_help("neighbours per point of the point-cloud Laplacian (at least 2)", PointCloudParams::default().neighbors))]
     pub neighbors: Option<usize>,
     /// Point clouds: use the file's normals for the tangent planes (where non-zero)
     /// instead of estimating them from the neighbours.
     #[arg(long)]
     pub use_normals: bool,
-    /// Point clouds: relative mollification of the point-cloud Laplacian (as
-    /// robust_laplacian's mollify_factor).
+    // Help (with the library's default) from `cloud_help`.
     #[arg(long, value_name = "F", help = cloud_help("relative mollification of the point-cloud Laplacian (as robust_laplacian's mollify_factor)", PointCloudParams::default().mollify_factor))]
     pub mollify_factor: Option<f64>,
 }
