@@ -141,8 +141,8 @@ def test_every_field_works_on_a_cloud(ball):
     k = 30
     fields = {
         "heat": an.heat(t=0.01, k=k),
-        "diffusion": an.diffusion(0, t=0.01, k=k),
-        "diffusion-ball": an.diffusion({"vertex": 0, "radius": 0.3}, t=0.01, k=k),
+        "diffusion": an.diffuse(0, t=0.01, k=k),
+        "diffusion-ball": an.diffuse({"vertex": 0, "radius": 0.3}, t=0.01, k=k),
         "distance": an.distance(0, k=k),
         "wfem-distance": an.distance(0, distance="wfem-diffusion:t=0.1", k=k),
         "callable-distance": an.distance(0, distance=lambda s: 1 / s**3, k=k),

@@ -753,7 +753,7 @@ mod tests {
             ("[point_cloud]\nneighbors = 1\n", "key 'point_cloud'"),
             ("[point_cloud]\nmollify_factor = -1.0\n", "key 'point_cloud'"),
             ("[point_cloud]\nnormals = \"guess\"\n", "point_cloud.normals"),
-            ("[point_cloud]\nk = 3\n", "k"),
+            ("[point_cloud]\nk = 3\n", "unknown field `k`"),
         ] {
             let e = err(&format!("{base}{extra}"));
             assert!(e.contains(key), "{extra:?}: {e}");
