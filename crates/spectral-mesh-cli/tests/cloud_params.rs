@@ -332,3 +332,30 @@ fn point_cloud_options_with_a_mesh_are_refused_by_name() {
         assert!(help.contains(&want), "{want} missing from:\n{help}");
     }
 }
+
+/// The `params_hash` of the one row of a batch's summary.csv.
+fn params_hash(out: &Path) -> String {
+    let csv = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let i = header.iter().position(|h| *h == "params_hash").unwrap();
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    row[i].to_string()
+}
+
+#[test]
+fn batch_gives_the_options_to_its_clouds() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    write_sphere_points(&p.join("ball.xyz"), 600);
+    ok(p, &["batch", "ball.xyz", "-o", "defaults", "-k", "8"]);
+    ok(
+        p,
+        &["batch", "ball.xyz", "-o", "n12", "-k", "8", "--neighbors", "12"],
+    );
+    // The parameters are part of every result's parameter hash (a rerun with others
+    // computes again).
+    assert_ne!(params_hash(&p.join("defaults")), params_hash(&p.join("n12")));
+    let e = err(p, &["batch", "ball.xyz", "-o", "bad", "--neighbors", "1"]);
+    assert!(e.contains("--neighbors") && e.contains("at least 2"), "{e}");
+}
