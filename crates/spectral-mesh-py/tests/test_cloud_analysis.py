@@ -207,7 +207,9 @@ def test_bad_clouds_raise_value_error_with_the_librarys_message(tmp_path):
     sm.write_mesh(off, *sm.shape("sphere:res=1"))
     with pytest.raises(ValueError, match="n_neighbors applies only to point clouds"):
         sm.Analysis.from_file(off, n_neighbors=8)
-    assert not sm.Analysis.from_file(off).is_point_cloud
+    mesh = sm.Analysis.from_file(off)
+    assert not mesh.is_point_cloud and mesh.point_cloud_params is None and mesh.kind == "fem"
+    assert np.array_equal(mesh.eigenvalues(10), sm.Analysis(*sm.read_mesh(off)).eigenvalues(10))
     default = sm.DEFAULTS["point_cloud"]["n_neighbors"]
     assert sm.Analysis.from_file(xyz).point_cloud_params["neighbors"] == default
 
