@@ -137,7 +137,6 @@ impl CloudArgs {
     }
 }
 
-
 /// The short help of every `--laplacian` option.
 pub const LAPLACIAN_HELP: &str = "Discretization: cot, voronoi-cot, fem, mixed-voronoi, uniform, robust [default: fem; robust for point clouds, the only one that applies to them]";
 

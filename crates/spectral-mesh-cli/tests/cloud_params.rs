@@ -131,9 +131,22 @@ fn eigs_of_a_shared_cloud_uses_the_neighbours_given() {
         .zip(b)
         .skip(1)
         .any(|(x, y)| (x - y).abs() > 1e-6 * y.abs());
-    assert!(differ, "8 and 30 neighbours gave the same spectrum: {a:?} {b:?}");
+    assert!(
+        differ,
+        "8 and 30 neighbours gave the same spectrum: {a:?} {b:?}"
+    );
     // No option: the library's defaults.
-    ok(p, &["eigs", c, "-k", &k.to_string(), "--eigenvalues-txt", "ev.txt"]);
+    ok(
+        p,
+        &[
+            "eigs",
+            c,
+            "-k",
+            &k.to_string(),
+            "--eigenvalues-txt",
+            "ev.txt",
+        ],
+    );
     let lib = library_eigenvalues(&cloud, PointCloudParams::default(), k);
     assert_eq!(values(&p.join("ev.txt")), lib);
 }
@@ -308,7 +321,10 @@ fn point_cloud_options_with_a_mesh_are_refused_by_name() {
         e.contains("--use-normals, --mollify-factor apply only to point clouds"),
         "{e}"
     );
-    let e = err(p, &["render", "sphere:res=1", "--neighbors", "8", "-o", "r.png"]);
+    let e = err(
+        p,
+        &["render", "sphere:res=1", "--neighbors", "8", "-o", "r.png"],
+    );
     assert!(e.contains("--neighbors"), "{e}");
     // operators: --mollify-factor sets the robust Laplacian of a mesh, and only that.
     ok(
@@ -325,7 +341,14 @@ fn point_cloud_options_with_a_mesh_are_refused_by_name() {
     );
     let e = err(
         p,
-        &["operators", "sphere:res=1", "--mollify-factor", "1e-4", "-o", "ops2"],
+        &[
+            "operators",
+            "sphere:res=1",
+            "--mollify-factor",
+            "1e-4",
+            "-o",
+            "ops2",
+        ],
     );
     assert!(e.contains("--mollify-factor applies only"), "{e}");
     // A replay of a file with [point_cloud] on a mesh.
@@ -372,11 +395,23 @@ fn batch_gives_the_options_to_its_clouds() {
     ok(p, &["batch", "ball.xyz", "-o", "defaults", "-k", "8"]);
     ok(
         p,
-        &["batch", "ball.xyz", "-o", "n12", "-k", "8", "--neighbors", "12"],
+        &[
+            "batch",
+            "ball.xyz",
+            "-o",
+            "n12",
+            "-k",
+            "8",
+            "--neighbors",
+            "12",
+        ],
     );
     // The parameters are part of every result's parameter hash (a rerun with others
     // computes again).
-    assert_ne!(params_hash(&p.join("defaults")), params_hash(&p.join("n12")));
+    assert_ne!(
+        params_hash(&p.join("defaults")),
+        params_hash(&p.join("n12"))
+    );
     let e = err(p, &["batch", "ball.xyz", "-o", "bad", "--neighbors", "1"]);
     assert!(e.contains("--neighbors") && e.contains("at least 2"), "{e}");
 }

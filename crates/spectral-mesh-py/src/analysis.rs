@@ -689,9 +689,7 @@ impl PyAnalysis {
             marks,
             labels,
             options,
-            self.inner
-                .point_spacing()
-                .map(|h| POINT_RADIUS_FACTOR * h),
+            self.inner.point_spacing().map(|h| POINT_RADIUS_FACTOR * h),
             path,
         )
     }

@@ -224,8 +224,7 @@ fn point_laplacian<'py>(
     let cloud = arrays::cloud_from(&p, normals.as_ref()).map_err(|e| e.into_pyerr(py))?;
     // Given normals give the tangent planes (where non-zero), as documented; without them
     // the planes are estimated.
-    let params =
-        analysis::cloud_params(Some(neighbors), Some(mollify_factor), normals.is_some());
+    let params = analysis::cloud_params(Some(neighbors), Some(mollify_factor), normals.is_some());
     let (s, b, total) = run(py, move |_| {
         let mut ops =
             Operators::from_points(&cloud, &params).map_err(|e| Failure::value(e.to_string()))?;
@@ -544,7 +543,16 @@ fn render(
         ))
     };
     let (mesh, values, options) = prepare().map_err(|e| e.into_pyerr(py))?;
-    draw(py, Arc::new(mesh), values, marks, labels, options, None, path)
+    draw(
+        py,
+        Arc::new(mesh),
+        values,
+        marks,
+        labels,
+        options,
+        None,
+        path,
+    )
 }
 
 /// The library's defaults as a dict: every request kind's keys (from [`FieldRequest`]'s

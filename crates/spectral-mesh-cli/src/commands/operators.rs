@@ -6,8 +6,8 @@ use anyhow::Result;
 use spectral_mesh::SparseMatrix;
 use spectral_mesh::io::{Input, MeshFormat, WriteOptions, read_input, write_mesh};
 use spectral_mesh::operators::{
-    MassKind, RobustParams, cotan_stiffness, mass_matrix, point_cloud_laplacian,
-    robust_laplacian, uniform_laplacian,
+    MassKind, RobustParams, cotan_stiffness, mass_matrix, point_cloud_laplacian, robust_laplacian,
+    uniform_laplacian,
 };
 
 use crate::engine::CloudArgs;

@@ -388,9 +388,7 @@ impl ExperimentFile {
     /// The point-cloud Laplacian's parameters: the `[point_cloud]` keys over the
     /// library's defaults (the defaults when the table is absent).
     pub fn point_cloud_params(&self) -> PointCloudParams {
-        self.point_cloud
-            .map(|p| p.params())
-            .unwrap_or_default()
+        self.point_cloud.map(|p| p.params()).unwrap_or_default()
     }
 
     /// The Laplacian (default fem).
@@ -738,8 +736,8 @@ mod tests {
         assert_eq!(g.point_cloud_params(), params);
         // Absent keys (and an absent table) are the library's defaults.
         let base = "experiment = \"diffusion-basis\"\nmesh = \"scan.xyz\"\n";
-        let h = ExperimentFile::parse(&format!("{base}[point_cloud]\nneighbors = 12\n"), "p")
-            .unwrap();
+        let h =
+            ExperimentFile::parse(&format!("{base}[point_cloud]\nneighbors = 12\n"), "p").unwrap();
         assert_eq!(
             h.point_cloud_params(),
             PointCloudParams {
@@ -751,8 +749,14 @@ mod tests {
         assert_eq!(none.point_cloud_params(), PointCloudParams::default());
         for (extra, key) in [
             ("[point_cloud]\nneighbors = 1\n", "key 'point_cloud'"),
-            ("[point_cloud]\nmollify_factor = -1.0\n", "key 'point_cloud'"),
-            ("[point_cloud]\nnormals = \"guess\"\n", "point_cloud.normals"),
+            (
+                "[point_cloud]\nmollify_factor = -1.0\n",
+                "key 'point_cloud'",
+            ),
+            (
+                "[point_cloud]\nnormals = \"guess\"\n",
+                "point_cloud.normals",
+            ),
             ("[point_cloud]\nk = 3\n", "unknown field `k`"),
         ] {
             let e = err(&format!("{base}{extra}"));
