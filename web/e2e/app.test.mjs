@@ -247,6 +247,8 @@ test('harmonic mode: two clicks make two removable constraints and a correct map
   // Remove the first: one left, the page asks for another click and sends nothing.
   const n = await count();
   await page.click('#constraint-list li button[data-index="0"]');
+  // Its marker goes at once, not with the next map (there is none: one constraint left).
+  assert.equal(await page.evaluate(() => window.__markers.constraint), 1);
   await page.waitForFunction(() => /another vertex/.test(document.getElementById('constraint-list').textContent));
   assert.equal(await page.$$eval('#constraint-list li:not(.hint)', (l) => l.length), 1);
   assert.equal(await count(), n);

@@ -7,6 +7,9 @@
 # build (most of it eigenbases: 3torus, a 10k-vertex torus at k = 100).
 #   SPECTRAL_MESH_SHARED_MESHES  folder with sphere966.off (default: ../shared/meshes beside
 #                                the clone, then /work/shared/meshes)
+#   SPECTRAL_MESH_SHARED_POINTS  folder with kitten.xyz (default: ../shared/points beside the
+#                                clone, then /work/shared/points); points.test.mjs skips its
+#                                real-cloud test without it
 #   SPECTRAL_MESH_WEB_BENCH=1    also run the ~100k-vertex, k = 200 input-to-picture benchmark
 #   SPECTRAL_MESH_SCREENSHOT     where the test saves its screenshot of the app (default:
 #                                target/e2e/web-app.png; set it to docs/web-app.png to
@@ -32,6 +35,12 @@ if [ -z "${SPECTRAL_MESH_SHARED_MESHES:-}" ]; then
   done
 fi
 export SPECTRAL_MESH_SHARED_MESHES="${SPECTRAL_MESH_SHARED_MESHES:-}"
+if [ -z "${SPECTRAL_MESH_SHARED_POINTS:-}" ]; then
+  for d in "$ROOT/../shared/points" /work/shared/points; do
+    if [ -f "$d/kitten.xyz" ]; then SPECTRAL_MESH_SHARED_POINTS="$d"; break; fi
+  done
+fi
+export SPECTRAL_MESH_SHARED_POINTS="${SPECTRAL_MESH_SHARED_POINTS:-}"
 
 LOG=$(mktemp)
 "$BIN" serve --host 127.0.0.1 --port 0 --cache-mib 2048 >"$LOG" 2>&1 &

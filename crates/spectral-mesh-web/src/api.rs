@@ -13,11 +13,14 @@ use axum::{Json, Router};
 use http_body_util::BodyExt;
 use serde::Deserialize;
 use serde_json::json;
-use spectral_mesh::Mesh;
-use spectral_mesh::analysis::{Analysis, AnalysisError};
+use spectral_mesh::analysis::{Analysis, AnalysisError, AnalysisInput};
 use spectral_mesh::experiments::file::ExperimentFile;
+use spectral_mesh::io::{Input, LoadedPoints};
 use spectral_mesh::mesh::topology::Topology;
+use spectral_mesh::operators::PointCloudParams;
+use spectral_mesh::shapes::ShapeError;
 use spectral_mesh::spectral::eigenbasis::EigenError;
+use spectral_mesh::{Laplacian, Mesh};
 use spectral_mesh_render::figure::Figure;
 
 use crate::body::{self, BodyError, FieldBody};
@@ -26,8 +29,8 @@ use crate::field::{FieldReply, field_reply};
 use crate::jobs::{self, Job, Submit, Submitted};
 use crate::limits::{Deadline, busy, guard, mib, read_inside};
 use crate::state::{
-    AnalysisKey, AppState, Item, Key, MeshEntry, Reservation, analysis_creation_bytes, field_bytes,
-    mesh_bytes,
+    AnalysisKey, AppState, Item, Key, Loaded, MeshEntry, Reservation, analysis_creation_bytes,
+    field_bytes,
 };
 
 type St = State<Arc<AppState>>;
@@ -407,6 +410,7 @@ async fn orbit_js(State(s): St) -> Response {
 
 async fn health(State(s): St) -> Json<serde_json::Value> {
     let (running, queued) = s.jobs.counts();
+    let (superseded, cancelled) = s.jobs.totals();
     Json(json!({
         "ok": true,
         "cache_used": s.cache.used(),
@@ -416,6 +420,8 @@ async fn health(State(s): St) -> Json<serde_json::Value> {
         "memory_budget": s.cache.budget(),
         "jobs_running": running,
         "jobs_queued": queued,
+        "jobs_superseded": superseded,
+        "jobs_cancelled": cancelled,
         "requests_in_progress": s.in_flight.get(),
         "limits": s.config.limits,
     }))
@@ -438,6 +444,21 @@ fn check_id(id: &str) -> ApiResult<()> {
     } else {
         Err(ApiError::bad("a mesh id is 16 hexadecimal digits"))
     }
+}
+
+/// `k` against an input of `n` vertices or points (`noun`) and `--max-k` (422), in the
+/// input's words.
+fn check_k(k: usize, n: usize, noun: &str, max_k: usize) -> ApiResult<()> {
+    body::check_k(k, n, max_k).map_err(|m| {
+        ApiError::unprocessable(if noun == "points" {
+            m.replace(
+                "(the number of vertices)",
+                "(the number of points of this point cloud)",
+            )
+        } else {
+            m
+        })
+    })
 }
 
 fn info_json(mesh: &Mesh, topo: &Topology) -> serde_json::Value {
@@ -467,12 +488,43 @@ fn info_json(mesh: &Mesh, topo: &Topology) -> serde_json::Value {
     })
 }
 
+/// The info panel of a point cloud: the points as read, and what its point-cloud
+/// Laplacian (the analysis `an`, built at upload) found: the triangle union it uses for
+/// connectivity, its pieces (as many zero eigenvalues), the mean point spacing.
+fn cloud_info(
+    cloud: &spectral_mesh::PointCloud,
+    params: &PointCloudParams,
+    an: &Analysis,
+) -> serde_json::Value {
+    let (lo, hi) = cloud.bounding_box();
+    let topo = an.topology();
+    let union = an.mesh();
+    json!({
+        "kind": "point cloud",
+        "points": cloud.n_points(),
+        "vertices": cloud.n_points(),
+        "triangles": 0,
+        "normals": cloud.n_normals(),
+        "bbox_min": lo,
+        "bbox_max": hi,
+        "laplacian": Laplacian::Robust.name(),
+        "neighbors": params.neighbors,
+        "union_triangles": union.n_triangles(),
+        "components": topo.n_components(),
+        "point_spacing": an.point_spacing(),
+        "problems": [],
+    })
+}
+
 fn mesh_reply(e: &MeshEntry) -> serde_json::Value {
     json!({
         "mesh_id": e.id,
-        "n": e.mesh.n_vertices(),
-        "m": e.mesh.n_triangles(),
+        "kind": e.kind(),
+        "n": e.n(),
+        "m": e.n_triangles(),
         "source": e.source,
+        "laplacians": e.laplacians(),
+        "point_spacing": e.info.get("point_spacing").cloned().unwrap_or(serde_json::Value::Null),
         "info": e.info,
     })
 }
@@ -481,14 +533,15 @@ fn mesh_reply(e: &MeshEntry) -> serde_json::Value {
 /// resolution typo must not exhaust memory).
 pub const MAX_SHAPE_VERTICES: usize = 2_000_000;
 
-/// Checks a mesh against the vertex and triangle limits (413).
-fn check_size(s: &AppState, what: &str, n: usize, m: usize) -> ApiResult<()> {
+/// Checks a mesh or a point cloud against the vertex and triangle limits (413); `noun`
+/// is `vertices` or `points`.
+fn check_size(s: &AppState, what: &str, noun: &str, n: usize, m: usize) -> ApiResult<()> {
     let l = &s.config.limits;
     if n > l.max_vertices {
         return Err(ApiError(
             StatusCode::PAYLOAD_TOO_LARGE,
             format!(
-                "{what} has {n} vertices, more than this server's limit of {} (--max-vertices)",
+                "{what} has {n} {noun}, more than this server's limit of {} (--max-vertices)",
                 l.max_vertices
             ),
         ));
@@ -505,6 +558,41 @@ fn check_size(s: &AppState, what: &str, n: usize, m: usize) -> ApiResult<()> {
     Ok(())
 }
 
+/// The loaded entry of `id`, if any.
+fn loaded(s: &AppState, id: &str) -> Option<serde_json::Value> {
+    let item = s.mesh(id)?;
+    match &*item {
+        Item::Mesh(e) => Some(mesh_reply(e)),
+        Item::Analysis(_) => None,
+    }
+}
+
+/// Enters a checked mesh or cloud into the cache, with the reservation that covered its
+/// reading and building released first (what stays is the entry itself).
+fn enter(s: &AppState, entry: MeshEntry, reservation: Reservation) -> ApiResult<serde_json::Value> {
+    let bytes = entry.bytes();
+    let reply = mesh_reply(&entry);
+    let id = entry.id.clone();
+    drop(reservation);
+    s.cache
+        .insert(Key::Mesh(id), Arc::new(Item::Mesh(Box::new(entry))), bytes)
+        .map_err(|short| {
+            if short.never_fits() {
+                ApiError(
+                    StatusCode::PAYLOAD_TOO_LARGE,
+                    format!(
+                        "the input needs about {}, more than the cache holds ({}, --cache-mib)",
+                        mib(bytes),
+                        mib(short.limit)
+                    ),
+                )
+            } else {
+                no_room("this input", &short, StatusCode::PAYLOAD_TOO_LARGE)
+            }
+        })?;
+    Ok(reply)
+}
+
 /// Enters a mesh into the cache (after its check and its info), with the reservation
 /// that covered its reading released first (the parsed mesh is what stays).
 fn insert_mesh(
@@ -517,47 +605,122 @@ fn insert_mesh(
     check_size(
         s,
         &format!("'{source}'"),
+        "vertices",
         mesh.n_vertices(),
         mesh.n_triangles(),
     )?;
     let hash = mesh.content_hash();
     let id = hash[..16].to_string();
-    if let Some(item) = s.mesh(&id)
-        && let Item::Mesh(e) = &*item
-    {
-        return Ok(mesh_reply(e));
+    if let Some(reply) = loaded(s, &id) {
+        return Ok(reply);
     }
     let topo = Topology::new(&mesh);
     let mut info = info_json(&mesh, &topo);
     drop(topo);
+    info["kind"] = json!("mesh");
     info["reader_notes"] = json!(notes);
-    let bytes = mesh_bytes(&mesh);
     let entry = MeshEntry {
-        id: id.clone(),
+        id,
         hash,
         source,
-        mesh: Arc::new(mesh),
+        input: Loaded::Mesh(Arc::new(mesh)),
         info,
     };
-    let reply = mesh_reply(&entry);
+    enter(s, entry, reservation)
+}
+
+/// Enters an uploaded point cloud: checked against the limits (its points count as
+/// vertices), then its analysis for the page's defaults (robust, unit area) made at
+/// once with [`Analysis::from_input`], so that a cloud whose Laplacian cannot be built
+/// (collinear or coincident points) is refused at the upload (422) and the reply tells
+/// the triangle union and the point spacing the page draws with.
+async fn insert_cloud(
+    s: &Arc<AppState>,
+    points: LoadedPoints,
+    source: String,
+    reservation: Reservation,
+    deadline: Deadline,
+) -> ApiResult<serde_json::Value> {
+    let n = points.cloud.n_points();
+    check_size(s, &format!("'{source}'"), "points", n, 0)?;
+    let hash = points.cloud.content_hash();
+    let id = hash[..16].to_string();
+    if let Some(reply) = loaded(s, &id) {
+        return Ok(reply);
+    }
+    // The parsed cloud is small beside what the upload's reading reserved: let that go
+    // and reserve the Laplacian's assembly instead.
     drop(reservation);
-    s.cache
-        .insert(Key::Mesh(id), Arc::new(Item::Mesh(Box::new(entry))), bytes)
-        .map_err(|short| {
-            if short.never_fits() {
-                ApiError(
-                    StatusCode::PAYLOAD_TOO_LARGE,
-                    format!(
-                        "the mesh needs about {}, more than the cache holds ({}, --cache-mib)",
-                        mib(bytes),
-                        mib(short.limit)
-                    ),
-                )
-            } else {
-                no_room("this mesh", &short, StatusCode::PAYLOAD_TOO_LARGE)
+    let r = reserve(
+        s,
+        "building the point-cloud Laplacian",
+        analysis_creation_bytes(n, Laplacian::Robust, true),
+        deadline,
+        StatusCode::PAYLOAD_TOO_LARGE,
+    )
+    .await?;
+    let s2 = s.clone();
+    tokio::task::spawn_blocking(move || -> ApiResult<serde_json::Value> {
+        let params = PointCloudParams::default();
+        let mut entry = MeshEntry {
+            id: id.clone(),
+            hash,
+            source,
+            input: Loaded::Points(AnalysisInput::Points {
+                cloud: points.cloud,
+                params,
+            }),
+            info: serde_json::Value::Null,
+        };
+        let key = AnalysisKey {
+            id,
+            laplacian: Laplacian::Robust,
+            normalize: true,
+        };
+        let an = s2
+            .analysis(&entry, &key)
+            .map_err(|e| ApiError::unprocessable(format!("'{}': {e}", entry.source)))?;
+        let mut info = match &entry.input {
+            Loaded::Points(AnalysisInput::Points { cloud, params }) => {
+                cloud_info(cloud, params, &an)
             }
-        })?;
-    Ok(reply)
+            _ => serde_json::Value::Null,
+        };
+        info["reader_notes"] = json!(points.warnings);
+        entry.info = info;
+        let reply = enter(&s2, entry, r)?;
+        // Now that the cloud is loaded, its analysis can stay in the cache.
+        s2.remember(&key, &an);
+        Ok(reply)
+    })
+    .await
+    .map_err(internal)?
+}
+
+/// Refuses a shape spec whose mesh would exceed the vertex limit, before it is built.
+fn shape_error(text: &str, cap: usize, e: ShapeError) -> ApiError {
+    match e {
+        ShapeError::TooLarge { vertices, .. } => ApiError(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            format!(
+                "shape '{text}' would have {vertices} vertices{}, more than this server's limit of {cap} (--max-vertices): lower res",
+                if text.contains("irregular") {
+                    " (at most)"
+                } else {
+                    ""
+                }
+            ),
+        ),
+        e => ApiError::bad(format!("shape '{text}': {e}")),
+    }
+}
+
+/// What an upload turned out to be once read.
+enum Read {
+    /// A mesh, entered: the reply.
+    Entered(serde_json::Value),
+    /// A point cloud, to be entered with its Laplacian.
+    Points(LoadedPoints, String, Reservation),
 }
 
 async fn load_mesh(
@@ -576,25 +739,20 @@ async fn load_mesh(
         let (text, spec, most) = body::parse_shape(&bytes)?;
         drop(r);
         let cap = s.config.limits.max_vertices.min(MAX_SHAPE_VERTICES);
-        if most > cap {
-            return Err(ApiError(
-                StatusCode::PAYLOAD_TOO_LARGE,
-                format!(
-                    "shape '{text}' has {most} vertices, more than this server's limit of {cap} (--max-vertices)"
-                ),
-            ));
-        }
+        // `most` bounds the mesh from above (the irregular variants: the regular shape
+        // one level finer); the library's `build_limited` refuses what exceeds the cap
+        // before allocating it, so the reservation need not exceed the cap either.
         let r = reserve(
             &s,
             &format!("building shape '{text}'"),
-            most * SHAPE_BYTES_PER_VERTEX,
+            most.min(cap) * SHAPE_BYTES_PER_VERTEX,
             deadline,
             StatusCode::PAYLOAD_TOO_LARGE,
         )
         .await?;
         tokio::task::spawn_blocking(move || {
-            let mesh = spectral_mesh::shapes::build(&spec)
-                .map_err(|e| ApiError::bad(format!("shape '{text}': {e}")))?;
+            let mesh = spectral_mesh::shapes::build_limited(&spec, cap)
+                .map_err(|e| shape_error(&text, cap, e))?;
             insert_mesh(&s2, mesh, text, Vec::new(), r)
         })
         .await
@@ -613,21 +771,30 @@ async fn load_mesh(
         if bytes.is_empty() {
             return Err(ApiError::bad("the upload is empty"));
         }
-        tokio::task::spawn_blocking(move || {
-            let loaded = spectral_mesh::io::read_mesh_from_bytes(&bytes, &name)
+        let read = tokio::task::spawn_blocking(move || -> ApiResult<Read> {
+            let input = spectral_mesh::io::read_input_from_bytes(&bytes, &name)
                 .map_err(|e| ApiError::unprocessable(e.to_string()))?;
             drop(bytes);
-            let mut notes = loaded.warnings;
-            if loaded.polygons_triangulated > 0 {
-                notes.push(format!(
-                    "{} polygons were split into triangles",
-                    loaded.polygons_triangulated
-                ));
+            match input {
+                Input::Mesh(loaded) => {
+                    let mut notes = loaded.warnings;
+                    if loaded.polygons_triangulated > 0 {
+                        notes.push(format!(
+                            "{} polygons were split into triangles",
+                            loaded.polygons_triangulated
+                        ));
+                    }
+                    insert_mesh(&s2, loaded.mesh, name, notes, r).map(Read::Entered)
+                }
+                Input::Points(points) => Ok(Read::Points(points, name, r)),
             }
-            insert_mesh(&s2, loaded.mesh, name, notes, r)
         })
         .await
-        .map_err(internal)??
+        .map_err(internal)??;
+        match read {
+            Read::Entered(reply) => reply,
+            Read::Points(points, name, r) => insert_cloud(&s, points, name, r, deadline).await?,
+        }
     };
     Ok(Json(reply))
 }
@@ -671,7 +838,7 @@ async fn geometry(
 ) -> ApiResult<Response> {
     let item = get_mesh(&s, &id)?;
     let e = entry(&item)?;
-    let (n, m) = (e.mesh.n_vertices(), e.mesh.n_triangles());
+    let (n, m) = (e.n(), e.n_triangles());
     let size = 8 + 12 * n + 12 * m;
     let _r = reserve(
         &s,
@@ -684,12 +851,12 @@ async fn geometry(
     let mut out = Vec::with_capacity(size);
     out.extend((n as u32).to_le_bytes());
     out.extend((m as u32).to_le_bytes());
-    for p in e.mesh.positions() {
+    for p in e.positions() {
         for c in p {
             out.extend((*c as f32).to_le_bytes());
         }
     }
-    for t in e.mesh.triangles() {
+    for t in e.mesh().map_or(&[][..], |m| m.triangles()) {
         for c in t {
             out.extend((*c as u32).to_le_bytes());
         }
@@ -710,18 +877,19 @@ async fn analysis_for(
     if let Some(a) = s.existing_analysis(key) {
         return Ok(a);
     }
-    let n = entry(item)?.mesh.n_vertices();
+    let e = entry(item)?;
+    let (n, points) = (e.n(), e.is_points());
     let r = reserve(
         s,
         "assembling the operators",
-        analysis_creation_bytes(n, key.laplacian),
+        analysis_creation_bytes(n, key.laplacian, points),
         deadline,
         StatusCode::UNPROCESSABLE_ENTITY,
     )
     .await?;
     let (s2, key2, item2) = (s.clone(), key.clone(), item.clone());
     tokio::task::spawn_blocking(move || -> ApiResult<Arc<Analysis>> {
-        let a = s2.analysis(entry(&item2)?, &key2);
+        let a = s2.analysis(entry(&item2)?, &key2)?;
         drop(r);
         Ok(a)
     })
@@ -750,22 +918,23 @@ async fn start_basis(
     let b = body::parse_basis(&bytes)?;
     drop(r);
     let item = get_mesh(&s, &id)?;
-    let n = entry(&item)?.mesh.n_vertices();
+    let e = entry(&item)?;
+    let (n, noun, mesh) = (e.n(), e.noun(), e.bytes());
+    let laplacian = e.laplacian(b.laplacian).map_err(ApiError::unprocessable)?;
     let limits = &s.config.limits;
-    body::check_k(b.k, n, limits.max_k).map_err(ApiError::unprocessable)?;
+    check_k(b.k, n, noun, limits.max_k)?;
     let key = AnalysisKey {
         id: id.clone(),
-        laplacian: b.laplacian,
+        laplacian,
         normalize: b.normalize,
     };
     let analysis = analysis_for(&s, &item, &key, deadline).await?;
     let estimate = jobs::estimate(n, b.k, &analysis);
     let after = jobs::held_after(n, b.k, &analysis);
     if analysis.held_k() < b.k {
-        let mesh = mesh_bytes(&entry(&item)?.mesh);
         if after + mesh > limits.cache_bytes {
             return Err(ApiError::unprocessable(format!(
-                "an eigenbasis of k = {} on {n} vertices would make this mesh and its analysis hold about {}, more than the cache's {} (--cache-mib): ask for fewer pairs",
+                "an eigenbasis of k = {} on {n} {noun} would make this input and its analysis hold about {}, more than the cache's {} (--cache-mib): ask for fewer pairs",
                 b.k,
                 mib(after + mesh),
                 mib(limits.cache_bytes)
@@ -774,7 +943,7 @@ async fn start_basis(
         let held = crate::state::analysis_bytes(&analysis) + mesh;
         if estimate + held > limits.memory_bytes {
             return Err(ApiError::unprocessable(format!(
-                "an eigenbasis of k = {} on {n} vertices needs about {} at its peak (estimate) besides the {} its mesh and analysis hold, more than this server's memory budget of {} (--memory-mib): ask for fewer pairs",
+                "an eigenbasis of k = {} on {n} {noun} needs about {} at its peak (estimate) besides the {} its input and analysis hold, more than this server's memory budget of {} (--memory-mib): ask for fewer pairs",
                 b.k,
                 mib(estimate),
                 mib(held),
@@ -821,6 +990,15 @@ async fn basis_status(State(s): St, Path(id): Path<String>) -> ApiResult<Json<Jo
 
 // ---------- fields ----------
 
+/// A computed field with what it was computed on.
+struct Computed {
+    reply: FieldReply,
+    /// The binary reply, when asked for.
+    bytes: Option<Vec<u8>>,
+    item: Arc<Item>,
+    analysis: Arc<Analysis>,
+}
+
 /// The reply to `body` on mesh `id` (off the request thread, with its memory reserved
 /// first); 409 when the basis is not there yet. With `encode`, the binary reply too (on
 /// the field threads as well).
@@ -830,12 +1008,16 @@ async fn compute(
     body: FieldBody,
     encode: bool,
     deadline: Deadline,
-) -> ApiResult<(FieldReply, Option<Vec<u8>>, Arc<Item>)> {
+) -> ApiResult<Computed> {
     let item = get_mesh(s, id)?;
-    let n = entry(&item)?.mesh.n_vertices();
+    let e = entry(&item)?;
+    let n = e.n();
+    let laplacian = e
+        .laplacian(body.laplacian)
+        .map_err(ApiError::unprocessable)?;
     let key = AnalysisKey {
         id: id.to_string(),
-        laplacian: body.laplacian,
+        laplacian,
         normalize: body.normalize,
     };
     let needs_basis = body.request.eigenpairs().is_some();
@@ -859,11 +1041,11 @@ async fn compute(
         StatusCode::UNPROCESSABLE_ENTITY,
     )
     .await?;
-    let s2 = s.clone();
+    let (s2, an) = (s.clone(), analysis.clone());
     let (reply, bytes) = tokio::task::spawn_blocking(move || -> ApiResult<_> {
-        let before = analysis.memory_bytes();
+        let before = an.memory_bytes();
         let reply = s2.on_field_threads(|| -> ApiResult<_> {
-            let Some(r) = field_reply(&analysis, &body.request, body.levels)? else {
+            let Some(r) = field_reply(&an, &body.request, body.levels)? else {
                 return Ok(None);
             };
             let bytes = if encode {
@@ -874,18 +1056,23 @@ async fn compute(
             Ok(Some((r, bytes)))
         });
         // A harmonic map factors a solver, the wFEM distance computes B X: account.
-        if analysis.memory_bytes() != before {
-            s2.remember(&key, &analysis);
+        if an.memory_bytes() != before {
+            s2.remember(&key, &an);
         }
         drop(r);
         match reply? {
             Some((r, bytes)) => Ok((r, bytes)),
-            None => Err(missing_basis(&s2, &key, &body, analysis.held_k())),
+            None => Err(missing_basis(&s2, &key, &body, an.held_k())),
         }
     })
     .await
     .map_err(internal)??;
-    Ok((reply, bytes, item))
+    Ok(Computed {
+        reply,
+        bytes,
+        item,
+        analysis,
+    })
 }
 
 /// The 409 of a field whose eigenbasis is not there yet.
@@ -932,8 +1119,8 @@ async fn field(
     let (bytes, r) = json_body(&s, &headers, body, deadline).await?;
     let body = body::parse_field(&bytes)?;
     drop((bytes, r));
-    let (_, bytes, _) = compute(&s, &id, body, true, deadline).await?;
-    Ok(octet(bytes.unwrap_or_default()))
+    let c = compute(&s, &id, body, true, deadline).await?;
+    Ok(octet(c.bytes.unwrap_or_default()))
 }
 
 // ---------- downloads ----------
@@ -1001,8 +1188,14 @@ async fn download(
         )));
     }
     let options = body.figure_options()?;
-    let (laplacian, normalize) = (body.laplacian, body.normalize);
-    let (reply, _, item) = compute(s, id, FieldBody { levels: 0, ..body }, false, deadline).await?;
+    let normalize = body.normalize;
+    let Computed {
+        reply,
+        item,
+        analysis,
+        ..
+    } = compute(s, id, FieldBody { levels: 0, ..body }, false, deadline).await?;
+    let laplacian = analysis.options().laplacian;
     let name = format!("{}-{}.{format}", reply.field.request.kind(), &id[..8]);
     let mime = match format.as_str() {
         "png" => "image/png",
@@ -1043,7 +1236,9 @@ async fn download(
             f.validate().map_err(internal)?;
             f.to_toml().map_err(internal)?.into_bytes()
         } else {
-            let fig = Figure::of_field(&e.mesh, field, options).map_err(internal)?;
+            // A point cloud is drawn as discs sized from its point spacing, its files are
+            // point sets; a mesh as before (its analysis holds the same mesh).
+            let fig = Figure::of_analysis(&analysis, field, options).map_err(internal)?;
             fig.bytes(&format).map_err(internal)?
         };
         drop(r);

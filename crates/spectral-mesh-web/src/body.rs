@@ -39,8 +39,9 @@ pub const MAX_PICTURE: u32 = 4096;
 pub struct FieldBody {
     /// The field.
     pub request: FieldRequest,
-    /// Discretization (default fem).
-    pub laplacian: Laplacian,
+    /// Discretization as given (`None`: the input's default, fem for a mesh and robust
+    /// for a point cloud).
+    pub laplacian: Option<Laplacian>,
     /// Unit-area normalisation (default true).
     pub normalize: bool,
     /// Level sets drawn (default 10).
@@ -97,12 +98,10 @@ impl FieldBody {
                 "the body must be a JSON object with a \"kind\" (e.g. {\"kind\": \"heat\", \"t\": 0.01})",
             ));
         };
-        let laplacian = match take_str(&mut m, "laplacian")? {
-            None => Laplacian::Fem,
-            Some(s) => s
-                .parse::<Laplacian>()
-                .map_err(|e| bad(format!("laplacian: {e}")))?,
-        };
+        let laplacian = take_str(&mut m, "laplacian")?
+            .map(|s| s.parse::<Laplacian>())
+            .transpose()
+            .map_err(|e| bad(format!("laplacian: {e}")))?;
         let normalize = take_bool(&mut m, "normalize")?.unwrap_or(true);
         let levels =
             take_uint(&mut m, "levels", MAX_LEVELS as u64)?.map_or(DEFAULT_LEVELS, |l| l as usize);
@@ -165,8 +164,9 @@ struct BasisJson {
 /// A parsed basis request.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct BasisBody {
-    /// Discretization (default fem).
-    pub laplacian: Laplacian,
+    /// Discretization as given (`None`: the input's default, fem for a mesh and robust
+    /// for a point cloud).
+    pub laplacian: Option<Laplacian>,
     /// Unit-area normalisation (default true).
     pub normalize: bool,
     /// Pairs (default 100).
@@ -180,12 +180,11 @@ pub fn parse_basis(bytes: &[u8]) -> Result<BasisBody, BodyError> {
     } else {
         serde_json::from_slice(bytes).map_err(|e| bad(format!("bad JSON: {e}")))?
     };
-    let laplacian = match j.laplacian {
-        None => Laplacian::Fem,
-        Some(s) => s
-            .parse::<Laplacian>()
-            .map_err(|e| bad(format!("laplacian: {e}")))?,
-    };
+    let laplacian = j
+        .laplacian
+        .map(|s| s.parse::<Laplacian>())
+        .transpose()
+        .map_err(|e| bad(format!("laplacian: {e}")))?;
     Ok(BasisBody {
         laplacian,
         normalize: j.normalize.unwrap_or(true),
@@ -317,7 +316,7 @@ mod tests {
         assert_eq!(
             parse_basis(b"").unwrap(),
             BasisBody {
-                laplacian: Laplacian::Fem,
+                laplacian: None,
                 normalize: true,
                 k: 100
             }
@@ -326,7 +325,7 @@ mod tests {
             parse_basis(br#"{"k": 7, "laplacian": "voronoi-cot", "normalize": false}"#).unwrap();
         assert_eq!(
             (b.k, b.laplacian, b.normalize),
-            (7, Laplacian::VoronoiCot, false)
+            (7, Some(Laplacian::VoronoiCot), false)
         );
         for body in [
             &br#"{"k": -1}"#[..],
@@ -363,17 +362,14 @@ mod tests {
             "laplacian": "voronoi-cot", "normalize": false, "levels": 7, "colormap": "viridis"
         }))
         .unwrap();
-        assert_eq!(b.laplacian, Laplacian::VoronoiCot);
+        assert_eq!(b.laplacian, Some(Laplacian::VoronoiCot));
         assert!(!b.normalize);
         assert_eq!(b.levels, 7);
         assert_eq!(b.request.source(), Some(3));
         assert_eq!(b.figure_options().unwrap().levels, 7);
         let d = FieldBody::from_value(serde_json::json!({"kind": "distance"})).unwrap();
         assert_eq!(d.request, FieldRequest::default());
-        assert_eq!(
-            (d.laplacian, d.normalize, d.levels),
-            (Laplacian::Fem, true, 10)
-        );
+        assert_eq!((d.laplacian, d.normalize, d.levels), (None, true, 10));
         for (body, key) in [
             (serde_json::json!({"t": 1}), "kind"),
             (serde_json::json!({"kind": "heat", "filter": "x"}), "filter"),

@@ -43,6 +43,13 @@ pub struct FieldHeader {
     pub floating: Vec<FloatingComponent>,
     /// Discretization.
     pub laplacian: &'static str,
+    /// True when the input is a point cloud (its operators are the point-cloud Laplacian,
+    /// its level sets and critical points those of the triangle union that Laplacian was
+    /// built on).
+    pub point_cloud: bool,
+    /// A point cloud's mean neighbour spacing ([`Analysis::point_spacing`], in the
+    /// input's units), which the page sizes its splats from; `null` for a mesh.
+    pub point_spacing: Option<f64>,
     /// True when the field is that of the shape scaled to unit area.
     pub normalized: bool,
     /// Eigenpairs used (`null` when no basis was used).
@@ -142,6 +149,8 @@ pub fn field_reply(
         constraints: field.constraints.clone(),
         floating: field.floating.clone(),
         laplacian: analysis.options().laplacian.name(),
+        point_cloud: analysis.is_point_cloud(),
+        point_spacing: analysis.point_spacing(),
         normalized: field.normalized,
         k: field.k,
         basis_k: field.basis_k,

@@ -196,6 +196,11 @@ struct Inner {
     /// Computations running (superseded ones included until they return).
     running: usize,
     serial: u64,
+    /// Jobs stopped because a newer request replaced them (same mesh, or same client on
+    /// another mesh), since the server started.
+    superseded: u64,
+    /// Jobs cancelled for any reason (superseded, DELETE, abandoned, mesh unloaded).
+    cancelled: u64,
 }
 
 /// The jobs of the server.
@@ -266,8 +271,10 @@ impl Inner {
     }
 
     /// Stops the slot's job: a queued one at once, a running one when its computation
-    /// returns (its token is cancelled now).
-    fn stop(slot: &mut Slot, state: &'static str, message: String) {
+    /// returns (its token is cancelled now). True when it was active and not already
+    /// being stopped.
+    fn stop(slot: &mut Slot, state: &'static str, message: String) -> bool {
+        let active = slot.job.active() && slot.stop.is_none();
         match slot.job.state.as_str() {
             "queued" => {
                 slot.job.state = state.into();
@@ -282,6 +289,7 @@ impl Inner {
             }
             _ => {}
         }
+        active
     }
 }
 
@@ -319,19 +327,34 @@ impl Jobs {
         (g.running, g.queued())
     }
 
+    /// Totals since the server started, for `/api/health`: (superseded, cancelled). A
+    /// superseded job is one a newer basis request replaced (the same mesh with other
+    /// parameters, or the same `X-Client-Id` on another mesh); cancelled counts those and
+    /// every other cancel (DELETE, abandoned, mesh unloaded).
+    pub fn totals(&self) -> (u64, u64) {
+        let g = self.lock();
+        (g.superseded, g.cancelled)
+    }
+
     /// Forgets the jobs of meshes no longer loaded (stopping the active ones).
     pub fn forget(&self, keep: impl Fn(&str) -> bool) {
         let mut g = self.lock();
         let gone: Vec<String> = g.slots.keys().filter(|id| !keep(id)).cloned().collect();
+        let mut stopped = 0;
         for id in gone {
             if let Some(slot) = g.slots.get_mut(&id) {
                 if slot.job.active() {
-                    Inner::stop(slot, "cancelled", "the mesh was unloaded".into());
+                    stopped += u64::from(Inner::stop(
+                        slot,
+                        "cancelled",
+                        "the mesh was unloaded".into(),
+                    ));
                 } else {
                     g.slots.remove(&id);
                 }
             }
         }
+        g.cancelled += stopped;
     }
 
     /// Cancels the job of mesh `id` (DELETE): the job as it is then.
@@ -339,7 +362,8 @@ impl Jobs {
         let mut g = self.lock();
         let slot = g.slots.get_mut(id)?;
         slot.seen = Instant::now();
-        Inner::stop(slot, "cancelled", "cancelled by request".into());
+        let stopped = Inner::stop(slot, "cancelled", "cancelled by request".into());
+        g.cancelled += u64::from(stopped);
         g.report(id)
     }
 
@@ -392,7 +416,7 @@ impl Jobs {
                 let id = req.id.clone();
                 return Submitted::Accepted(g.report(&id).unwrap_or_else(Job::idle));
             }
-            Inner::stop(
+            let stopped = Inner::stop(
                 slot,
                 "cancelled",
                 format!(
@@ -402,6 +426,8 @@ impl Jobs {
                     req.key.normalize
                 ),
             );
+            g.superseded += u64::from(stopped);
+            g.cancelled += u64::from(stopped);
         }
         let limits = &s.config.limits;
         if g.queued() >= limits.max_queued {
@@ -413,6 +439,7 @@ impl Jobs {
         }
         // The same client moved on to another mesh: its earlier job goes.
         if let Some(client) = &req.client {
+            let mut stopped = 0;
             for (id, slot) in g.slots.iter_mut() {
                 if *id != req.id
                     && slot.job.active()
@@ -420,13 +447,15 @@ impl Jobs {
                     && slot.clients.contains(client)
                     && !slot.anonymous
                 {
-                    Inner::stop(
+                    stopped += u64::from(Inner::stop(
                         slot,
                         "cancelled",
                         format!("superseded: the same client asked for mesh {}", req.id),
-                    );
+                    ));
                 }
             }
+            g.superseded += stopped;
+            g.cancelled += stopped;
         }
         g.serial += 1;
         let serial = g.serial;
@@ -456,7 +485,7 @@ impl Jobs {
     /// documentation). Returns how many were stopped.
     pub fn enforce(&self, job_seconds: u64, idle_seconds: u64) -> usize {
         let mut g = self.lock();
-        let mut stopped = 0;
+        let (mut stopped, mut abandoned) = (0, 0);
         for slot in g.slots.values_mut() {
             if !slot.job.active() || slot.stop.is_some() {
                 continue;
@@ -470,6 +499,7 @@ impl Jobs {
                     ),
                 );
                 stopped += 1;
+                abandoned += 1;
             } else if slot
                 .started
                 .is_some_and(|t| t.elapsed() >= Duration::from_secs(job_seconds))
@@ -484,6 +514,7 @@ impl Jobs {
                 stopped += 1;
             }
         }
+        g.cancelled += abandoned;
         stopped
     }
 }

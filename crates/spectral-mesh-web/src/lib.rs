@@ -15,15 +15,35 @@
 //!
 //! ## API (all under `/api`)
 //!
-//! Meshes:
+//! Meshes and point clouds:
 //! - `GET  /api/shapes` -> `{shapes: [{name, description, default_vertices, vertex_formula}]}`
-//! - `POST /api/mesh` with JSON `{"shape": "sphere:res=3"}`, or the raw bytes of a mesh
-//!   file (`Content-Type: application/octet-stream`, file name in `X-Filename`)
-//!   -> `{mesh_id, n, m, source, info}`. The id is the first 16 hex digits of
-//!   [`spectral_mesh::Mesh::content_hash`]. Uploads stay in memory; over the cap: 413.
-//! - `GET  /api/mesh/{id}` -> `{mesh_id, n, m, source, info}`
+//! - `POST /api/mesh` with JSON `{"shape": "sphere:res=3"}` (built with
+//!   [`spectral_mesh::shapes::build_limited`] under the vertex limit: a spec whose mesh
+//!   would be larger is refused with 413 before anything is built), or the raw bytes of a
+//!   mesh or point file (`Content-Type: application/octet-stream`, file name in
+//!   `X-Filename`), read by [`spectral_mesh::io::read_input_from_bytes`]: meshes (OFF, OBJ,
+//!   PLY, STL) and point clouds (`.xyz`/`.pts`/`.txt`/`.csv` text, PLY with vertices and
+//!   no faces, with or without normals)
+//!   -> `{mesh_id, kind, n, m, source, laplacians, point_spacing, info}`. `kind` is
+//!   `"mesh"` or `"point cloud"`; `laplacians` the discretizations that apply (a cloud:
+//!   `["robust"]` only); `m` is 0 for a cloud. The id is the first 16 hex digits of the
+//!   content hash ([`spectral_mesh::Mesh::content_hash`], or
+//!   [`spectral_mesh::PointCloud::content_hash`]). A cloud is kept as the library's
+//!   [`spectral_mesh::analysis::AnalysisInput`] and its analysis for the page's defaults
+//!   (robust, unit area) is built at the upload with
+//!   [`spectral_mesh::analysis::Analysis::from_input`]: a cloud whose point-cloud
+//!   Laplacian cannot be built (collinear points) is refused there (422), and the reply
+//!   gives its triangle union (`info.union_triangles`, `info.components`) and its mean
+//!   point spacing. Every limit applies to clouds as to meshes (upload bytes, points as
+//!   vertices, `k <= n`). Uploads stay in memory; over the cap: 413.
+//! - `GET  /api/mesh/{id}` -> the same object.
 //! - `GET  /api/mesh/{id}/geometry` -> binary, little-endian: `u32 n, u32 m`,
-//!   `f32 positions[3n]`, `u32 triangles[3m]`.
+//!   `f32 positions[3n]`, `u32 triangles[3m]` (a cloud: its points, `m = 0`).
+//!
+//! The discretization (`laplacian` in basis, field and download bodies) defaults to the
+//! input's: `fem` for a mesh, `robust` for a point cloud (its point-cloud Laplacian, Sharp
+//! and Crane 2020, 30 neighbours), as in the CLI. Any other on a cloud is refused with 422
+//! and a message saying why (those need triangles).
 //!
 //! Eigenbases (one computation per mesh at a time):
 //! - `POST /api/mesh/{id}/basis` `{"k": 100, "laplacian": "fem", "normalize": true}` (all
@@ -37,6 +57,10 @@
 //! - `GET  /api/mesh/{id}/basis/status` -> the job (`state`: `idle`, `running`, `done`,
 //!   `error` or `cancelled`).
 //! - `DELETE /api/mesh/{id}/basis` cancels the running computation.
+//! - A request may carry `X-Client-Id` (the page sends a random id made once per tab on
+//!   every request): a newer basis request of the same client for another mesh cancels
+//!   its older job ([`jobs`]). `GET /api/health` counts the jobs superseded
+//!   (`jobs_superseded`) and cancelled for any reason (`jobs_cancelled`) since the start.
 //!
 //! Fields:
 //! - `POST /api/mesh/{id}/field` with a JSON object: a
@@ -44,7 +68,7 @@
 //!   keys, unknown keys refused: `{"kind": "heat", "t": 0.01, "anchor": 12, "k": 200}`,
 //!   `{"kind": "distance", "distance": "wfem-diffusion:t=0.1"}`, `{"kind": "harmonic",
 //!   "constraints": [{"vertex": 3, "value": 0}, {"vertex": 9, "value": 1}]}`, ...) plus the
-//!   analysis keys `laplacian` (default `fem`) and `normalize` (default `true`) and the
+//!   analysis keys `laplacian` (default `fem`, `robust` for a point cloud) and `normalize` (default `true`) and the
 //!   picture key `levels` (level sets, default 10, at most 1000). Answered from the held
 //!   basis only: 409 with a message when the analysis holds fewer than the request's `k`
 //!   pairs (compute the basis first). The reply is binary, little-endian:
@@ -52,7 +76,8 @@
 //!   `f32 values[n]`, `f32 segments[6 * total]` (level-set segments `x1 y1 z1 x2 y2 z2`,
 //!   level after level). The header ([`field::FieldHeader`]) has `n`, `kind`, `request`
 //!   (every default resolved, e.g. the source filled in), `source`, `marks`,
-//!   `constraints`, `floating` (components a harmonic map left unconstrained), `laplacian`, `normalized`, `k`, `basis_k`, `lambda_max`,
+//!   `constraints`, `floating` (components a harmonic map left unconstrained), `laplacian`, `point_cloud`, `point_spacing` (a cloud's mean
+//!   neighbour spacing, `null` for a mesh), `normalized`, `k`, `basis_k`, `lambda_max`,
 //!   `categorical` (segmentation labels), `min`, `max`, `levels`, `level_counts`,
 //!   `critical` (the library's `CriticalReport`: `points {minima, maxima, saddles,
 //!   on_boundary, non_manifold}`, counts, `chi`, `doubled`, `lhs`, `rhs`, `holds`,
@@ -61,8 +86,10 @@
 //!   library's [`spectral_mesh::analysis::TruncationHint`], the weight of the first
 //!   omitted eigenpair against the first varying one and a warning when truncation
 //!   dominates; `null` otherwise) and `timing_ms {field, critical, levels, total}`. The
-//!   page asks for `levels = 0` (it draws level sets in its shader) and reads the values
-//!   straight into a `Float32Array`.
+//!   page asks for `levels = 0` for a mesh (it draws level sets in its shader) and reads
+//!   the values straight into a `Float32Array`; for a point cloud it asks for the level
+//!   sets (the library's, on the triangle union of the cloud's Laplacian) and draws the
+//!   segments over its splats.
 //!
 //! Downloads:
 //! - `POST /api/mesh/{id}/download` with the body of a field request plus `format` (`png`,
@@ -70,8 +97,9 @@
 //!   `size` (16..=4096), `transparent`, `critical_points`, `colorbar` (as the `[figure]`
 //!   table of experiment files), or `GET /api/mesh/{id}/download?format=F&body=JSON`
 //!   with the same object URL-encoded. `png`, `wrl`, `ply` and `txt` are the render
-//!   crate's [`spectral_mesh_render::figure::Figure`] of the field (`txt`: one value per
-//!   line at full precision); `toml` is the experiment file
+//!   crate's [`spectral_mesh_render::figure::Figure::of_analysis`] of the field (`txt`: one
+//!   value per line at full precision; a point cloud is drawn as discs sized from its
+//!   point spacing, its `ply` and `wrl` files are point sets); `toml` is the experiment file
 //!   ([`spectral_mesh::experiments::file::ExperimentFile::for_field`]) that
 //!   `spectral-mesh run FILE.toml` replays to the same bits: `experiment = "field"`,
 //!   `mesh` (the shape spec, or the uploaded file's name: put the file beside the

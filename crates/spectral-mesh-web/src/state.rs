@@ -4,7 +4,9 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use spectral_mesh::analysis::{Analysis, AnalysisOptions, DistanceSpec, FieldRequest};
+use spectral_mesh::analysis::{
+    Analysis, AnalysisError, AnalysisInput, AnalysisOptions, DistanceSpec, FieldRequest,
+};
 use spectral_mesh::{Laplacian, Mesh};
 
 use crate::ServeConfig;
@@ -12,18 +14,131 @@ use crate::cache::{ByteLru, Entry};
 use crate::jobs::{Jobs, predicted_factor_len};
 use crate::limits::InFlight;
 
-/// A mesh the page has loaded.
+/// What was loaded: a triangle mesh or a point cloud.
+pub enum Loaded {
+    /// A mesh, shared with its analyses (every discretization applies).
+    Mesh(Arc<Mesh>),
+    /// A point cloud, as the library's analysis input ([`AnalysisInput::Points`]: the
+    /// points, their normals if any, and the parameters of its Laplacian). Its analyses
+    /// are made by [`Analysis::from_input`]; only [`Laplacian::Robust`] (the point-cloud
+    /// Laplacian of Sharp and Crane) applies.
+    Points(AnalysisInput),
+}
+
+/// A mesh or point cloud the page has loaded.
 pub struct MeshEntry {
-    /// The first 16 hex digits of [`Mesh::content_hash`].
+    /// The first 16 hex digits of the content hash ([`Mesh::content_hash`], or
+    /// [`spectral_mesh::PointCloud::content_hash`] for a cloud).
     pub id: String,
     /// The whole content hash (64 hex digits), as experiment files record it.
     pub hash: String,
     /// Shape spec or uploaded file name (what the experiment file records as `mesh`).
     pub source: String,
-    /// The mesh, shared with its analyses.
-    pub mesh: Arc<Mesh>,
+    /// The mesh or the point cloud.
+    pub input: Loaded,
     /// The info panel's JSON.
     pub info: serde_json::Value,
+}
+
+impl MeshEntry {
+    /// Vertices of the mesh, or points of the cloud.
+    pub fn n(&self) -> usize {
+        match &self.input {
+            Loaded::Mesh(m) => m.n_vertices(),
+            Loaded::Points(p) => p.n(),
+        }
+    }
+
+    /// Triangles of the mesh (0 for a point cloud: its triangle union belongs to its
+    /// analyses).
+    pub fn n_triangles(&self) -> usize {
+        match &self.input {
+            Loaded::Mesh(m) => m.n_triangles(),
+            Loaded::Points(_) => 0,
+        }
+    }
+
+    /// The vertex or point positions, `n` entries.
+    pub fn positions(&self) -> &[[f64; 3]] {
+        match &self.input {
+            Loaded::Mesh(m) => m.positions(),
+            Loaded::Points(AnalysisInput::Points { cloud, .. }) => cloud.positions(),
+            Loaded::Points(AnalysisInput::Mesh(m)) => m.positions(),
+        }
+    }
+
+    /// The mesh, `None` for a point cloud.
+    pub fn mesh(&self) -> Option<&Arc<Mesh>> {
+        match &self.input {
+            Loaded::Mesh(m) => Some(m),
+            Loaded::Points(_) => None,
+        }
+    }
+
+    /// True for a point cloud.
+    pub fn is_points(&self) -> bool {
+        matches!(self.input, Loaded::Points(_))
+    }
+
+    /// `"mesh"` or `"point cloud"`.
+    pub fn kind(&self) -> &'static str {
+        if self.is_points() {
+            "point cloud"
+        } else {
+            "mesh"
+        }
+    }
+
+    /// `"vertices"` or `"points"`, for messages.
+    pub fn noun(&self) -> &'static str {
+        if self.is_points() {
+            "points"
+        } else {
+            "vertices"
+        }
+    }
+
+    /// The discretizations that apply: all for a mesh, robust only for a point cloud.
+    pub fn laplacians(&self) -> Vec<&'static str> {
+        if self.is_points() {
+            vec![Laplacian::Robust.name()]
+        } else {
+            [
+                Laplacian::Fem,
+                Laplacian::VoronoiCot,
+                Laplacian::Cot,
+                Laplacian::MixedVoronoi,
+                Laplacian::Uniform,
+                Laplacian::Robust,
+            ]
+            .iter()
+            .map(|l| l.name())
+            .collect()
+        }
+    }
+
+    /// The discretization of a request: the one given, or the input's default (fem for
+    /// a mesh, robust for a point cloud, as the CLI). A point cloud refuses any other
+    /// than robust with a message saying why (the handlers answer 422).
+    pub fn laplacian(&self, given: Option<Laplacian>) -> Result<Laplacian, String> {
+        match (self.is_points(), given) {
+            (false, g) => Ok(g.unwrap_or(Laplacian::Fem)),
+            (true, None | Some(Laplacian::Robust)) => Ok(Laplacian::Robust),
+            (true, Some(l)) => Err(format!(
+                "laplacian: '{}' is a point cloud and the {} Laplacian needs triangles: a point cloud has only its point-cloud Laplacian (Sharp and Crane 2020), \"laplacian\": \"robust\" (the default for point clouds)",
+                self.source,
+                l.name()
+            )),
+        }
+    }
+
+    /// Bytes the entry takes (see [`mesh_bytes`]; a cloud: positions and normals).
+    pub fn bytes(&self) -> usize {
+        match &self.input {
+            Loaded::Mesh(m) => mesh_bytes(m),
+            Loaded::Points(p) => p.n() * 96,
+        }
+    }
 }
 
 /// What one analysis is of: mesh id, discretization, scale normalisation.
@@ -148,22 +263,31 @@ impl AppState {
     }
 
     /// The analysis of `entry` for `key`: an existing one, or a new one (operators
-    /// assembled now, O(n): reserve [`analysis_creation_bytes`] first; nothing factored
-    /// yet).
-    pub fn analysis(&self, entry: &MeshEntry, key: &AnalysisKey) -> Arc<Analysis> {
+    /// assembled now, O(n) for a mesh, O(n k log n) for the point-cloud Laplacian of a
+    /// cloud with `k` neighbours: reserve [`analysis_creation_bytes`] first; nothing
+    /// factored yet). A mesh shares its `Arc` with the analysis ([`Analysis::new`], what
+    /// [`Analysis::from_input`] does with a mesh, without a copy); a point cloud goes
+    /// through [`Analysis::from_input`], which refuses a discretization other than
+    /// robust and a cloud without a triangle in its local triangulations.
+    pub fn analysis(
+        &self,
+        entry: &MeshEntry,
+        key: &AnalysisKey,
+    ) -> Result<Arc<Analysis>, AnalysisError> {
         if let Some(a) = self.existing_analysis(key) {
-            return a;
+            return Ok(a);
         }
-        let a = Arc::new(Analysis::new(
-            entry.mesh.clone(),
-            AnalysisOptions {
-                laplacian: key.laplacian,
-                normalize: key.normalize,
-                ..AnalysisOptions::default()
-            },
-        ));
+        let options = AnalysisOptions {
+            laplacian: key.laplacian,
+            normalize: key.normalize,
+            ..AnalysisOptions::default()
+        };
+        let a = Arc::new(match &entry.input {
+            Loaded::Mesh(m) => Analysis::new(m.clone(), options),
+            Loaded::Points(input) => Analysis::from_input(input.clone(), options)?,
+        });
         self.remember(key, &a);
-        a
+        Ok(a)
     }
 
     /// (Re-)enters an analysis into the cache with its current size, if its mesh is
@@ -197,9 +321,13 @@ pub fn mesh_bytes(m: &Mesh) -> usize {
 }
 
 /// Bytes an analysis takes: [`Analysis::memory_bytes`] (counted from its arrays) plus a
-/// tenth for allocator overhead and the factor's symbolic analysis.
+/// tenth for allocator overhead and the factor's symbolic analysis; the analysis of a
+/// point cloud also holds its points and the triangle union of its Laplacian.
 pub fn analysis_bytes(a: &Analysis) -> usize {
-    let b = a.memory_bytes();
+    let mut b = a.memory_bytes();
+    if a.is_point_cloud() {
+        b += mesh_bytes(a.mesh()) + 48 * a.n();
+    }
     b + b / 10
 }
 
@@ -209,10 +337,13 @@ pub fn basis_bytes(n: usize, k: usize) -> usize {
 }
 
 /// Peak bytes of assembling the operators of a new analysis on `n` vertices (triplets
-/// and the two sparse matrices; the robust Laplacian builds an intrinsic mesh first).
-pub fn analysis_creation_bytes(n: usize, laplacian: Laplacian) -> usize {
-    match laplacian {
-        Laplacian::Robust => 3000 * n,
+/// and the two sparse matrices; the robust Laplacian builds an intrinsic mesh first; the
+/// point-cloud Laplacian of a cloud of `n` points also its neighbour lists, local
+/// triangulations and their union: an estimate of twice the robust figure).
+pub fn analysis_creation_bytes(n: usize, laplacian: Laplacian, points: bool) -> usize {
+    match (laplacian, points) {
+        (_, true) => 6000 * n,
+        (Laplacian::Robust, false) => 3000 * n,
         _ => 1000 * n,
     }
 }

@@ -36,12 +36,25 @@ const app = {
   constraints: null,     // explicit harmonic constraints [{vertex, value}], null: the preset
   lastControl: null,     // id of the control behind the request in flight
   framed: null,          // mesh id the camera was aimed for
+  isCloud: false,        // the input is a point cloud (drawn as splats, robust only)
+  spacing: 0,            // a cloud's mean point spacing (the library's), sizes the splats
+  meshLaplacian: null,   // the Laplacian chosen for meshes, restored after a cloud
 };
 window.__app = app;
 window.__lastField = null;
 window.__timings = [];
 window.__lastError = null;
 window.__markers = {};
+
+// This page's name for the server: a random id made once per tab (on load), sent as
+// X-Client-Id on every request, so that the server knows a newer basis request of this
+// page supersedes its older one (another mesh's job of the same page is cancelled).
+const CLIENT_ID = (() => {
+  const b = new Uint8Array(12);
+  crypto.getRandomValues(b);
+  return 'page-' + Array.from(b, (x) => x.toString(16).padStart(2, '0')).join('');
+})();
+window.__clientId = CLIENT_ID;
 
 // ---------- three.js scene ----------
 const view = $('view');
@@ -66,7 +79,10 @@ function resize() {
   render();
 }
 window.addEventListener('resize', resize);
-function render() { renderer.render(scene, camera); }
+function render() {
+  if (app.isCloud) updateSplatScale();
+  renderer.render(scene, camera);
+}
 controls.addEventListener('change', render);
 const nextFrame = () => new Promise((r) => requestAnimationFrame(() => r()));
 
@@ -133,6 +149,70 @@ const fieldMaterial = new THREE.ShaderMaterial({
   polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
 });
 
+// A point cloud: one round splat per point, coloured by the same colour map texture and
+// range (the uniforms are shared with the surface's material), a disc of radius
+// 0.65 x the library's mean point spacing (as the server's pictures), shaded as a small
+// sphere. The splat is pushed back along the view ray by its radius, so that the level
+// lines and the markers on the surface stay in front of it. Level sets are not drawn in
+// this shader: the page asks the server for the library's level-set segments on the
+// triangle union of the cloud's Laplacian and draws them as lines.
+const POINT_RADIUS_FACTOR = 0.65;
+const splatMaterial = new THREE.ShaderMaterial({
+  uniforms: {
+    cmap: fieldMaterial.uniforms.cmap, lo: fieldMaterial.uniforms.lo, hi: fieldMaterial.uniforms.hi,
+    hasField: fieldMaterial.uniforms.hasField, radius: { value: 0.01 }, scale: { value: 1 },
+  },
+  vertexShader: `
+    attribute float scalar;
+    uniform float radius, scale;
+    varying float vS;
+    void main() {
+      vS = scalar;
+      vec4 mv = modelViewMatrix * vec4(position, 1.0);
+      mv.xyz += normalize(mv.xyz) * radius;
+      gl_Position = projectionMatrix * mv;
+      gl_PointSize = max(2.0, 2.0 * radius * scale / max(-mv.z, 1e-6));
+    }`,
+  fragmentShader: `
+    uniform sampler2D cmap;
+    uniform float lo, hi, hasField;
+    varying float vS;
+    void main() {
+      vec2 d = gl_PointCoord * 2.0 - 1.0;
+      float r2 = dot(d, d);
+      if (r2 > 1.0) discard;
+      vec3 c = vec3(0.8);
+      if (hasField > 0.5) {
+        float u = hi > lo ? (vS - lo) / (hi - lo) : 0.5;
+        c = texture2D(cmap, vec2(clamp(u, 0.0, 1.0) * (255.0 / 256.0) + 0.5 / 256.0, 0.5)).rgb;
+      }
+      gl_FragColor = vec4(c * (0.55 + 0.45 * sqrt(1.0 - r2)), 1.0);
+    }`,
+});
+// Pixels per world unit at distance 1 (the splats' gl_PointSize), from the drawing buffer.
+const bufferSize = new THREE.Vector2();
+function updateSplatScale() {
+  renderer.getDrawingBufferSize(bufferSize);
+  splatMaterial.uniforms.scale.value = bufferSize.y * camera.projectionMatrix.elements[5] / 2;
+}
+// A cloud's level sets: the server's segments, as lines.
+let levelObj = null;
+const levelMaterial = new THREE.LineBasicMaterial({ color: 0x111111 });
+function clearLevelLines() {
+  if (levelObj) { scene.remove(levelObj); levelObj.geometry.dispose(); levelObj = null; }
+}
+function setLevelLines(segments) {
+  clearLevelLines();
+  window.__levelSegments = segments ? segments.length / 6 : 0;
+  if (!segments || !segments.length) return;
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(segments, 3));
+  levelObj = new THREE.LineSegments(g, levelMaterial);
+  levelObj.renderOrder = 1;
+  levelObj.visible = $('show-levels').checked;
+  scene.add(levelObj);
+}
+
 // ---------- markers: one sprite shape per kind, drawn on the surface ----------
 const MARKERS = {
   source: { label: 'source / anchor', fill: '#ffd400', stroke: '#000', shape: 'star', size: 22 },
@@ -178,6 +258,7 @@ function buildLegend() {
     el.appendChild(row);
   }
   const lines = document.createElement('div');
+  lines.dataset.kind = 'level';
   lines.innerHTML = '<svg width="16" height="16"><line x1="0" y1="8" x2="16" y2="8" stroke="#111" stroke-width="2"/></svg><span>level set</span>';
   el.appendChild(lines);
 }
@@ -187,11 +268,12 @@ function clearMarkers() {
   markerObjs.length = 0;
   window.__markers = {};
 }
-// Points a little above the surface (along the vertex normal), so none is half buried.
+// Points a little above the surface (along the vertex normal), so none is half buried (a
+// cloud's splats are pushed back instead).
 function addMarkers(kind, vertices) {
   window.__markers[kind] = vertices.length;
   if (!vertices.length) return;
-  const lift = 0.006 * radius;
+  const lift = app.isCloud ? 0 : 0.006 * radius;
   const pts = new Float32Array(3 * vertices.length);
   vertices.forEach((v, i) => {
     for (let c = 0; c < 3; c++) pts[3 * i + c] = app.positions[3 * v + c] + lift * app.normals[3 * v + c];
@@ -237,6 +319,11 @@ function showError(control, msg) {
   }
 }
 
+// Every request names this page (X-Client-Id).
+function withClient(opts = {}) {
+  return { ...opts, headers: { ...(opts.headers || {}), 'X-Client-Id': CLIENT_ID } };
+}
+
 async function api(method, url, body, binary = false) {
   const opts = { method, headers: {} };
   if (body !== undefined) {
@@ -247,7 +334,7 @@ async function api(method, url, body, binary = false) {
 }
 
 async function fetchWith(url, opts, binary) {
-  const r = await fetch(url, opts);
+  const r = await fetch(url, withClient(opts));
   if (!r.ok) {
     let msg = `${r.status} ${r.statusText}`;
     try { const j = await r.json(); if (j.error) msg = j.error; } catch (_) { /* not JSON */ }
@@ -365,6 +452,8 @@ function renderConstraintList() {
       app.constraints = shownConstraints().map((x) => ({ vertex: x.vertex, value: x.value }));
       app.constraints.splice(i, 1);
       $('preset').value = 'clicks';
+      drawMarkers(); // the removed marker goes now, not with the next map
+      render();
       onInput({ target: { id: 'constraint-list' } });
     });
     li.appendChild(b);
@@ -384,11 +473,22 @@ function addConstraint(v) {
   if (at >= 0) cur[at].value = value; else cur.push({ vertex: v, value });
   app.constraints = cur;
   $('preset').value = 'clicks';
+  drawMarkers();
+  render();
 }
 
 // ---------- mesh ----------
 function describeInfo(r) {
   const i = r.info;
+  if (r.kind === 'point cloud') {
+    return [
+      `${r.source}`,
+      `point cloud: ${i.points} points, ${i.normals ? `${i.normals} with normals` : 'no normals'}`,
+      `point-cloud Laplacian (robust): ${i.neighbors} neighbours`,
+      `triangle union ${i.union_triangles} triangles, components ${i.components}`,
+      `mean point spacing ${fmt(i.point_spacing)}`,
+    ].join('\n');
+  }
   const lines = [
     `${r.source}`,
     `vertices ${i.vertices}   triangles ${i.triangles}   edges ${i.edges}`,
@@ -399,12 +499,39 @@ function describeInfo(r) {
   return lines.join('\n');
 }
 
+// What the input is and which Laplacian is used: a point cloud has only its point-cloud
+// Laplacian (robust); the other choices are disabled while it is loaded, and the mesh
+// choice comes back with the next mesh.
+function applyInputKind(reply) {
+  const sel = $('laplacian');
+  const cloud = reply.kind === 'point cloud';
+  if (cloud && !app.isCloud) app.meshLaplacian = sel.value;
+  app.isCloud = cloud;
+  app.spacing = cloud ? (reply.point_spacing || 0) : 0;
+  const allowed = new Set(reply.laplacians || [...sel.options].map((o) => o.value));
+  for (const o of sel.options) o.disabled = !allowed.has(o.value);
+  if (cloud) sel.value = 'robust';
+  else if (app.meshLaplacian) { sel.value = app.meshLaplacian; app.meshLaplacian = null; }
+  const el = $('input-kind');
+  if (cloud) {
+    el.textContent = `Input: point cloud (${reply.n} points), drawn as splats. Laplacian: robust, the point-cloud `
+      + `Laplacian of Sharp & Crane (${reply.info.neighbors} neighbours); the others need triangles. Level sets and `
+      + `critical points are those of the triangle union it is built on (${reply.info.union_triangles} triangles).`;
+  } else {
+    el.textContent = `Input: triangle mesh (${reply.n} vertices, ${reply.m} triangles).`;
+  }
+  el.dataset.kind = reply.kind;
+  const level = document.querySelector('#legend [data-kind="level"] span');
+  if (level) level.textContent = cloud ? 'level set (on the triangle union)' : 'level set';
+}
+
 async function setMesh(reply, fileName = null) {
   app.meshId = reply.mesh_id; app.n = reply.n; app.m = reply.m; app.info = reply.info;
   app.basisKey = null;
   app.field = null;
   app.framed = null;
   app.constraints = null;
+  applyInputKind(reply);
   if ($('preset').value === 'clicks') $('preset').value = '2';
   $('info').textContent = describeInfo(reply);
   const sel = $('shape-select');
@@ -433,19 +560,34 @@ async function setMesh(reply, fileName = null) {
 function buildMeshObject() {
   if (meshObj) { scene.remove(meshObj); meshObj.geometry.dispose(); }
   clearMarkers();
+  clearLevelLines();
   const g = new THREE.BufferGeometry();
   g.setAttribute('position', new THREE.BufferAttribute(app.positions, 3));
-  g.setIndex(new THREE.BufferAttribute(app.triangles, 1));
   g.setAttribute('scalar', new THREE.BufferAttribute(new Float32Array(app.n), 1));
-  g.computeVertexNormals();
   g.computeBoundingSphere();
-  app.normals = g.getAttribute('normal').array;
-  fieldMaterial.uniforms.hasField.value = 0;
-  meshObj = new THREE.Mesh(g, fieldMaterial);
-  scene.add(meshObj);
   const s = g.boundingSphere;
   radius = s.radius; center.copy(s.center);
   app.radius = radius;
+  fieldMaterial.uniforms.hasField.value = 0;
+  if (app.isCloud) {
+    // Splats; the "normals" only aim the camera at the source: outward from the centre.
+    const nrm = new Float32Array(3 * app.n);
+    for (let v = 0; v < app.n; v++) {
+      const d = [0, 1, 2].map((c) => app.positions[3 * v + c] - center.getComponent(c));
+      const l = Math.hypot(...d) || 1;
+      for (let c = 0; c < 3; c++) nrm[3 * v + c] = d[c] / l;
+    }
+    app.normals = nrm;
+    if (!(app.spacing > 0)) app.spacing = 2 * radius / Math.sqrt(Math.max(app.n, 1)); // a guess
+    splatMaterial.uniforms.radius.value = POINT_RADIUS_FACTOR * app.spacing;
+    meshObj = new THREE.Points(g, splatMaterial);
+  } else {
+    g.setIndex(new THREE.BufferAttribute(app.triangles, 1));
+    g.computeVertexNormals();
+    app.normals = g.getAttribute('normal').array;
+    meshObj = new THREE.Mesh(g, fieldMaterial);
+  }
+  scene.add(meshObj);
   aimCamera(new THREE.Vector3(0.4, 0.5, 1).normalize());
 }
 
@@ -468,6 +610,7 @@ function frameSource(v) {
   const candidates = [base, base.clone().multiplyScalar(-1), base.clone().add(out).normalize(),
     base.clone().add(nrm).normalize(), nrm.clone(), out.clone()];
   const ray = new THREE.Raycaster();
+  ray.params.Points.threshold = POINT_RADIUS_FACTOR * app.spacing;
   for (const dir of candidates) {
     if (!(dir.lengthSq() > 0.5)) continue;
     aimCamera(dir);
@@ -500,25 +643,33 @@ async function loadFile(file) {
 }
 
 // ---------- basis ----------
+// Computes (or finds) the basis the request needs. Returns false, without waiting for
+// it, when a newer input arrived meanwhile (or another mesh was loaded): the next update
+// asks again with the latest values, so a basis for another k (or mesh) supersedes this
+// one on the server, which cancels it.
 async function ensureBasis(p) {
   const key = `${p.laplacian}:${p.k}`;
   if (app.basisKey === key) return true;
+  const id = app.meshId;
   const want = { laplacian: p.laplacian, normalize: true, k: p.k };
   const mine = (st) => st.laplacian === p.laplacian && st.normalize === true && st.held_k >= p.k;
-  let st = await api('POST', `/api/mesh/${app.meshId}/basis`, want);
+  const moved = () => app.pending || app.meshId !== id;
+  let st = await api('POST', `/api/mesh/${id}/basis`, want);
   // A computation for other parameters (another tab) may cancel this one: ask again, a
   // few times.
   for (let tries = 0; !(st.state === 'done' && mine(st)); ) {
     if (st.state === 'error') throw new Error(`eigenbasis: ${st.message}`);
     setProgress(st);
     await new Promise((r) => setTimeout(r, 150));
-    st = await api('GET', `/api/mesh/${app.meshId}/basis/status`);
-    if (st.state !== 'running' && !(st.state === 'done' && mine(st))) {
+    if (moved()) return false;
+    st = await api('GET', `/api/mesh/${id}/basis/status`);
+    if (!['running', 'queued'].includes(st.state) && !(st.state === 'done' && mine(st))) {
       if (++tries > 3) throw new Error(`eigenbasis: ${st.message}`);
-      st = await api('POST', `/api/mesh/${app.meshId}/basis`, want);
+      st = await api('POST', `/api/mesh/${id}/basis`, want);
     }
   }
   setProgress(st);
+  if (app.meshId !== id) return false;
   app.basisKey = key;
   return true;
 }
@@ -533,11 +684,11 @@ function showK(header) {
   let text = `k requested ${want}`;
   if (header && header.k !== null && header.k !== undefined) {
     text = `k used ${header.k} (of ${header.basis_k} held)`;
-    if (header.k < want) text += `: this mesh has ${app.n} vertices, ${want} requested`;
+    if (header.k < want) text += `: this ${app.isCloud ? 'point cloud' : 'mesh'} has ${app.n} ${app.isCloud ? 'points' : 'vertices'}, ${want} requested`;
   } else if (header) {
     text = 'k: no eigenbasis used';
   } else if (app.n && want > app.n) {
-    text = `k ${app.n} on this mesh (${app.n} vertices; ${want} requested)`;
+    text = `k ${app.n} on this ${app.isCloud ? 'point cloud' : 'mesh'} (${app.n} ${app.isCloud ? 'points' : 'vertices'}; ${want} requested)`;
   }
   $('k-used').textContent = text;
 }
@@ -548,7 +699,9 @@ function parseField(buf) {
   const hl = dv.getUint32(0, true);
   const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buf, 4, hl)));
   const values = new Float32Array(buf, 4 + hl, header.n);
-  return { header, values };
+  const nSeg = (header.level_counts || []).reduce((a, b) => a + b, 0);
+  const segments = new Float32Array(buf, 4 + hl + 4 * header.n, 6 * nSeg);
+  return { header, values, segments };
 }
 
 // One request in flight; inputs during it coalesce into one more request with the latest
@@ -580,19 +733,21 @@ async function updateOnce() {
     return;
   }
   try {
-    const body = fieldRequest(p);
+    // A mesh's level sets are drawn in the shader; a cloud's are the library's segments.
+    const body = fieldRequest(p, app.isCloud ? p.levels : 0);
     const needsBasis = body.kind !== 'harmonic';
-    if (needsBasis) await ensureBasis(p);
+    const id = app.meshId;
+    if (needsBasis && !(await ensureBasis(p))) return; // superseded by a newer input
     let buf;
     try {
-      buf = await api('POST', `/api/mesh/${app.meshId}/field`, body, true);
+      buf = await api('POST', `/api/mesh/${id}/field`, body, true);
     } catch (e) {
       if (e.status !== 409 || !needsBasis) throw e;
       app.basisKey = null; // evicted: compute again
-      await ensureBasis(p);
-      buf = await api('POST', `/api/mesh/${app.meshId}/field`, body, true);
+      if (!(await ensureBasis(p))) return;
+      buf = await api('POST', `/api/mesh/${id}/field`, body, true);
     }
-    if (app.pending) return; // a newer input: draw that one instead
+    if (app.pending || app.meshId !== id) return; // a newer input: draw that one instead
     const t1 = performance.now();
     app.field = parseField(buf);
     app.field.params = p;
@@ -612,6 +767,7 @@ async function updateOnce() {
     if (/\bk\b must|eigenbasis of k|pairs/.test(e.message) && !/constraint/.test(e.message)) at = 'k';
     if (/expression|custom/.test(e.message)) at = 'custom';
     if (/constraint/.test(e.message)) at = 'constraint-list';
+    if (/^laplacian:|needs triangles|point-cloud Laplacian/.test(e.message)) at = 'laplacian';
     showError(at, e.message);
   }
 }
@@ -641,7 +797,8 @@ function drawColorbar() {
   $('colorbar-ticks').innerHTML = ticks.map((v) => `<span>${fmt(v)}</span>`).join('');
   const levels = $('show-levels').checked && !h.categorical ? parseInt($('levels').value, 10) : 0;
   const flat = h.critical?.flat ? ' · constant field' : '';
-  $('colorbar-units').textContent = `${h.normalized ? 'shape scaled to unit area' : 'original size'} · ${h.laplacian}` +
+  const input = h.point_cloud ? 'point cloud (point-cloud Laplacian) · ' : '';
+  $('colorbar-units').textContent = `${input}${h.normalized ? 'shape scaled to unit area' : 'original size'} · ${h.laplacian}` +
     `${h.k ? `, k = ${h.k}` : ''}${levels ? ` · ${levels} level sets, spacing ${fmt((h.max - h.min) / levels)}` : ''}${flat}`;
 }
 
@@ -661,6 +818,7 @@ function applyView() {
   }
   u.nLevels.value = parseInt($('levels').value, 10);
   u.showLevels.value = $('show-levels').checked && !(h && h.categorical) ? 1 : 0;
+  if (levelObj) levelObj.visible = $('show-levels').checked;
   drawColorbar();
 }
 
@@ -676,6 +834,7 @@ function drawField() {
   attr.array.set(values);
   attr.needsUpdate = true;
   fieldMaterial.uniforms.hasField.value = 1;
+  if (app.isCloud) setLevelLines(app.field.segments);
   frameSource(header.source);
   applyView();
   drawMarkers();
@@ -702,18 +861,20 @@ function drawField() {
   render();
 }
 
+// The markers of the field drawn, with the constraints as the page holds them now (a
+// constraint removed or added is shown at once, not when the next map arrives).
 function drawMarkers() {
   clearMarkers();
   const h = app.field?.header;
-  if (!h) return;
-  const cp = h.critical;
-  if ($('show-critical').checked && cp) {
+  const cp = h?.critical;
+  if (h && $('show-critical').checked && cp) {
     addMarkers('minimum', cp.points.minima);
     addMarkers('maximum', cp.points.maxima);
     addMarkers('saddle', cp.points.saddles.map(([v]) => v));
   }
-  addMarkers('constraint', (h.constraints || []).map((c) => c.vertex));
-  if (h.source !== null && h.source !== undefined) addMarkers('source', [h.source]);
+  const constraints = $('experiment').value === 'harmonic' ? shownConstraints() : (h?.constraints || []);
+  if (app.positions) addMarkers('constraint', constraints.map((c) => c.vertex).filter((v) => v < app.n));
+  if (h && h.source !== null && h.source !== undefined) addMarkers('source', [h.source]);
 }
 
 // ---------- picking ----------
@@ -730,6 +891,21 @@ function vertexAt(clientX, clientY) {
   const r = renderer.domElement.getBoundingClientRect();
   const ndc = new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
   raycaster.setFromCamera(ndc, camera);
+  if (app.isCloud) {
+    // The splat under the cursor: of the points within a splat radius of the ray, the one
+    // nearest to the ray among those in the front layer (within two spacings of the first).
+    const rad = POINT_RADIUS_FACTOR * app.spacing;
+    raycaster.params.Points.threshold = rad;
+    const hits = raycaster.intersectObject(meshObj);
+    if (!hits.length) return null;
+    const front = hits[0].distance + 2 * app.spacing;
+    let best = hits[0];
+    for (const h of hits) {
+      if (h.distance > front) break;
+      if (h.distanceToRay < best.distanceToRay) best = h;
+    }
+    return best.index;
+  }
   const hit = raycaster.intersectObject(meshObj)[0];
   if (!hit) return null;
   const f = hit.face;
@@ -775,7 +951,7 @@ document.querySelectorAll('#downloads a').forEach((a) => {
     if (!app.meshId) return;
     const url = downloadUrl(a.dataset.format);
     try {
-      const r = await fetch(url);
+      const r = await fetch(url, withClient());
       if (!r.ok) { let m = r.statusText; try { m = (await r.json()).error; } catch (_) { /* */ } throw new Error(m); }
       const blob = await r.blob();
       const name = (r.headers.get('content-disposition') || '').match(/filename="([^"]+)"/)?.[1] || `field.${a.dataset.format}`;
@@ -797,6 +973,8 @@ function onInput(e) {
 }
 // View-only changes: no request, recoloured on the GPU; timed from the input to the frame.
 async function onViewInput(e) {
+  // A cloud's level sets are the server's segments: a new number of levels is a request.
+  if (app.isCloud && e.target.id === 'levels') { onInput(e); return; }
   const t0 = performance.now();
   if (e.target.id === 'colormap') setColormap($('colormap').value);
   $('levels-val').textContent = $('levels').value;
@@ -824,6 +1002,8 @@ $('preset').addEventListener('change', (e) => {
 $('constraints-clear').addEventListener('click', (e) => {
   app.constraints = [];
   $('preset').value = 'clicks';
+  drawMarkers();
+  render();
   onInput(e);
 });
 $('click-mode').addEventListener('change', () => refreshParamVisibility());

@@ -380,6 +380,10 @@ async fn abandoned_overlong_and_superseded_jobs_stop() {
         "{st}"
     );
     assert_eq!(wait_job(addr, &small).await["state"], "done");
+    // The health counters say so.
+    let h = get(addr, "/api/health").await.json();
+    assert_eq!(h["jobs_superseded"], 1, "{h}");
+    assert_eq!(h["jobs_cancelled"], 1, "{h}");
 }
 
 /// A body that stops arriving is answered 408 at the request deadline, one cut short is a
