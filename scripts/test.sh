@@ -57,7 +57,7 @@ done
 # then its pytest suite (conformance with libigl, robust-laplacian, SciPy, LaPy; inputs;
 # threads and Ctrl-C). Measured: 3-8 min for the build from scratch on 2 cores, about
 # 1 min for the tests.
-step "python package (build, install, pytest)" bash scripts/test-python.sh
+step "python package (build, install, pytest)" env SPECTRAL_MESH_CLI="$cli" bash scripts/test-python.sh
 
 # The web server under a bounded load (about 40 s; the long soak is web/soak.sh).
 step "web server soak (quick)" env SPECTRAL_MESH_CLI="$cli" SOAK_OUT="$root/target/soak-quick.json" bash web/soak.sh --quick

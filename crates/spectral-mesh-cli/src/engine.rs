@@ -1,5 +1,6 @@
 //! The command line's side of the one engine: the options every spectral command shares
-//! (`-k`, `--laplacian`, `--tolerance`, `--cache`, `--repair`), the [`Analysis`] they
+//! (`-k`, `--laplacian`, `--tolerance`, `--cache`, `--repair`, and the point-cloud
+//! Laplacian's `--neighbors`, `--use-normals`, `--mollify-factor`), the [`Analysis`] they
 //! build, its eigenbasis with a progress bar (or from the cache), and the experiment file
 //! a field command saves.
 
@@ -10,15 +11,16 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use spectral_mesh::analysis::request::DEFAULT_K;
 use spectral_mesh::analysis::{Analysis, AnalysisInput, AnalysisOptions, Field, FieldRequest};
-use spectral_mesh::experiments::file::ExperimentFile;
+use spectral_mesh::experiments::file::{ExperimentFile, PointCloudFile};
 use spectral_mesh::linalg::EigenProgress;
+use spectral_mesh::operators::{NormalSource, PointCloudParams};
 use spectral_mesh::spectral::Eigenbasis;
 use spectral_mesh::spectral::eigenbasis::EigenParams;
 use spectral_mesh::spectral::store::load_or_compute;
 use spectral_mesh::{CancelToken, Laplacian};
 use spectral_mesh_render::figure::FigureOptions;
 
-use crate::input::MeshInfo;
+use crate::input::{self, Input, MeshInfo};
 use crate::output::save_experiment;
 use crate::progress::EigenBar;
 
@@ -44,6 +46,95 @@ pub struct BasisArgs {
     /// Repair the mesh first (see `info --repair`).
     #[arg(long)]
     pub repair: bool,
+    #[command(flatten)]
+    pub cloud: CloudArgs,
+}
+
+/// The point-cloud Laplacian's parameters, shared by every command that reads an input.
+/// Unset options take the library's defaults ([`PointCloudParams::default`], shown in the
+/// help); given with a mesh they are an error (see [`CloudArgs::apply`]).
+#[derive(Debug, Clone, Default, clap::Args)]
+#[command(next_help_heading = "Point clouds")]
+pub struct CloudArgs {
+    // Help (with the library's default) from `cloud_help`.
+    #[arg(long, value_name = "K", help = cloud_help("neighbours per point of the point-cloud Laplacian (at least 2)", PointCloudParams::default().neighbors))]
+    pub neighbors: Option<usize>,
+    /// Point clouds: use the file's normals for the tangent planes (where non-zero)
+    /// instead of estimating them from the neighbours.
+    #[arg(long)]
+    pub use_normals: bool,
+    // Help (with the library's default) from `cloud_help`.
+    #[arg(long, value_name = "F", help = cloud_help("relative mollification of the point-cloud Laplacian (as robust_laplacian's mollify_factor)", PointCloudParams::default().mollify_factor))]
+    pub mollify_factor: Option<f64>,
+}
+
+/// A point-cloud option's help with the library's default.
+fn cloud_help(what: &str, default: impl std::fmt::Display) -> String {
+    format!("Point clouds: {what} [default: {default}]")
+}
+
+impl CloudArgs {
+    /// The options given, by name (empty when none was).
+    pub fn given(&self) -> Vec<&'static str> {
+        let mut g = Vec::new();
+        if self.neighbors.is_some() {
+            g.push("--neighbors");
+        }
+        if self.use_normals {
+            g.push("--use-normals");
+        }
+        if self.mollify_factor.is_some() {
+            g.push("--mollify-factor");
+        }
+        g
+    }
+
+    /// The parameters: the options given over the library's defaults, checked.
+    pub fn params(&self) -> Result<PointCloudParams> {
+        let d = PointCloudParams::default();
+        let p = PointCloudParams {
+            neighbors: self.neighbors.unwrap_or(d.neighbors),
+            mollify_factor: self.mollify_factor.unwrap_or(d.mollify_factor),
+            normals: if self.use_normals {
+                NormalSource::FromCloud
+            } else {
+                d.normals
+            },
+            ..d
+        };
+        if let Err(e) = p.validate() {
+            bail!("{}: {e}", self.given().join(", "));
+        }
+        Ok(p)
+    }
+
+    /// Sets the parameters of a point-cloud input. With a mesh input, any option given is
+    /// an error (not a warning): the user asked for an operator that is not the one that
+    /// would be computed, and a warning scrolled away would leave results that silently
+    /// ignore what was asked; the error names the options and costs nothing to fix.
+    pub fn apply(&self, input: &mut Input) -> Result<()> {
+        if input.shape.is_points() {
+            input.set_cloud_params(self.params()?);
+            return Ok(());
+        }
+        let given = self.given();
+        if !given.is_empty() {
+            bail!(
+                "{} {} only to point clouds, and {} is a mesh (its Laplacian is chosen with --laplacian)",
+                given.join(", "),
+                if given.len() == 1 { "applies" } else { "apply" },
+                input.label()
+            );
+        }
+        Ok(())
+    }
+
+    /// [`input::load_repaired`] then [`CloudArgs::apply`].
+    pub fn load(&self, spec: Option<&str>, repair: bool) -> Result<Input> {
+        let mut input = input::load_repaired(spec, repair)?;
+        self.apply(&mut input)?;
+        Ok(input)
+    }
 }
 
 /// The short help of every `--laplacian` option.
@@ -59,7 +150,8 @@ pub const LAPLACIAN_LONG_HELP: &str = "Discretization (S, B):
   robust         Sharp and Crane 2020: tufted cover, intrinsic Delaunay, lumped mass;
                  any triangle soup (non-manifold edges and vertices: see `info`)
 Point clouds (.xyz/.pts/.txt/.csv, PLY without faces) take only robust: their
-point-cloud Laplacian (30 neighbours, local Delaunay, tufted union); it is their default.";
+point-cloud Laplacian (k nearest neighbours, local Delaunay, tufted union; see the
+'Point clouds' options); it is their default.";
 
 /// The discretization for `input`: `given`, or fem for a mesh and robust for a point
 /// cloud; refuses a discretization that does not apply to a point cloud, by name.
@@ -74,6 +166,12 @@ pub fn resolve_laplacian(given: Option<Laplacian>, input: &AnalysisInput) -> Res
 }
 
 impl BasisArgs {
+    /// Loads the input (repaired with --repair) and sets a point cloud's Laplacian
+    /// parameters from the point-cloud options (refused with a mesh).
+    pub fn load(&self, spec: Option<&str>) -> Result<Input> {
+        self.cloud.load(spec, self.repair)
+    }
+
     /// The analysis options for `input`: these, the shape scaled to unit area when
     /// `normalize`, zero Dirichlet conditions on `dirichlet`.
     pub fn options(
@@ -216,7 +314,8 @@ pub fn check_vertex(v: usize, n: usize, option: &str) -> Result<()> {
 }
 
 /// The analysis keys of an experiment file for `an` on the mesh of `info`, saved at
-/// `file`: mesh, its hash as read, repair, discretization, normalisation, picture options.
+/// `file`: mesh, its hash as read, repair, discretization, normalisation, a point cloud's
+/// Laplacian parameters, picture options.
 pub fn experiment_file(
     experiment: &str,
     file: &Path,
@@ -231,6 +330,7 @@ pub fn experiment_file(
         laplacian: Some(an.options().laplacian.name().into()),
         normalize: Some(an.options().normalize),
         figure: Some(figure.to_file()),
+        point_cloud: info.point_cloud.as_ref().map(PointCloudFile::from_params),
         ..ExperimentFile::new(experiment, &info.entry(file))
     }
 }

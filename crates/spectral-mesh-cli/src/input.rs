@@ -11,6 +11,7 @@ use spectral_mesh::experiments::paper::MeshSummary;
 use spectral_mesh::io::{self, read_input};
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::mesh::validate::{RepairOptions, repair};
+use spectral_mesh::operators::PointCloudParams;
 use spectral_mesh::shapes;
 
 /// Where a mesh came from.
@@ -34,6 +35,10 @@ pub struct MeshInfo {
     pub notes: Vec<String>,
     /// The content hash of the mesh as read, when a repair changed it afterwards.
     hash_as_read: Option<String>,
+    /// The point-cloud Laplacian's parameters of a point-cloud input (`None` for a mesh):
+    /// the same as the input's, kept here for summaries and experiment files once the
+    /// input has gone into an analysis.
+    pub point_cloud: Option<PointCloudParams>,
 }
 
 /// A resolved input: a mesh or a point cloud.
@@ -82,9 +87,11 @@ impl MeshInfo {
             .unwrap_or_else(|| shape.content_hash())
     }
 
-    /// The library's summary of `mesh` (loaded with this information).
+    /// The library's summary of `mesh` (loaded with this information), naming a point
+    /// cloud's Laplacian parameters.
     pub fn summary(&self, mesh: &Mesh, topology: &Topology) -> MeshSummary {
         MeshSummary::new(self.name(), self.hash(mesh), mesh, topology)
+            .with_point_cloud(self.point_cloud)
     }
 
     /// The `mesh` entry of an experiment file saved at `file`: a shape spec as is, a mesh
@@ -127,6 +134,15 @@ impl Input {
         }
     }
 
+    /// Sets the point-cloud Laplacian's parameters of a point-cloud input (and of its
+    /// information); nothing for a mesh.
+    pub fn set_cloud_params(&mut self, p: PointCloudParams) {
+        if let AnalysisInput::Points { params, .. } = &mut self.shape {
+            *params = p;
+            self.info.point_cloud = Some(p);
+        }
+    }
+
     /// [`Input::mesh`], consuming the input.
     pub fn into_mesh(self, what: &str) -> Result<(Mesh, MeshInfo)> {
         match self.shape {
@@ -148,6 +164,7 @@ pub fn load(spec: Option<&str>) -> Result<Input> {
         polygons_triangulated,
         notes,
         hash_as_read: None,
+        point_cloud: None,
     };
     if path.exists() {
         return Ok(match read_input(path)? {
@@ -164,6 +181,7 @@ pub fn load(spec: Option<&str>) -> Result<Input> {
                 // A cloud is named by the hash of its points (its Laplacian's triangles
                 // are derived).
                 i.hash_as_read = Some(p.cloud.content_hash());
+                i.point_cloud = Some(PointCloudParams::default());
                 Input {
                     shape: p.cloud.into(),
                     info: i,

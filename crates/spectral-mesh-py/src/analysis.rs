@@ -8,7 +8,9 @@ use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use serde_json::json;
-use spectral_mesh::analysis::{AnalysisOptions, Signal, SignatureSpec};
+use spectral_mesh::analysis::{AnalysisInput, AnalysisOptions, Signal, SignatureSpec};
+use spectral_mesh::io::read_input;
+use spectral_mesh::operators::{Laplacian, NormalSource, PointCloudParams};
 use spectral_mesh::spectral::BasisView;
 use spectral_mesh::spectral::distances::distances_from_many;
 use spectral_mesh::spectral::embedding::spectral_embedding;
@@ -16,6 +18,7 @@ use spectral_mesh::spectral::filters::Filter;
 use spectral_mesh::spectral::signatures::{hks, hks_auto_times, wks, wks_auto_energies};
 use spectral_mesh::spectral::store::{BasisMeta, load_npz, save_npz};
 use spectral_mesh::{Analysis, CancelToken, Eigenbasis, FieldRequest};
+use spectral_mesh_render::figure::POINT_RADIUS_FACTOR;
 
 use crate::arrays::{
     self, FieldOut, MeshArrays, Pairs, csc_parts, csc_to_py, mesh_from, to_columns, to_rows,
@@ -37,6 +40,28 @@ fn request_error(e: serde_json::Error) -> Failure {
 #[pyclass(frozen, name = "Analysis", module = "spectral_mesh._native")]
 pub struct PyAnalysis {
     inner: Arc<Analysis>,
+    /// The point-cloud Laplacian's parameters of a point-cloud analysis.
+    cloud: Option<PointCloudParams>,
+}
+
+/// The point-cloud Laplacian's parameters from the Python keywords (`None`: the
+/// library's default; the library checks them when it builds the Laplacian).
+pub(crate) fn cloud_params(
+    neighbors: Option<usize>,
+    mollify_factor: Option<f64>,
+    use_normals: bool,
+) -> PointCloudParams {
+    let d = PointCloudParams::default();
+    PointCloudParams {
+        neighbors: neighbors.unwrap_or(d.neighbors),
+        mollify_factor: mollify_factor.unwrap_or(d.mollify_factor),
+        normals: if use_normals {
+            NormalSource::FromCloud
+        } else {
+            d.normals
+        },
+        ..d
+    }
 }
 
 impl PyAnalysis {
@@ -99,7 +124,124 @@ impl PyAnalysis {
         };
         let (mesh, options) = prepare().map_err(|e| e.into_pyerr(py))?;
         let inner = run(py, move |_| Ok(Arc::new(Analysis::new(mesh, options))))?;
-        Ok(Self { inner })
+        Ok(Self { inner, cloud: None })
+    }
+
+    /// Builds the analysis of a point cloud `P` (its point-cloud Laplacian, built now):
+    /// `normals` (when given) give the tangent planes where they are non-zero; `None`
+    /// parameters take the library's defaults.
+    #[staticmethod]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (p, normals, neighbors, mollify_factor, normalize, tol, seed, dirichlet, method))]
+    fn from_points(
+        py: Python<'_>,
+        p: PyReadonlyArray2<'_, f64>,
+        normals: Option<PyReadonlyArray2<'_, f64>>,
+        neighbors: Option<usize>,
+        mollify_factor: Option<f64>,
+        normalize: bool,
+        tol: f64,
+        seed: u64,
+        dirichlet: Option<Vec<usize>>,
+        method: &str,
+    ) -> PyResult<Self> {
+        let prepare = || -> Result<_, Failure> {
+            let cloud = arrays::cloud_from(&p, normals.as_ref())?;
+            let params = cloud_params(neighbors, mollify_factor, normals.is_some());
+            let options = AnalysisOptions {
+                laplacian: Laplacian::Robust,
+                normalize,
+                eigen: eigen_params(tol, seed, dirichlet, method)?,
+            };
+            Ok((cloud, params, options))
+        };
+        let (cloud, params, options) = prepare().map_err(|e| e.into_pyerr(py))?;
+        let inner = run(py, move |_| {
+            Ok(Arc::new(Analysis::from_points(cloud, &params, options)?))
+        })?;
+        Ok(Self {
+            inner,
+            cloud: Some(params),
+        })
+    }
+
+    /// Builds the analysis of a mesh or point-cloud file (`read_input`: a PLY without
+    /// faces and the point formats are clouds). `kind`: `None` for the input's default
+    /// (fem for a mesh, robust for a cloud). The point-cloud keywords (`None` / `False`:
+    /// the library's defaults) are refused with a mesh, as on the command line.
+    #[staticmethod]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (path, kind, neighbors, mollify_factor, use_normals, normalize, tol, seed, dirichlet, method))]
+    fn from_file(
+        py: Python<'_>,
+        path: PathBuf,
+        kind: Option<String>,
+        neighbors: Option<usize>,
+        mollify_factor: Option<f64>,
+        use_normals: bool,
+        normalize: bool,
+        tol: f64,
+        seed: u64,
+        dirichlet: Option<Vec<usize>>,
+        method: &str,
+    ) -> PyResult<Self> {
+        let prepare = || -> Result<_, Failure> {
+            let kind = kind.as_deref().map(laplacian_of).transpose()?;
+            Ok((kind, eigen_params(tol, seed, dirichlet, method)?))
+        };
+        let (kind, eigen) = prepare().map_err(|e| e.into_pyerr(py))?;
+        let (inner, cloud) = run(py, move |_| {
+            let (input, cloud) = match AnalysisInput::from(read_input(&path)?) {
+                AnalysisInput::Points { cloud, .. } => {
+                    let params = cloud_params(neighbors, mollify_factor, use_normals);
+                    (AnalysisInput::Points { cloud, params }, Some(params))
+                }
+                mesh => {
+                    let given: Vec<&str> = [
+                        (neighbors.is_some(), "n_neighbors"),
+                        (mollify_factor.is_some(), "mollify_factor"),
+                        (use_normals, "use_normals"),
+                    ]
+                    .into_iter()
+                    .filter_map(|(set, name)| set.then_some(name))
+                    .collect();
+                    if !given.is_empty() {
+                        return Err(Failure::value(format!(
+                            "{} {} only to point clouds, and {} is a mesh (its Laplacian is chosen with kind)",
+                            given.join(", "),
+                            if given.len() == 1 { "applies" } else { "apply" },
+                            path.display()
+                        )));
+                    }
+                    (mesh, None)
+                }
+            };
+            let laplacian = match (kind, cloud.is_some()) {
+                (Some(l), _) => l,
+                (None, true) => Laplacian::Robust,
+                (None, false) => AnalysisOptions::default().laplacian,
+            };
+            let options = AnalysisOptions {
+                laplacian,
+                normalize,
+                eigen,
+            };
+            Ok((Arc::new(Analysis::from_input(input, options)?), cloud))
+        })?;
+        Ok(Self { inner, cloud })
+    }
+
+    /// True for the analysis of a point cloud.
+    #[getter]
+    fn is_point_cloud(&self) -> bool {
+        self.inner.is_point_cloud()
+    }
+
+    /// The mean spacing of a point cloud's points (the mean edge length of its triangle
+    /// union), `None` for a mesh.
+    #[getter]
+    fn point_spacing(&self) -> Option<f64> {
+        self.inner.point_spacing()
     }
 
     /// Number of vertices.
@@ -547,6 +689,7 @@ impl PyAnalysis {
             marks,
             labels,
             options,
+            self.inner.point_spacing().map(|h| POINT_RADIUS_FACTOR * h),
             path,
         )
     }
@@ -554,7 +697,8 @@ impl PyAnalysis {
     fn __repr__(&self) -> String {
         let o = self.inner.options();
         format!(
-            "Analysis(n={}, kind='{}', normalize={}, held_k={})",
+            "Analysis({}={}, kind='{}', normalize={}, held_k={})",
+            if self.cloud.is_some() { "points" } else { "n" },
             self.inner.n(),
             o.laplacian.name(),
             if o.normalize { "True" } else { "False" },
@@ -571,6 +715,7 @@ impl PyAnalysis {
             "tol": o.eigen.tolerance,
             "seed": o.eigen.seed,
             "dirichlet": o.eigen.dirichlet,
+            "point_cloud": self.cloud,
         });
         pyjson::to_py(py, &v)
     }

@@ -222,12 +222,10 @@ fn point_laplacian<'py>(
     normalize: bool,
 ) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyTuple>, f64)> {
     let cloud = arrays::cloud_from(&p, normals.as_ref()).map_err(|e| e.into_pyerr(py))?;
+    // Given normals give the tangent planes (where non-zero), as documented; without them
+    // the planes are estimated.
+    let params = analysis::cloud_params(Some(neighbors), Some(mollify_factor), normals.is_some());
     let (s, b, total) = run(py, move |_| {
-        let params = PointCloudParams {
-            neighbors,
-            mollify_factor,
-            ..PointCloudParams::default()
-        };
         let mut ops =
             Operators::from_points(&cloud, &params).map_err(|e| Failure::value(e.to_string()))?;
         let total: f64 = ops.mass.values().iter().sum();
@@ -451,7 +449,9 @@ pub(crate) fn figure_options(
 }
 
 /// Draws `values` on `mesh`: writes `path` (format from its extension) and returns
-/// `None`, or returns the `(size, size, 4)` RGBA picture.
+/// `None`, or returns the `(size, size, 4)` RGBA picture. `point_radius`: draw the vertices
+/// as discs of this radius (a point cloud; its triangle union carries the level sets).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn draw(
     py: Python<'_>,
     mesh: Arc<Mesh>,
@@ -459,6 +459,7 @@ pub(crate) fn draw(
     marks: Vec<usize>,
     labels: Option<Vec<usize>>,
     options: FigureOptions,
+    point_radius: Option<f64>,
     path: Option<PathBuf>,
 ) -> PyResult<Py<PyAny>> {
     let out = run(py, move |_| {
@@ -477,6 +478,7 @@ pub(crate) fn draw(
             None => options,
         };
         let mut fig = Figure::new(&mesh, &values, marks, options)?;
+        fig.point_radius = point_radius;
         if let Some(l) = &labels {
             if l.len() != n {
                 return Err(Failure::value(format!(
@@ -541,7 +543,16 @@ fn render(
         ))
     };
     let (mesh, values, options) = prepare().map_err(|e| e.into_pyerr(py))?;
-    draw(py, Arc::new(mesh), values, marks, labels, options, path)
+    draw(
+        py,
+        Arc::new(mesh),
+        values,
+        marks,
+        labels,
+        options,
+        None,
+        path,
+    )
 }
 
 /// The library's defaults as a dict: every request kind's keys (from [`FieldRequest`]'s
@@ -593,6 +604,9 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
         "point_cloud": {
             "n_neighbors": pc.neighbors,
             "mollify_factor": pc.mollify_factor,
+            "delaunay_tolerance": pc.delaunay_tolerance,
+            "normals": pc.normals,
+            "union": pc.union,
         },
         "shape": spectral_mesh::shapes::DEFAULT_SHAPE,
         "laplacians": Laplacian::ALL.iter().map(|l| l.name()).collect::<Vec<_>>(),

@@ -29,6 +29,8 @@ use spectral_mesh::operators::Laplacian;
 use spectral_mesh::spectral::eigenbasis::EigenParams;
 use spectral_mesh_render::Thumbnails;
 
+use crate::engine::CloudArgs;
+
 /// How many times a shape is given to a worker that then dies before it is reported
 /// failed.
 const ATTEMPTS: u32 = 2;
@@ -98,6 +100,10 @@ pub struct Args {
     /// Write into a folder that holds other files (not made by a batch).
     #[arg(long, short = 'f')]
     pub force: bool,
+    // The point-cloud Laplacian's parameters, for the point clouds of the collection
+    // (its meshes have no use for them, and a collection may hold both: no error).
+    #[command(flatten)]
+    pub cloud: CloudArgs,
     /// Internal: run as a worker process of a batch (jobs on stdin, records on stdout).
     #[arg(long, hide = true)]
     pub worker: bool,
@@ -120,8 +126,8 @@ struct WorkerJob {
 }
 
 impl Args {
-    fn params(&self) -> BatchParams {
-        BatchParams {
+    fn params(&self) -> Result<BatchParams> {
+        Ok(BatchParams {
             k: self.k,
             laplacian: self.laplacian,
             tolerance: self.tolerance,
@@ -133,8 +139,8 @@ impl Args {
             adf: self.adf.clone(),
             scaled: self.scaled,
             thumbnail: self.thumbnail,
-            ..BatchParams::default()
-        }
+            point_cloud: self.cloud.params()?,
+        })
     }
 }
 
@@ -146,7 +152,7 @@ pub fn run(args: Args) -> Result<()> {
     let Some(out) = args.out.clone() else {
         bail!("--out: the output folder is required");
     };
-    let params = args.params();
+    let params = args.params()?;
     params.validate().map_err(|e| match e {
         BatchError::Parameter { key, message } => {
             anyhow::anyhow!("--{}: {message}", key.replace('_', "-"))

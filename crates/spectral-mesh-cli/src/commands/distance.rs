@@ -11,7 +11,6 @@ use spectral_mesh::spectral::store::npy_f64;
 
 use crate::engine::{self, BasisArgs, check_vertex};
 use crate::figure::{FigureArgs, write_field};
-use crate::input;
 use crate::output::{
     FIGURE_EXTS, check_experiment_file, check_outputs, check_writable, extension, write,
 };
@@ -68,7 +67,7 @@ pub struct Args {
 
 /// Computes the distances and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
-    let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
+    let input = args.basis.load(args.mesh.as_deref())?;
     let n = input.n();
     let spec: DistanceSpec = args
         .distance

@@ -13,7 +13,6 @@ use spectral_mesh::{Analysis, AnalysisOptions};
 use spectral_mesh_render::figure::field_text;
 
 use crate::engine::{self, BasisArgs};
-use crate::input;
 use crate::output::{check_writable, extension, write};
 
 /// Arguments of `eigs`.
@@ -46,7 +45,7 @@ pub struct Args {
 
 /// Computes the basis and prints its summary.
 pub fn run(args: Args) -> Result<()> {
-    let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
+    let input = args.basis.load(args.mesh.as_deref())?;
     for p in [&args.out, &args.eigenvalues_txt, &args.plot]
         .into_iter()
         .flatten()
@@ -70,6 +69,7 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     let label = input.label();
+    let cloud = input.info.point_cloud;
     let n = input.n();
     args.basis.check_k(n)?;
     // The options without Dirichlet vertices first: the boundary comes from the topology.
@@ -113,10 +113,9 @@ pub fn run(args: Args) -> Result<()> {
     let mesh = an.mesh();
     println!(
         "{label}: {}n = {n}, m = {}{}, {} discretization{}",
-        if an.is_point_cloud() {
-            "point cloud, "
-        } else {
-            ""
+        match cloud {
+            Some(p) => format!("point cloud ({} neighbours), ", p.neighbors),
+            None => String::new(),
         },
         mesh.n_triangles(),
         if an.is_point_cloud() {

@@ -10,7 +10,6 @@ use spectral_mesh::spectral::filters::Filter;
 
 use super::distance::FILTER_HELP;
 use crate::engine::{self, BasisArgs};
-use crate::input;
 use crate::output::{check_outputs, check_writable, write};
 
 /// Arguments of `embed`.
@@ -45,7 +44,7 @@ pub struct Args {
 
 /// Computes the embedding and writes it.
 pub fn run(args: Args) -> Result<()> {
-    let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
+    let input = args.basis.load(args.mesh.as_deref())?;
     let filter: Filter = args
         .filter
         .parse()

@@ -19,7 +19,9 @@ use spectral_mesh::spectral::eigenbasis::EigenParams;
 use spectral_mesh::{CancelToken, Laplacian};
 use spectral_mesh_render::figure::{Figure, FigureOptions, POINT_RADIUS_FACTOR};
 
-use crate::engine::{LAPLACIAN_HELP, LAPLACIAN_LONG_HELP, check_vertex, resolve_laplacian};
+use crate::engine::{
+    CloudArgs, LAPLACIAN_HELP, LAPLACIAN_LONG_HELP, check_vertex, resolve_laplacian,
+};
 use crate::figure::{FigureArgs, write_field_files};
 use crate::input::{self, Input};
 use crate::output::{check_experiment_file, prepare_outputs, save_experiment, write_json};
@@ -59,6 +61,8 @@ pub struct Common {
     pub save_experiment: Option<PathBuf>,
     #[command(flatten)]
     pub figure: FigureArgs,
+    #[command(flatten)]
+    pub cloud: CloudArgs,
 }
 
 /// Where and how an experiment writes: [`Common`] with the picture options resolved (from
@@ -179,7 +183,7 @@ pub struct PaperArgs {
 pub fn run(e: Experiment) -> Result<()> {
     match e {
         Experiment::Harmonic(a) => {
-            let input = input::load_repaired(a.mesh.as_deref(), a.common.repair)?;
+            let input = a.common.cloud.load(a.mesh.as_deref(), a.common.repair)?;
             let constraints = match (&a.constraints_file, a.explicit.is_empty()) {
                 (Some(f), _) => {
                     let mut c = read_constraints_file(f)?;
@@ -202,7 +206,7 @@ pub fn run(e: Experiment) -> Result<()> {
             if !(a.t.is_finite() && a.t > 0.0) {
                 bail!("--t {}: the time must be a positive number", a.t);
             }
-            let input = input::load_repaired(a.mesh.as_deref(), a.common.repair)?;
+            let input = a.common.cloud.load(a.mesh.as_deref(), a.common.repair)?;
             let request = FieldRequest::Heat {
                 anchor: a.anchor,
                 t: a.t,
@@ -219,7 +223,7 @@ pub fn run(e: Experiment) -> Result<()> {
             run_field(input, &setup, &(&a.common).into())
         }
         Experiment::SpectralDistance(a) => {
-            let input = input::load_repaired(a.mesh.as_deref(), a.common.repair)?;
+            let input = a.common.cloud.load(a.mesh.as_deref(), a.common.repair)?;
             let distance = a
                 .distance
                 .parse()
@@ -491,7 +495,7 @@ fn run_paper(a: PaperArgs) -> Result<()> {
         }),
         ..common.clone()
     };
-    let load = || input::load_repaired(a.mesh.as_deref(), common.repair);
+    let load = || a.common.cloud.load(a.mesh.as_deref(), common.repair);
     let laplacian = None;
     run_harmonic(
         load()?,

@@ -10,7 +10,7 @@ use spectral_mesh::experiments::paper::FieldStats;
 
 use crate::engine::{self, BasisArgs, check_vertex};
 use crate::figure::{FigureArgs, write_field};
-use crate::input::{self, read_field};
+use crate::input::read_field;
 use crate::output::{FIGURE_EXTS, check_experiment_file, check_outputs};
 
 /// The kernels, as typed.
@@ -81,7 +81,7 @@ fn parse_indicator(text: &str) -> Result<(usize, f64)> {
 
 /// Computes the basis function or the diffusion and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
-    let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
+    let input = args.basis.load(args.mesh.as_deref())?;
     let n = input.n();
     // What is diffused: None = e_anchor.
     let (signal, what) = match (&args.signal, &args.indicator) {

@@ -5,12 +5,12 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use spectral_mesh::SparseMatrix;
 use spectral_mesh::io::{Input, MeshFormat, WriteOptions, read_input, write_mesh};
-use spectral_mesh::operators::robust::DEFAULT_MOLLIFY_FACTOR;
 use spectral_mesh::operators::{
-    MassKind, NormalSource, PointCloudParams, RobustParams, cotan_stiffness, mass_matrix,
-    point_cloud_laplacian, robust_laplacian, uniform_laplacian,
+    MassKind, RobustParams, cotan_stiffness, mass_matrix, point_cloud_laplacian, robust_laplacian,
+    uniform_laplacian,
 };
 
+use crate::engine::CloudArgs;
 use crate::input;
 use crate::output::{prepare_outputs, write};
 
@@ -30,17 +30,10 @@ pub struct Args {
     /// Sharp and Crane 2020): S_robust.mtx and B_robust.mtx. Always on for point clouds.
     #[arg(long)]
     pub robust: bool,
-    /// Relative mollification of the robust Laplacian (as robust_laplacian's
-    /// mollify_factor).
-    #[arg(long, default_value_t = DEFAULT_MOLLIFY_FACTOR)]
-    pub mollify_factor: f64,
-    /// Point clouds: neighbours per point.
-    #[arg(long, default_value_t = spectral_mesh::operators::point_cloud::DEFAULT_NEIGHBORS)]
-    pub neighbors: usize,
-    /// Point clouds: use the file's normals for the tangent planes (where non-zero)
-    /// instead of estimating them.
-    #[arg(long)]
-    pub use_normals: bool,
+    // The point-cloud Laplacian's parameters; --mollify-factor also sets the robust
+    // Laplacian's of a mesh (with --robust).
+    #[command(flatten)]
+    pub cloud: CloudArgs,
     /// Overwrite existing files.
     #[arg(long, short = 'f')]
     pub force: bool,
@@ -64,7 +57,13 @@ pub fn run(args: Args) -> Result<()> {
     {
         return run_points(&args, spec, p);
     }
-    let input = input::load_repaired(args.mesh.as_deref(), args.repair)?;
+    let mut input = input::load_repaired(args.mesh.as_deref(), args.repair)?;
+    // On a mesh, only --mollify-factor applies (to the robust Laplacian, with --robust).
+    CloudArgs {
+        mollify_factor: args.cloud.mollify_factor.filter(|_| !args.robust),
+        ..args.cloud.clone()
+    }
+    .apply(&mut input)?;
     let mesh = input.mesh("operators")?;
     let mut names = vec![
         "mesh.off",
@@ -81,7 +80,10 @@ pub fn run(args: Args) -> Result<()> {
         Some(robust_laplacian(
             mesh,
             &RobustParams {
-                mollify_factor: args.mollify_factor,
+                mollify_factor: args
+                    .cloud
+                    .mollify_factor
+                    .unwrap_or(RobustParams::default().mollify_factor),
                 ..Default::default()
             },
         )?)
@@ -129,16 +131,7 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 fn run_points(args: &Args, spec: &str, p: spectral_mesh::io::LoadedPoints) -> Result<()> {
-    let params = PointCloudParams {
-        neighbors: args.neighbors,
-        mollify_factor: args.mollify_factor,
-        normals: if args.use_normals {
-            NormalSource::FromCloud
-        } else {
-            NormalSource::Estimate
-        },
-        ..Default::default()
-    };
+    let params = args.cloud.params()?;
     let r = point_cloud_laplacian(&p.cloud, &params)?;
     let names = ["S_robust.mtx", "B_robust.mtx"];
     let paths = prepare_outputs(&args.out, &names, args.force)?;

@@ -8,8 +8,9 @@ use spectral_mesh::Laplacian;
 use spectral_mesh::analysis::{Analysis, AnalysisInput, AnalysisOptions};
 use spectral_mesh_render::figure::{Figure, POINT_RADIUS_FACTOR};
 
+use crate::engine::CloudArgs;
 use crate::figure::FigureArgs;
-use crate::input::{self, read_field};
+use crate::input::read_field;
 use crate::output::check_writable;
 
 /// Arguments of `render`.
@@ -36,11 +37,15 @@ pub struct Args {
     pub force: bool,
     #[command(flatten)]
     pub figure: FigureArgs,
+    #[command(flatten)]
+    pub cloud: CloudArgs,
 }
 
 /// Draws the field.
 pub fn run(args: Args) -> Result<()> {
-    let input = input::load(args.mesh.as_deref())?;
+    // A point cloud's picture is drawn on its triangle union (level sets, critical
+    // points, the disc size), which depends on the Laplacian's parameters.
+    let input = args.cloud.load(args.mesh.as_deref(), false)?;
     let label = input.label();
     let n = input.n();
     // A point cloud is drawn from its analysis (the triangle union carries the level sets

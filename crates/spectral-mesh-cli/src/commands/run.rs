@@ -35,8 +35,16 @@ pub fn run(a: Args) -> Result<()> {
     let base = parent_dir(&a.file);
     let mesh = resolve_mesh(&f.mesh, &base).with_context(|| format!("{origin}: key 'mesh'"))?;
     let repair = f.repair.unwrap_or(false);
-    let input = input::load_repaired(Some(&mesh), repair)
+    let mut input = input::load_repaired(Some(&mesh), repair)
         .with_context(|| format!("{origin}: key 'mesh'"))?;
+    // A point cloud is replayed with the file's Laplacian parameters (the defaults when
+    // the file has none), so that its field is the same bit for bit.
+    if f.point_cloud.is_some() && !input.shape.is_points() {
+        bail!(
+            "{origin}: key 'point_cloud': {mesh} is a mesh; the point-cloud Laplacian's parameters apply to point clouds only"
+        );
+    }
+    input.set_cloud_params(f.point_cloud_params());
     let hash = input.info.hash_of(&input.shape);
     match &f.mesh_hash {
         Some(h) if !h.eq_ignore_ascii_case(&hash) => {

@@ -11,7 +11,7 @@ use spectral_mesh_render::figure::field_text;
 
 use crate::engine::{self, BasisArgs};
 use crate::figure::{FigureArgs, write_field};
-use crate::input::{self, read_field};
+use crate::input::read_field;
 use crate::output::{FIGURE_EXTS, check_experiment_file, check_outputs, write};
 
 /// Help of `--signature`.
@@ -98,7 +98,7 @@ fn signature_request(spec: &SignatureSpec, k: usize) -> Option<FieldRequest> {
 
 /// Segments and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
-    let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
+    let input = args.basis.load(args.mesh.as_deref())?;
     let n = input.n();
     let spec = signature(&args.signature, n)?;
     let request = FieldRequest::Segmentation {

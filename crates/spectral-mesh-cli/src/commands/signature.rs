@@ -17,7 +17,6 @@ use spectral_mesh::spectral::signatures::{
 use super::distance::FILTER_HELP;
 use crate::engine::{self, BasisArgs};
 use crate::figure::{FigureArgs, write_field};
-use crate::input;
 use crate::output::{FIGURE_EXTS, check_experiment_file, check_outputs, extension, write};
 
 /// Which signature.
@@ -276,7 +275,7 @@ fn columns_text(kind: &str, name: &str, labels: &[String], values: &[Vec<f64>]) 
 
 /// Computes the signature and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
-    let input = input::load_repaired(args.mesh.as_deref(), args.basis.repair)?;
+    let input = args.basis.load(args.mesh.as_deref())?;
     check_outputs(&args.out, &FIGURE_EXTS, args.force)?;
     check_experiment_file(args.save_experiment.as_ref(), args.force)?;
     if args.t.is_some() && !matches!(args.kind, Kind::Hks | Kind::Adf) {

@@ -12,6 +12,10 @@ NumPy arrays in, NumPy arrays and ``scipy.sparse.csr_matrix`` out:
 >>> h = an.hks([0.01, 0.1, 1.0])                      # (n, 3) heat kernel signatures
 >>> img = an.render(d)                                # (800, 800, 4) uint8 picture
 
+Point clouds (scans: ``.xyz``, ``.pts``, PLY without faces) go wherever a mesh does:
+``Analysis.from_points(P, n_neighbors=30)`` or ``Analysis.from_file("scan.ply")`` analyse
+them with their point-cloud Laplacian (as robust-laplacian's), with every field above.
+
 Conventions (the project's MATH.md): ``S`` is positive semi-definite (libigl's
 ``cotmatrix`` is ``-S``), ``B`` symmetric positive definite, eigenvalues ascending and
 ``>= 0``, eigenvectors B-orthonormal with their largest-magnitude entry positive, filters

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import _arrays, _native
 from ._api import _labels, _marks, _view_text
-from ._defaults import ANALYSIS, FIGURE, K, REQUESTS, SEED, TOL
+from ._defaults import ANALYSIS, FIGURE, K, POINT_CLOUD, REQUESTS, SEED, TOL
 
 _R = REQUESTS
 
@@ -137,14 +137,26 @@ def _callable_weights(w: Any, evals: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return used, weights
 
 
+def _solver_options(
+    tol: Any, seed: Any, dirichlet: Sequence[int] | None, method: Any
+) -> tuple[float, int, list[int] | None, str]:
+    """The eigensolver keywords as the native constructors take them."""
+    d = None if dirichlet is None else [_arrays.count(i, "dirichlet vertex") for i in dirichlet]
+    return _arrays.real(tol, "tol"), _arrays.count(seed, "seed"), d, str(method)
+
+
 class Analysis:
-    """One mesh analysed: its operators ``(S, B)``, the factorization, an eigenbasis that
+    """One mesh or point cloud analysed: its operators ``(S, B)``, the factorization, an eigenbasis that
     grows with ``k``, and every field of the paper computed from them.
 
     ``Analysis(V, F)`` assembles the operators (cheap); the first spectral request computes
     the basis, later requests with the same or a smaller ``k`` reuse it, a larger ``k``
     computes a larger basis (the pairs for a given ``k`` never depend on what was asked
     before). Fields come back as NumPy arrays of one value per vertex, ``(n,)`` float64.
+
+    **Point clouds.** :meth:`from_points` analyses points ``P`` with their point-cloud
+    Laplacian and :meth:`from_file` opens any mesh or point file; everything below then
+    works on the points as on a mesh's vertices (see :meth:`from_points`).
 
     **Scale.** ``normalize=True`` (the default, the paper's and the library's) analyses
     the shape as if scaled to unit total area: ``B`` is divided by the area ``A``, so the
@@ -182,33 +194,120 @@ class Analysis:
         method: str = ANALYSIS["method"],
     ):
         V, F = _arrays.mesh(V, F)
-        d = None if dirichlet is None else [_arrays.count(i, "dirichlet vertex") for i in dirichlet]
-        self._a = _native.Analysis(
+        native = _native.Analysis(
             V,
             F,
             str(kind),
             bool(normalize),
-            _arrays.real(tol, "tol"),
-            _arrays.count(seed, "seed"),
-            d,
-            str(method),
+            *_solver_options(tol, seed, dirichlet, method),
         )
         # Own read-only copies: the analysis does not change when the caller's arrays do.
-        self._V = V.copy()
-        self._F = F.copy()
+        self._setup(native, V.copy(), F.copy())
+
+    def _setup(self, native: _native.Analysis, V: np.ndarray, F: np.ndarray) -> None:
+        self._a = native
+        self._V = V
+        self._F = F
         self._V.setflags(write=False)
         self._F.setflags(write=False)
-        self._info: dict = {}
+        self._info: dict[str, Any] = {}
         self._last: Any = None
 
     @classmethod
-    def from_file(
-        cls, path: str | os.PathLike[str], kind: str = ANALYSIS["kind"], **options: Any
-    ) -> Analysis:
-        """The analysis of a mesh file (see :func:`spectral_mesh.read_mesh`)."""
-        from ._api import read_mesh
+    def _of_native(cls, native: _native.Analysis, V: np.ndarray | None = None) -> Analysis:
+        """An analysis around a native one; ``V`` defaults to its vertices (or points)."""
+        an = cls.__new__(cls)
+        v, f = native.mesh()
+        an._setup(native, v if V is None else V, f)
+        return an
 
-        return cls(*read_mesh(path), kind, **options)
+    @classmethod
+    def from_points(
+        cls,
+        P: Any,
+        normals: Any = None,
+        *,
+        n_neighbors: int = POINT_CLOUD["n_neighbors"],
+        mollify_factor: float = POINT_CLOUD["mollify_factor"],
+        normalize: bool = ANALYSIS["normalize"],
+        tol: float = TOL,
+        seed: int = SEED,
+        dirichlet: Sequence[int] | None = None,
+        method: str = ANALYSIS["method"],
+    ) -> Analysis:
+        """The analysis of a point cloud ``P`` (``(n, 3)``, any real dtype and order) with
+        its point-cloud Laplacian (``kind="robust"``, the only discretization that applies
+        to points; see :func:`spectral_mesh.point_cloud_laplacian`): every field, picture
+        and check of a mesh analysis works on it.
+
+        A separate constructor rather than ``Analysis(P)`` with ``F=None``: as
+        robust-laplacian's ``point_cloud_laplacian(P, n_neighbors=30)`` beside its
+        ``mesh_laplacian(V, F)``, points are asked for by name, so a forgotten ``F`` is an
+        error and never silently another operator.
+
+        ``normals``: optional ``(n, 3)`` normals giving the tangent planes where they are
+        non-zero (else estimated from the neighbours; robust-laplacian always estimates).
+        ``n_neighbors`` (as robust-laplacian's, at least 2) and ``mollify_factor`` default
+        to the library's values (:data:`spectral_mesh.DEFAULTS` ``["point_cloud"]``), the
+        command line's ``--neighbors`` and ``--mollify-factor``. The other keywords are
+        those of :class:`Analysis`.
+
+        The connectivity that critical points, level sets, segmentations and harmonic
+        maps use is the triangle union the Laplacian was built on: :attr:`F` (the points
+        are :attr:`V`, in the given order). Raises ``ValueError`` with the library's
+        message for a bad array (wrong shape, NaN), bad parameters or points that give no
+        triangle (collinear or coincident).
+        """
+        P = _arrays.vertices(P, "P")
+        nr = None if normals is None else _arrays.vertices(normals, "normals")
+        native = _native.Analysis.from_points(
+            P,
+            nr,
+            _arrays.count(n_neighbors, "n_neighbors"),
+            _arrays.real(mollify_factor, "mollify_factor"),
+            bool(normalize),
+            *_solver_options(tol, seed, dirichlet, method),
+        )
+        return cls._of_native(native, P.copy())
+
+    @classmethod
+    def from_file(
+        cls,
+        path: str | os.PathLike[str],
+        kind: str | None = None,
+        *,
+        n_neighbors: int | None = None,
+        mollify_factor: float | None = None,
+        use_normals: bool = False,
+        normalize: bool = ANALYSIS["normalize"],
+        tol: float = TOL,
+        seed: int = SEED,
+        dirichlet: Sequence[int] | None = None,
+        method: str = ANALYSIS["method"],
+    ) -> Analysis:
+        """The analysis of a mesh or point-cloud file, as the command line reads it: OFF,
+        OBJ, PLY and STL meshes (see :func:`spectral_mesh.read_mesh`); ``.xyz``, ``.pts``,
+        ``.txt`` and ``.csv`` points and PLY files without faces are point clouds (see
+        :meth:`from_points`).
+
+        ``kind``: ``None`` for the input's default (``"fem"`` for a mesh, ``"robust"`` for
+        a point cloud, the only one that applies to it). The point-cloud keywords, as the
+        command line's ``--neighbors``, ``--mollify-factor`` and ``--use-normals``
+        (``use_normals``: the file's normals give the tangent planes where non-zero), take
+        the library's defaults when ``None``; given with a mesh they raise ``ValueError``.
+        """
+        nb = None if n_neighbors is None else _arrays.count(n_neighbors, "n_neighbors")
+        mf = None if mollify_factor is None else _arrays.real(mollify_factor, "mollify_factor")
+        native = _native.Analysis.from_file(
+            os.fspath(path),
+            None if kind is None else str(kind),
+            nb,
+            mf,
+            bool(use_normals),
+            bool(normalize),
+            *_solver_options(tol, seed, dirichlet, method),
+        )
+        return cls._of_native(native)
 
     @classmethod
     def from_shape(cls, spec: str, kind: str = ANALYSIS["kind"], **options: Any) -> Analysis:
@@ -221,18 +320,40 @@ class Analysis:
 
     @property
     def V(self) -> np.ndarray:
-        """``(n, 3)`` float64 vertex positions as given (not scaled; a read-only copy)."""
+        """``(n, 3)`` float64 vertex positions (the points of a point cloud) as given (not
+        scaled; a read-only copy)."""
         return self._V
 
     @property
     def F(self) -> np.ndarray:
-        """``(m, 3)`` int64 triangles (a read-only copy)."""
+        """``(m, 3)`` int64 triangles (a read-only copy); for a point cloud the triangle
+        union its Laplacian was built on (the connectivity of critical points, level sets,
+        segmentations and harmonic maps)."""
         return self._F
 
     @property
     def n(self) -> int:
-        """Number of vertices."""
+        """Number of vertices (or points)."""
         return self._a.n
+
+    @property
+    def is_point_cloud(self) -> bool:
+        """True for the analysis of a point cloud (:meth:`from_points`, :meth:`from_file`)."""
+        return self._a.is_point_cloud
+
+    @property
+    def point_cloud_params(self) -> dict[str, Any] | None:
+        """The point-cloud Laplacian's parameters (``neighbors``, ``mollify_factor``,
+        ``delaunay_tolerance``, ``normals``, ``union``: the library's names, as in
+        experiment files' ``[point_cloud]``), ``None`` for a mesh."""
+        params: dict[str, Any] | None = self._a.options()["point_cloud"]
+        return params
+
+    @property
+    def point_spacing(self) -> float | None:
+        """The mean spacing of a point cloud's points (the mean edge length of
+        :attr:`F`; pictures draw discs of a size from it), ``None`` for a mesh."""
+        return self._a.point_spacing
 
     @property
     def kind(self) -> str:

@@ -10,7 +10,7 @@ import time
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from . import _native
-from ._defaults import K, KIND, TOL
+from ._defaults import K, KIND, POINT_CLOUD, TOL
 
 #: How many times a shape is given to a worker process that then dies (local pool)
 #: before its row says so.
@@ -76,6 +76,8 @@ def batch(
     adf: Any = None,
     scaled: bool = False,
     thumbnail: int | None = None,
+    n_neighbors: int = POINT_CLOUD["n_neighbors"],
+    mollify_factor: float = POINT_CLOUD["mollify_factor"],
     client: Any = None,
     processes: int | None = None,
     threads: int | None = None,
@@ -95,7 +97,10 @@ def batch(
     relative residual ``tol``, on the shape scaled to unit area (``normalize``); the
     descriptors ``hks``, ``wks``, ``adf``: ``"auto:N"`` (or ``N``) automatic times /
     energies from each spectrum, or a list; ``thumbnail``: a PNG of that many pixels a
-    side; ``eigenvectors=False`` saves the eigenvalues (and descriptors) only. Results are
+    side; ``eigenvectors=False`` saves the eigenvalues (and descriptors) only. Point clouds
+    (point files, PLY files without faces) use their point-cloud Laplacian with
+    ``n_neighbors`` and ``mollify_factor`` (as :meth:`Analysis.from_points`; the command
+    line's ``--neighbors`` and ``--mollify-factor``). Results are
     ``OUT/NAME.npz`` (``numpy.load``: ``eigenvalues``, ``eigenvectors`` ``(n, k)``, the mass
     in CSC arrays, ``hks`` ``(n, T)``, ...), written to a temporary name and renamed.
 
@@ -131,6 +136,13 @@ def batch(
         "basis": bool(eigenvectors), "hks": _schedule(hks, "hks"), "wks": _schedule(wks, "wks"),
         "wks_sigma": wks_sigma, "adf": _schedule(adf, "adf"), "scaled": bool(scaled),
         "thumbnail": thumbnail,
+        "point_cloud": {
+            "neighbors": n_neighbors,
+            "mollify_factor": mollify_factor,
+            "delaunay_tolerance": POINT_CLOUD["delaunay_tolerance"],
+            "normals": POINT_CLOUD["normals"],
+            "union": POINT_CLOUD["union"],
+        },
     }
     params, params_hash = _native.batch_params(json.dumps(raw))
     inputs = _native.batch_inputs(specs)

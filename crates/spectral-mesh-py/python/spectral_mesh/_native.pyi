@@ -107,7 +107,7 @@ def _panic_for_tests(message: str) -> None: ...
 def _work_for_tests(seconds: float, checks: bool) -> float: ...
 
 class Analysis:
-    """The library's ``Analysis``: one mesh, its operators, the factorization and a basis
+    """The library's ``Analysis``: one mesh or point cloud, its operators, the factorization and a basis
     that grows with ``k``."""
 
     def __new__(
@@ -121,8 +121,41 @@ class Analysis:
         dirichlet: list[int] | None,
         method: str,
     ) -> Analysis: ...
+    @staticmethod
+    def from_points(
+        p: F64,
+        normals: F64 | None,
+        neighbors: int | None,
+        mollify_factor: float | None,
+        normalize: bool,
+        tol: float,
+        seed: int,
+        dirichlet: list[int] | None,
+        method: str,
+    ) -> Analysis:
+        """The analysis of a point cloud (its point-cloud Laplacian, kind robust); given
+        normals give the tangent planes; ``None`` parameters are the library's defaults."""
+    @staticmethod
+    def from_file(
+        path: str | PathLike[str],
+        kind: str | None,
+        neighbors: int | None,
+        mollify_factor: float | None,
+        use_normals: bool,
+        normalize: bool,
+        tol: float,
+        seed: int,
+        dirichlet: list[int] | None,
+        method: str,
+    ) -> Analysis:
+        """The analysis of a mesh or point-cloud file; point-cloud parameters given with a
+        mesh raise ``ValueError``."""
     @property
     def n(self) -> int: ...
+    @property
+    def is_point_cloud(self) -> bool: ...
+    @property
+    def point_spacing(self) -> float | None: ...
     @property
     def held_k(self) -> int: ...
     @property
@@ -171,7 +204,9 @@ class Analysis:
         colorbar: bool,
         path: str | PathLike[str] | None,
     ) -> NDArray[np.uint8] | None: ...
-    def options(self) -> dict: ...
+    def options(self) -> dict:
+        """kind, normalize, tol, seed, dirichlet and point_cloud (the point-cloud
+        Laplacian's parameters, or None for a mesh)."""
     def __repr__(self) -> str: ...
 
 def batch_params(json: str) -> tuple[str, str]: ...

@@ -7,7 +7,9 @@
 //! the paper's three — or `field`), `mesh` and the analysis keys (`mesh_hash`, `repair`,
 //! `laplacian`, `normalize`, `basis_k`, `out`), the paper experiments' own keys (`k`, `t`,
 //! `anchor`, `distance`, `source`, `constraints`, `order`), a `[field]` table holding a
-//! [`FieldRequest`] for `experiment = "field"`, and a `[figure]` table of picture options.
+//! [`FieldRequest`] for `experiment = "field"`, a `[point_cloud]` table holding the
+//! point-cloud Laplacian's parameters when the input is a point cloud, and a `[figure]`
+//! table of picture options.
 
 use std::path::{Component, Path, PathBuf};
 
@@ -15,7 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::analysis::{Constraints, DistanceSpec, FieldRequest, Kernel};
 use crate::fields::harmonic::Constraint;
-use crate::operators::Laplacian;
+use crate::operators::{Laplacian, NormalSource, PointCloudParams, TriangleUnion};
 
 /// The experiments a file can name.
 pub const EXPERIMENTS: [&str; 4] = ["harmonic", "diffusion-basis", "spectral-distance", "field"];
@@ -55,6 +57,57 @@ pub struct FigureFile {
     /// Draw the colour bar.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub colorbar: Option<bool>,
+}
+
+/// The point-cloud Laplacian's parameters (`[point_cloud]`), for an input that is a point
+/// cloud. Every key is optional on reading (the library's [`PointCloudParams::default`]
+/// applies); saved files write them all, so a replay builds the same Laplacian (and so the
+/// same field, bit for bit) whatever the defaults are then.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointCloudFile {
+    /// Neighbours per point (at least 2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub neighbors: Option<usize>,
+    /// Relative mollification of the robust pipeline.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mollify_factor: Option<f64>,
+    /// Delaunay tolerance of the robust pipeline.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delaunay_tolerance: Option<f64>,
+    /// Tangent planes: `estimate` (PCA) or `from-cloud` (the file's normals where non-zero).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub normals: Option<NormalSource>,
+    /// How the local triangulations are combined: `consensus`, `consensus-only`,
+    /// `multiplicity` or `interleaved`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub union: Option<TriangleUnion>,
+}
+
+impl PointCloudFile {
+    /// Every parameter written out.
+    pub fn from_params(p: &PointCloudParams) -> Self {
+        Self {
+            neighbors: Some(p.neighbors),
+            mollify_factor: Some(p.mollify_factor),
+            delaunay_tolerance: Some(p.delaunay_tolerance),
+            normals: Some(p.normals),
+            union: Some(p.union),
+        }
+    }
+
+    /// The parameters: these keys over the library's defaults (not validated: see
+    /// [`PointCloudParams::validate`]).
+    pub fn params(&self) -> PointCloudParams {
+        let d = PointCloudParams::default();
+        PointCloudParams {
+            neighbors: self.neighbors.unwrap_or(d.neighbors),
+            mollify_factor: self.mollify_factor.unwrap_or(d.mollify_factor),
+            delaunay_tolerance: self.delaunay_tolerance.unwrap_or(d.delaunay_tolerance),
+            normals: self.normals.unwrap_or(d.normals),
+            union: self.union.unwrap_or(d.union),
+        }
+    }
 }
 
 /// An experiment file. Every key but `experiment` and `mesh` is optional on reading (the
@@ -111,6 +164,10 @@ pub struct ExperimentFile {
     /// The field (experiment = "field").
     #[serde(skip_serializing_if = "Option::is_none")]
     pub field: Option<FieldRequest>,
+    /// The point-cloud Laplacian's parameters (point-cloud inputs only; absent: the
+    /// library's defaults).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub point_cloud: Option<PointCloudFile>,
     /// Picture options.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub figure: Option<FigureFile>,
@@ -184,6 +241,7 @@ impl ExperimentFile {
             order: None,
             out: None,
             field: None,
+            point_cloud: None,
             figure: None,
         }
     }
@@ -319,7 +377,18 @@ impl ExperimentFile {
                 return Err(key_err("figure.size", format!("{s}: must be 16..8192")));
             }
         }
+        if let Some(p) = &self.point_cloud {
+            p.params()
+                .validate()
+                .map_err(|e| key_err("point_cloud", e))?;
+        }
         Ok(())
+    }
+
+    /// The point-cloud Laplacian's parameters: the `[point_cloud]` keys over the
+    /// library's defaults (the defaults when the table is absent).
+    pub fn point_cloud_params(&self) -> PointCloudParams {
+        self.point_cloud.map(|p| p.params()).unwrap_or_default()
     }
 
     /// The Laplacian (default fem).
@@ -646,6 +715,53 @@ mod tests {
                 k: 100
             })
         );
+    }
+
+    #[test]
+    fn point_cloud_parameters_round_trip_and_are_checked() {
+        let params = PointCloudParams {
+            neighbors: 8,
+            mollify_factor: 3.0e-6,
+            normals: NormalSource::FromCloud,
+            union: TriangleUnion::Interleaved,
+            ..PointCloudParams::default()
+        };
+        let mut f = ExperimentFile::for_field("scan.xyz", FieldRequest::default());
+        f.point_cloud = Some(PointCloudFile::from_params(&params));
+        let text = f.to_toml().unwrap();
+        assert!(text.contains("[point_cloud]"), "{text}");
+        assert!(text.contains("normals = \"from-cloud\""), "{text}");
+        let g = ExperimentFile::parse(&text, "x").unwrap();
+        assert_eq!(f, g);
+        assert_eq!(g.point_cloud_params(), params);
+        // Absent keys (and an absent table) are the library's defaults.
+        let base = "experiment = \"diffusion-basis\"\nmesh = \"scan.xyz\"\n";
+        let h =
+            ExperimentFile::parse(&format!("{base}[point_cloud]\nneighbors = 12\n"), "p").unwrap();
+        assert_eq!(
+            h.point_cloud_params(),
+            PointCloudParams {
+                neighbors: 12,
+                ..PointCloudParams::default()
+            }
+        );
+        let none = ExperimentFile::parse(base, "p").unwrap();
+        assert_eq!(none.point_cloud_params(), PointCloudParams::default());
+        for (extra, key) in [
+            ("[point_cloud]\nneighbors = 1\n", "key 'point_cloud'"),
+            (
+                "[point_cloud]\nmollify_factor = -1.0\n",
+                "key 'point_cloud'",
+            ),
+            (
+                "[point_cloud]\nnormals = \"guess\"\n",
+                "point_cloud.normals",
+            ),
+            ("[point_cloud]\nk = 3\n", "unknown field `k`"),
+        ] {
+            let e = err(&format!("{base}{extra}"));
+            assert!(e.contains(key), "{extra:?}: {e}");
+        }
     }
 
     #[test]

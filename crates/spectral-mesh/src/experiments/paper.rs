@@ -23,7 +23,7 @@ use crate::fields::harmonic::{Constraint, ConstraintSpec, harmonic_map_with_oper
 use crate::linalg::{EigenProgress, b_orthogonality_error};
 use crate::mesh::Mesh;
 use crate::mesh::topology::Topology;
-use crate::operators::{Laplacian, Operators};
+use crate::operators::{Laplacian, Operators, PointCloudParams};
 use crate::spectral::Eigenbasis;
 use crate::spectral::filters::ZERO_EIGENVALUE_EPS;
 
@@ -81,8 +81,12 @@ pub struct MeshSummary {
     pub genus: Vec<Option<i64>>,
     /// Boundary loops.
     pub boundary_loops: usize,
-    /// Total area.
+    /// Total area (of the triangle union, for a point cloud).
     pub area: f64,
+    /// The point-cloud Laplacian's parameters, when the input is a point cloud (its
+    /// triangles, counted above, are the union that Laplacian was built on).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub point_cloud: Option<PointCloudParams>,
 }
 
 impl MeshSummary {
@@ -104,6 +108,15 @@ impl MeshSummary {
             genus: topology.components.iter().map(|c| c.genus).collect(),
             boundary_loops: topology.boundary_loops.len(),
             area: mesh.area(),
+            point_cloud: None,
+        }
+    }
+
+    /// The summary naming the point-cloud Laplacian's parameters (`None` for a mesh).
+    pub fn with_point_cloud(self, params: Option<PointCloudParams>) -> Self {
+        Self {
+            point_cloud: params,
+            ..self
         }
     }
 }
