@@ -14,7 +14,7 @@ use http_body_util::BodyExt;
 use serde::Deserialize;
 use serde_json::json;
 use spectral_mesh::analysis::{Analysis, AnalysisError, AnalysisInput};
-use spectral_mesh::experiments::file::ExperimentFile;
+use spectral_mesh::experiments::file::{ExperimentFile, PointCloudFile};
 use spectral_mesh::io::{Input, LoadedPoints};
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::operators::PointCloudParams;
@@ -1233,6 +1233,11 @@ async fn download(
                 _ => None,
             };
             f.figure = Some(options.to_file());
+            // A cloud's Laplacian parameters, so that `run` replays it with these even if
+            // the defaults change.
+            if let Loaded::Points(AnalysisInput::Points { params, .. }) = &e.input {
+                f.point_cloud = Some(PointCloudFile::from_params(params));
+            }
             f.validate().map_err(internal)?;
             f.to_toml().map_err(internal)?.into_bytes()
         } else {

@@ -291,6 +291,14 @@ async fn uploaded_clouds_give_the_librarys_fields() {
         t.contains("mesh = \"sphere600.xyz\"") && t.contains("laplacian = \"robust\""),
         "{t}"
     );
+    // The cloud's Laplacian parameters are recorded, so a replay does not depend on the
+    // defaults of the day.
+    let f = spectral_mesh::experiments::file::ExperimentFile::parse(&t, "export.toml").unwrap();
+    assert!(t.contains("[point_cloud]"), "{t}");
+    assert_eq!(
+        f.point_cloud_params(),
+        spectral_mesh::operators::PointCloudParams::default()
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -532,10 +532,30 @@ pub fn cache_file_name(hash: &str, laplacian: Laplacian, params: &EigenParams) -
     )
 }
 
+/// The cache key of a mesh and its operators: the mesh hash combined with the stiffness
+/// matrix (pattern and values), so that operators built from the same triangles with other
+/// settings (a point cloud's neighbours or mollification, say) never share a cache file.
+pub fn cache_key(mesh_hash: &str, ops: &Operators) -> String {
+    let mut h = blake3::Hasher::new();
+    h.update(mesh_hash.as_bytes());
+    let s = &ops.stiffness;
+    for &c in s.col_ptr() {
+        h.update(&(c as u64).to_le_bytes());
+    }
+    for &r in s.row_idx() {
+        h.update(&(r as u64).to_le_bytes());
+    }
+    for &v in s.values() {
+        h.update(&v.to_le_bytes());
+    }
+    h.finalize().to_hex().to_string()
+}
+
 /// Returns the basis stored in `cache_dir` for this mesh, discretization and parameters,
 /// or computes it (and stores it there). A stored basis is reused only when the mesh hash,
 /// the Laplacian, every parameter and the mass matrix (bit for bit: a basis of the shape
-/// scaled to unit area is not served for the shape as given) match; anything unreadable
+/// scaled to unit area is not served for the shape as given) and the stiffness matrix (by
+/// its hash in the file name, [`cache_key`]) match; anything unreadable
 /// or different is recomputed and overwritten. The boolean is `true` when the basis came from the cache.
 pub fn load_or_compute(
     cache_dir: &Path,
@@ -545,7 +565,11 @@ pub fn load_or_compute(
     progress: &mut dyn FnMut(EigenProgress),
 ) -> Result<(Eigenbasis, bool), StoreError> {
     let hash = mesh_hash(mesh);
-    let path = cache_dir.join(cache_file_name(&hash, ops.laplacian, params));
+    let path = cache_dir.join(cache_file_name(
+        &cache_key(&hash, ops),
+        ops.laplacian,
+        params,
+    ));
     if path.is_file()
         && let Ok((basis, meta)) = load_npz(&path)
         && meta.mesh_hash == hash
@@ -679,10 +703,21 @@ print(repr(float(X[5, 3])), repr(float(lam[4])))
             load_or_compute(dir.path(), &mesh, &ops3, &params, &mut |_| {}).unwrap();
         assert!(!cached5);
         assert_eq!(b5.laplacian, Laplacian::VoronoiCot);
+        // Same mesh and mass, another stiffness (as a point cloud's other neighbours or
+        // mollification could give): recomputed, not served from the first basis.
+        let mut ops4 = Operators::new(&mesh, Laplacian::Fem);
+        ops4.stiffness = ops4.stiffness.add_scaled(2.0, &ops.stiffness, 0.0);
+        assert_eq!(ops4.mass, ops.mass);
+        let (b7, cached7) =
+            load_or_compute(dir.path(), &mesh, &ops4, &params, &mut |_| {}).unwrap();
+        assert!(!cached7);
+        assert!((b7.values[5] - 2.0 * b1.values[5]).abs() < 1e-8 * b1.values[5]);
         // A corrupt cache file is recomputed, not an error.
-        let path = dir
-            .path()
-            .join(cache_file_name(&mesh_hash(&mesh), Laplacian::Fem, &params));
+        let path = dir.path().join(cache_file_name(
+            &cache_key(&mesh_hash(&mesh), &ops),
+            Laplacian::Fem,
+            &params,
+        ));
         std::fs::write(&path, b"garbage").unwrap();
         let (_, cached6) = load_or_compute(dir.path(), &mesh, &ops, &params, &mut |_| {}).unwrap();
         assert!(!cached6);
