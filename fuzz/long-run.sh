@@ -14,12 +14,17 @@
 set -uo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 cd "$here"
+# No `npm ci` from the web crate's build script (as scripts/fuzz-smoke.sh).
+export SPECTRAL_MESH_NO_NPM=1
 seconds="${1:?usage: fuzz/long-run.sh SECONDS [TARGET ...]}"
 shift
 san="${FUZZ_SANITIZER:-none}"
 jobs="${FUZZ_JOBS:-1}"
-nice -n 19 cargo fuzz build -s "$san" || exit 1
 if [ "$#" -gt 0 ]; then targets=("$@"); else mapfile -t targets < <(cargo fuzz list); fi
+# One target: build that one only (cargo fuzz build takes one name or none).
+only=()
+[ "${#targets[@]}" -eq 1 ] && only=("${targets[0]}")
+nice -n 19 cargo fuzz build -s "$san" "${only[@]}" || exit 1
 bin="$here/target/long-run-bin-$san"
 rm -rf "$bin" && mkdir -p "$bin" logs
 for t in "${targets[@]}"; do

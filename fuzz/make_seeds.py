@@ -7,15 +7,18 @@ faces, renumbered, so colours, polygons and large coordinates are represented), 
 same pieces written as OBJ, PLY (ASCII, binary both byte orders) and STL (ASCII and
 binary), the heads of the point clouds in /work/shared/points (read_points, and the
 PLY ones for read_ply_ascii), the experiment files and request bodies of
-docs/experiment-files.md, and hand-made edge cases. Standard library only.
+docs/experiment-files.md, the web page's request bodies (web_body), and hand-made edge
+cases. Standard library only.
 
     python3 fuzz/make_seeds.py [--meshes DIR] [--points DIR]
+    python3 fuzz/make_seeds.py --only web_body      # that target's seeds only
 
 The output is deterministic; the seeds are committed, so CI does not run this.
 """
 
 import argparse
 import hashlib
+import json
 import os
 import shutil
 import struct
@@ -323,11 +326,168 @@ def basis_members(n, k, laplacian="fem", fortran=True):
             npy(list(meta), "B", (len(meta),))]
 
 
+# web_body: requests to the web server's router (see fuzz_targets/web_body.rs): a
+# selector byte (bits 0-2 endpoint: 0 field, 1 download POST, 2 download GET, 3 basis,
+# 4 shape, 5 cancel + status; bits 3-4 mesh: 0 sphere, 1 disk, 2 last loaded, 3 unknown;
+# bits 5-6 the GET's format: none, txt, png, toml; bit 7 no Content-Length), the body,
+# and up to 4 such requests separated by "\n---\n". The bodies are the page's
+# (static/app.js: fieldRequest, ensureBasis, downloadUrl, the shape box) and the API
+# tests' (tests/web_api.rs), good and bad.
+WEB_FIELD, WEB_DL_POST, WEB_DL_GET, WEB_BASIS, WEB_SHAPE, WEB_CANCEL = 0, 1, 2, 3, 4, 5
+WEB_SPHERE, WEB_DISK, WEB_LAST, WEB_UNKNOWN = 0x00, 0x08, 0x10, 0x18
+WEB_TXT, WEB_PNG, WEB_TOML, WEB_NO_LENGTH = 0x20, 0x40, 0x60, 0x80
+
+
+def web_part(sel, body):
+    if not isinstance(body, str):
+        body = json.dumps(body)
+    return bytes([sel]) + body.encode()
+
+
+def web_body_seeds():
+    page = {"laplacian": "fem", "normalize": True, "levels": 0}
+    fields = {
+        "harmonic-preset": {"kind": "harmonic", "constraints": 2, **page},
+        "harmonic-clicked": {"kind": "harmonic", "constraints": [{"vertex": 3, "value": 0},
+                                                                  {"vertex": 90, "value": 1}], **page},
+        "harmonic-order2": {"kind": "harmonic", "order": 2, "constraints": 4, **page},
+        "heat": {"kind": "heat", "t": 0.5, "k": 100, **page},
+        "heat-anchor": {"kind": "heat", "t": 0.002, "k": 30, "anchor": 7, **page},
+        "heat-standard": {"kind": "heat", "t": 0.01, "k": 50, "kernel": "standard"},
+        "diffusion-wfem": {"kind": "distance", "distance": "wfem-diffusion:t=0.5", "k": 100, "source": 5, **page},
+        "distance-biharmonic": {"kind": "distance", "distance": "biharmonic", "k": 100, **page},
+        "distance-commute": {"kind": "distance", "distance": "commute", "k": 100, "source": 11, **page},
+        "distance-diffusion": {"kind": "distance", "distance": "diffusion:t=0.1", "k": 100, **page},
+        "distance-mix": {"kind": "distance", "distance": "mix:a=0.3,t=0.1", "k": 40, "source": 3, **page},
+        "distance-custom": {"kind": "distance", "distance": "custom-w:exp(-t*s);t=0.5,a=0.5", "k": 100, **page},
+        "distance-custom-phi": {"kind": "distance", "distance": "custom-phi:s^2;t=0.5,a=0.5", "k": 60, **page},
+        "signature": {"kind": "spectral-function", "filter": "biharmonic", "k": 100, **page},
+        "segmentation-hks": {"kind": "segmentation", "signature": "hks:t=0.5", "persistence": 0.05, "k": 100, **page},
+        "segmentation-filter": {"kind": "segmentation", "signature": "spectral-function:biharmonic",
+                                "persistence": 0.05, "k": 100, **page},
+        "embedding": {"kind": "embedding", "filter": "commute", "component": 2, "k": 100, **page},
+        "eigenfunction": {"kind": "eigenfunction", "index": 3, "k": 100, **page},
+        "diffusion-ball": {"kind": "diffusion", "signal": {"ball": {"vertex": 3, "radius": 0.3}}, "t": 0.01, "k": 40},
+        "diffusion-impulse": {"kind": "diffusion", "signal": {"impulse": 17}},
+        "hks": {"kind": "hks", "t": 0.01, "k": 40, "scaled": True},
+        "wks": {"kind": "wks", "energy": 4.0, "k": 40},
+        "adf": {"kind": "adf", "k": 40},
+        "green": {"kind": "green", "k": 40, "levels": 7},
+        "defaults": {"kind": "distance"},
+    }
+    for name, body in fields.items():
+        put("web_body", f"field-{name}", web_part(WEB_FIELD | WEB_SPHERE, body))
+    for name in ["harmonic-preset", "heat", "diffusion-wfem", "segmentation-hks", "eigenfunction"]:
+        body = dict(fields[name], k=127) if "k" in fields[name] else fields[name]
+        put("web_body", f"field-disk-{name}", web_part(WEB_FIELD | WEB_DISK, body))
+    # Downloads: the page's links (GET, format in the query, levels and colormap in the body).
+    dl = {"kind": "distance", "distance": "biharmonic", "k": 100, "laplacian": "fem",
+          "normalize": True, "levels": 10, "colormap": "viridis"}
+    put("web_body", "download-get-txt", web_part(WEB_DL_GET | WEB_TXT, dl))
+    put("web_body", "download-get-png", web_part(WEB_DL_GET | WEB_PNG, dict(dl, size=96)))
+    put("web_body", "download-get-toml", web_part(WEB_DL_GET | WEB_TOML, dict(dl, k=40)))
+    put("web_body", "download-get-wrl", web_part(WEB_DL_GET, dict(dl, format="wrl")))
+    put("web_body", "download-get-ply", web_part(WEB_DL_GET | WEB_DISK, dict(dl, format="ply", k=127)))
+    put("web_body", "download-post-png", web_part(WEB_DL_POST, {
+        "kind": "heat", "k": 30, "t": 0.05, "format": "png", "size": 64, "view": "iso",
+        "colormap": "turbo", "transparent": True, "critical_points": True, "colorbar": True}))
+    put("web_body", "download-post-segmentation", web_part(WEB_DL_POST, {
+        "kind": "segmentation", "k": 20, "format": "png", "size": 32, "view": "30,45"}))
+    put("web_body", "download-post-toml-harmonic", web_part(WEB_DL_POST, {
+        "kind": "harmonic", "order": 2, "format": "toml", "colormap": "grey"}))
+    # Bases: the page's (ensureBasis), other discretizations, the defaults.
+    for name, sel, body in [
+        ("page", WEB_SPHERE, {"laplacian": "fem", "normalize": True, "k": 100}),
+        ("held", WEB_DISK, {"k": 127}),
+        ("defaults", WEB_SPHERE, ""),
+        ("voronoi-cot", WEB_SPHERE, {"laplacian": "voronoi-cot", "k": 20}),
+        ("cot", WEB_DISK, {"laplacian": "cot", "k": 10, "normalize": False}),
+        ("robust", WEB_SPHERE, {"laplacian": "robust", "k": 12}),
+        ("uniform", WEB_DISK, {"laplacian": "uniform", "k": 30}),
+        ("mixed-voronoi", WEB_SPHERE, {"laplacian": "mixed-voronoi", "k": 8}),
+        ("more", WEB_SPHERE, {"k": 150}),
+    ]:
+        put("web_body", f"basis-{name}", web_part(WEB_BASIS | sel, body))
+    # Sequences: a basis then its field; a shape, its basis, a field and a download; a
+    # cancel and status.
+    sep = b"\n---\n"
+    put("web_body", "seq-basis-then-field", sep.join([
+        web_part(WEB_BASIS, {"laplacian": "voronoi-cot", "k": 20}),
+        web_part(WEB_FIELD, {"kind": "heat", "k": 20, "t": 0.05, "laplacian": "voronoi-cot"}),
+        web_part(WEB_DL_POST, {"kind": "distance", "k": 20, "laplacian": "voronoi-cot", "format": "toml"}),
+    ]))
+    put("web_body", "seq-shape-basis-field", sep.join([
+        web_part(WEB_SHAPE, {"shape": "sphere:res=1"}),
+        web_part(WEB_BASIS | WEB_LAST, {"k": 10}),
+        web_part(WEB_FIELD | WEB_LAST, {"kind": "distance", "k": 10, "source": 4}),
+        web_part(WEB_DL_GET | WEB_LAST | WEB_TOML, {"kind": "heat", "k": 8}),
+    ]))
+    put("web_body", "seq-shape-harmonic", sep.join([
+        web_part(WEB_SHAPE, {"shape": "torus:res=0"}),
+        web_part(WEB_FIELD | WEB_LAST, {"kind": "harmonic", "constraints": 6, "levels": 20}),
+    ]))
+    put("web_body", "seq-shape-iterative-basis", sep.join([
+        web_part(WEB_SHAPE, {"shape": "irregular-sphere:res=1"}),
+        web_part(WEB_BASIS | WEB_LAST, {"k": 40, "laplacian": "cot"}),
+        web_part(WEB_FIELD | WEB_LAST, {"kind": "hks", "k": 40, "laplacian": "cot"}),
+    ]))
+    put("web_body", "seq-basis-cancel", sep.join([
+        web_part(WEB_BASIS | WEB_DISK, {"laplacian": "robust", "k": 50}),
+        web_part(WEB_CANCEL | WEB_DISK, ""),
+    ]))
+    put("web_body", "cancel-idle", web_part(WEB_CANCEL, ""))
+    for name, shape in [("sphere", "sphere:res=1"), ("disk", "disk:res=0"), ("cylinder", "cylinder:res=0,h=2"),
+                        ("too-big", "sphere:res=9"), ("unknown", "klein-bottle-9"), ("path", "/etc/passwd")]:
+        put("web_body", f"shape-{name}", web_part(WEB_SHAPE, {"shape": shape}))
+    # Refusals (tests/web_api.rs, bad_input_is_a_4xx_with_a_message...).
+    bad = {
+        "kind-unknown": {"kind": "astrology"},
+        "no-kind": {"experiment": "heat", "k": 20},
+        "key-of-another-kind": {"kind": "heat", "k": 20, "filter": "commute"},
+        "levels": {"kind": "heat", "k": 20, "levels": 100000},
+        "t-negative": {"kind": "heat", "k": 20, "t": -1.0},
+        "anchor-out-of-range": {"kind": "heat", "k": 20, "anchor": 162},
+        "constraint-out-of-range": {"kind": "harmonic", "constraints": [{"vertex": 0, "value": 0},
+                                                                          {"vertex": 99999, "value": 1}]},
+        "k-too-many": {"kind": "heat", "k": 167},
+        "k-more-than-held": {"kind": "heat", "k": 120},
+        "k-zero": {"kind": "hks", "k": 0},
+        "index-k1": {"kind": "eigenfunction", "k": 1},
+        "filter-syntax": {"kind": "distance", "k": 20, "distance": "custom-w:exp(-t*;t=1"},
+        "filter-negative": {"kind": "distance", "k": 20, "distance": "custom-w:s-1000"},
+        "laplacian": {"kind": "heat", "laplacian": "nope"},
+        "not-held-laplacian": {"kind": "heat", "k": 10, "laplacian": "robust"},
+        "normalize": {"kind": "heat", "normalize": "yes"},
+        "not-an-object": [1, 2],
+        "syntax": '{"kind": "heat", ',
+    }
+    for name, body in bad.items():
+        put("web_body", f"bad-field-{name}", web_part(WEB_FIELD, body))
+    put("web_body", "bad-download-format", web_part(WEB_DL_POST, {"kind": "heat", "k": 20, "format": "exe"}))
+    put("web_body", "bad-download-size", web_part(WEB_DL_POST, {"kind": "heat", "k": 20, "format": "png", "size": 100000}))
+    put("web_body", "bad-download-size-budget", web_part(WEB_DL_GET | WEB_PNG, {"kind": "heat", "size": 4096}))
+    put("web_body", "bad-download-colormap", web_part(WEB_DL_GET | WEB_PNG, {"kind": "heat", "colormap": "jet"}))
+    put("web_body", "bad-download-query", web_part(WEB_DL_GET | WEB_TXT, "kind=heat"))
+    put("web_body", "bad-basis-key", web_part(WEB_BASIS, {"pairs": 5}))
+    put("web_body", "bad-basis-laplacian", web_part(WEB_BASIS, {"laplacian": "nope", "k": 5}))
+    put("web_body", "bad-basis-k", web_part(WEB_BASIS | WEB_DISK, {"k": 128}))
+    put("web_body", "bad-basis-k-zero", web_part(WEB_BASIS, {"k": 0}))
+    put("web_body", "bad-unknown-mesh", web_part(WEB_FIELD | WEB_UNKNOWN, {"kind": "heat"}))
+    put("web_body", "bad-no-length", web_part(WEB_FIELD | WEB_NO_LENGTH, {"kind": "heat", "k": 20}))
+    put("web_body", "bad-empty", bytes([WEB_FIELD]))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--meshes", default="/work/shared/meshes")
     ap.add_argument("--points", default="/work/shared/points")
+    ap.add_argument("--only", choices=["web_body"],
+                    help="rewrite the seeds of this target only")
     args = ap.parse_args()
+    if args.only == "web_body":
+        shutil.rmtree(os.path.join(OUT, "web_body"), ignore_errors=True)
+        web_body_seeds()
+        return
     if os.path.isdir(OUT):
         shutil.rmtree(OUT)
     ms = meshes(args.meshes)
@@ -634,6 +794,7 @@ def main():
     }
     for k, t in experiments.items():
         put("experiment_file", k, t)
+    web_body_seeds()
     total = 0
     for root, _, files in os.walk(OUT):
         for f in files:

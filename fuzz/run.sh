@@ -15,10 +15,14 @@
 #
 # Environment: FUZZ_SANITIZER (default `none`; `address` needs RUSTC_BOOTSTRAP=1 on the
 # stable toolchain), FUZZ_CORPUS (default fuzz/corpus), FUZZ_TARGET_DIR (default
-# fuzz/target).
+# fuzz/target), FUZZ_BIN (a binary of TARGET built already, e.g. by `cargo fuzz build`:
+# it is run as it is, without `cargo fuzz run` and its check of the build; what
+# scripts/fuzz-smoke.sh does).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 cd "$here"
+# No `npm ci` from the web crate's build script (as scripts/fuzz-smoke.sh).
+export SPECTRAL_MESH_NO_NPM=1
 target="${1:?usage: fuzz/run.sh TARGET SECONDS [LIBFUZZER_OPTION ...]}"
 seconds="${2:?usage: fuzz/run.sh TARGET SECONDS [LIBFUZZER_OPTION ...]}"
 shift 2
@@ -35,6 +39,12 @@ opts=(-max_total_time="$seconds" -timeout=2 -rss_limit_mb=2048 -print_final_stat
 if awk -v t="$target" '$1 == t && $2 == "timeout" {f = 1} END {exit !f}' known-open.txt; then
   echo "note: $target has a known open hang (fuzz/known-open.txt): timeouts are recorded, not fatal"
   opts+=(-fork=1 -ignore_timeouts=1)
+fi
+if [ -n "${FUZZ_BIN:-}" ]; then
+  mkdir -p "$here/artifacts/$target"
+  echo "fuzzing $target with $FUZZ_BIN; replay a finding with: cargo fuzz run -s none $target fuzz/artifacts/$target/FILE"
+  exec "$FUZZ_BIN" -artifact_prefix="$here/artifacts/$target/" "${opts[@]}" "$@" "$corpus" \
+    "$here/seeds/$target"
 fi
 target_dir=()
 [ -n "${FUZZ_TARGET_DIR:-}" ] && target_dir=(--target-dir "$FUZZ_TARGET_DIR")
