@@ -13,118 +13,15 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use serde_json::{Value, json};
+use serde_json::json;
 use spectral_mesh::Laplacian;
 use spectral_mesh::analysis::{Analysis, AnalysisOptions, FieldRequest};
 use spectral_mesh::io::read_input_from_bytes;
+use spectral_mesh_web::Limits;
 use spectral_mesh_web::field::parse_reply;
-use spectral_mesh_web::{Limits, ServeConfig, bind};
-use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio::net::TcpStream;
 
-struct Reply {
-    status: u16,
-    body: Vec<u8>,
-}
-
-impl Reply {
-    fn json(&self) -> Value {
-        serde_json::from_slice(&self.body).unwrap_or(Value::Null)
-    }
-    fn error(&self) -> String {
-        self.json()["error"].as_str().unwrap_or("").to_string()
-    }
-    fn text(&self) -> String {
-        String::from_utf8_lossy(&self.body).into_owned()
-    }
-}
-
-fn dechunk(mut b: &[u8]) -> Vec<u8> {
-    let mut out = Vec::new();
-    while let Some(eol) = b.windows(2).position(|w| w == b"\r\n") {
-        let size =
-            usize::from_str_radix(std::str::from_utf8(&b[..eol]).unwrap().trim(), 16).unwrap_or(0);
-        if size == 0 || b.len() < eol + 4 + size {
-            break;
-        }
-        out.extend(&b[eol + 2..eol + 2 + size]);
-        b = &b[eol + 2 + size + 2..];
-    }
-    out
-}
-
-/// One request on its own connection (`extra`: header lines ending in CRLF); the reply
-/// read to the end (at most 120 s).
-async fn request(addr: SocketAddr, method: &str, path: &str, extra: &str, body: &[u8]) -> Reply {
-    let mut s = TcpStream::connect(addr).await.unwrap();
-    let head = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Length: {}\r\n{extra}\r\n",
-        body.len()
-    );
-    s.write_all(head.as_bytes()).await.unwrap();
-    let _ = s.write_all(body).await;
-    let mut buf = Vec::new();
-    let _ = tokio::time::timeout(Duration::from_secs(120), s.read_to_end(&mut buf)).await;
-    let split = buf
-        .windows(4)
-        .position(|w| w == b"\r\n\r\n")
-        .expect("no reply header");
-    let headers = String::from_utf8_lossy(&buf[..split]).to_ascii_lowercase();
-    let status: u16 = headers[9..12].parse().unwrap();
-    let mut body = buf[split + 4..].to_vec();
-    if headers.contains("transfer-encoding: chunked") {
-        body = dechunk(&body);
-    }
-    Reply { status, body }
-}
-
-async fn get(addr: SocketAddr, path: &str) -> Reply {
-    request(addr, "GET", path, "", b"").await
-}
-
-async fn post_json(addr: SocketAddr, path: &str, v: Value) -> Reply {
-    request(
-        addr,
-        "POST",
-        path,
-        "Content-Type: application/json\r\n",
-        v.to_string().as_bytes(),
-    )
-    .await
-}
-
-async fn upload(addr: SocketAddr, name: &str, bytes: &[u8]) -> Reply {
-    let extra = format!("Content-Type: application/octet-stream\r\nX-Filename: {name}\r\n");
-    request(addr, "POST", "/api/mesh", &extra, bytes).await
-}
-
-async fn start(limits: Limits) -> SocketAddr {
-    let server = bind(ServeConfig {
-        port: 0,
-        limits,
-        ..Default::default()
-    })
-    .await
-    .unwrap();
-    let addr = server.addr;
-    tokio::spawn(server.run());
-    addr
-}
-
-/// Polls the job of `id` until it is neither queued nor running (at most 300 s).
-async fn wait_job(addr: SocketAddr, id: &str) -> Value {
-    let t = Instant::now();
-    while t.elapsed() < Duration::from_secs(300) {
-        let j = get(addr, &format!("/api/mesh/{id}/basis/status"))
-            .await
-            .json();
-        if j["state"] != "running" && j["state"] != "queued" {
-            return j;
-        }
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    }
-    panic!("the job of {id} did not end within 300 s");
-}
+mod common;
+use common::*;
 
 /// `n` points on the unit sphere (Fibonacci lattice) as `.xyz` text.
 fn sphere_xyz(n: usize) -> Vec<u8> {
