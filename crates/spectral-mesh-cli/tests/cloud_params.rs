@@ -11,44 +11,14 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use spectral_mesh::analysis::{Analysis, AnalysisInput, AnalysisOptions};
 use spectral_mesh::io::{Input, read_input};
 use spectral_mesh::operators::{Laplacian, PointCloudParams};
 use spectral_mesh::spectral::eigenbasis::EigenParams;
 
-fn run(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_spectral-mesh"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn ok(dir: &Path, args: &[&str]) -> String {
-    let o = run(dir, args);
-    assert!(
-        o.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn err(dir: &Path, args: &[&str]) -> String {
-    let o = run(dir, args);
-    assert!(!o.status.success(), "{args:?} should fail");
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn values(p: &Path) -> Vec<f64> {
-    std::fs::read_to_string(p)
-        .unwrap()
-        .lines()
-        .map(|l| l.trim().parse().unwrap())
-        .collect()
-}
+mod common;
+use common::*;
 
 /// The shared point clouds' folder, or `None` (and a message) when it is absent.
 fn shared_points() -> Option<PathBuf> {
@@ -101,7 +71,7 @@ fn eigs_of_a_shared_cloud_uses_the_neighbours_given() {
     let mut by_neighbors = Vec::new();
     for nb in [8usize, 30] {
         let txt = format!("ev{nb}.txt");
-        let out = ok(
+        let out = ok_in(
             p,
             &[
                 "eigs",
@@ -136,7 +106,7 @@ fn eigs_of_a_shared_cloud_uses_the_neighbours_given() {
         "8 and 30 neighbours gave the same spectrum: {a:?} {b:?}"
     );
     // No option: the library's defaults.
-    ok(
+    ok_in(
         p,
         &[
             "eigs",
@@ -211,12 +181,12 @@ fn a_cloud_experiment_with_its_parameters_replays_bit_for_bit() {
         "diffusion.toml",
     ];
     args.extend(cloud_opts);
-    ok(p, &args);
+    ok_in(p, &args);
     let text = std::fs::read_to_string(p.join("diffusion.toml")).unwrap();
     assert!(text.contains("[point_cloud]"), "{text}");
     assert!(text.contains("neighbors = 6"), "{text}");
     assert!(text.contains("normals = \"estimate\""), "{text}");
-    ok(p, &["run", "diffusion.toml", "-o", "replay"]);
+    ok_in(p, &["run", "diffusion.toml", "-o", "replay"]);
     same_bytes(
         &p.join("first/diffusion-basis.txt"),
         &p.join("replay/diffusion-basis.txt"),
@@ -231,7 +201,7 @@ fn a_cloud_experiment_with_its_parameters_replays_bit_for_bit() {
     assert_eq!(pc["neighbors"], 6, "{summary}");
     assert_eq!(pc["mollify_factor"], 2e-5, "{summary}");
     // The parameters matter: the defaults give another field.
-    ok(
+    ok_in(
         p,
         &[
             "experiment",
@@ -265,8 +235,8 @@ fn a_cloud_experiment_with_its_parameters_replays_bit_for_bit() {
         "heat.toml",
     ];
     args.extend(cloud_opts);
-    ok(p, &args);
-    ok(p, &["run", "heat.toml", "-o", "heat-replay"]);
+    ok_in(p, &args);
+    ok_in(p, &["run", "heat.toml", "-o", "heat-replay"]);
     same_bytes(&p.join("heat.txt"), &p.join("heat-replay/heat.txt"));
     // The same field as the experiment (both the heat basis function at the same anchor).
     same_bytes(&p.join("heat.txt"), &p.join("first/diffusion-basis.txt"));
@@ -282,8 +252,8 @@ fn a_cloud_experiment_with_its_parameters_replays_bit_for_bit() {
         "harm.toml",
     ];
     args.extend(cloud_opts);
-    ok(p, &args);
-    ok(p, &["run", "harm.toml", "-o", "harm-replay"]);
+    ok_in(p, &args);
+    ok_in(p, &["run", "harm.toml", "-o", "harm-replay"]);
     same_bytes(
         &p.join("harm/harmonic-field-1.txt"),
         &p.join("harm-replay/harmonic-field-1.txt"),
@@ -298,13 +268,13 @@ fn a_cloud_experiment_with_its_parameters_replays_bit_for_bit() {
 fn point_cloud_options_with_a_mesh_are_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();
-    let e = err(p, &["eigs", "sphere:res=2", "-k", "5", "--neighbors", "8"]);
+    let e = err_in(p, &["eigs", "sphere:res=2", "-k", "5", "--neighbors", "8"]);
     assert!(
         e.contains("--neighbors applies only to point clouds")
             && e.contains("sphere:res=2 is a mesh"),
         "{e}"
     );
-    let e = err(
+    let e = err_in(
         p,
         &[
             "experiment",
@@ -321,13 +291,13 @@ fn point_cloud_options_with_a_mesh_are_refused_by_name() {
         e.contains("--use-normals, --mollify-factor apply only to point clouds"),
         "{e}"
     );
-    let e = err(
+    let e = err_in(
         p,
         &["render", "sphere:res=1", "--neighbors", "8", "-o", "r.png"],
     );
     assert!(e.contains("--neighbors"), "{e}");
     // operators: --mollify-factor sets the robust Laplacian of a mesh, and only that.
-    ok(
+    ok_in(
         p,
         &[
             "operators",
@@ -339,7 +309,7 @@ fn point_cloud_options_with_a_mesh_are_refused_by_name() {
             "ops",
         ],
     );
-    let e = err(
+    let e = err_in(
         p,
         &[
             "operators",
@@ -357,16 +327,16 @@ fn point_cloud_options_with_a_mesh_are_refused_by_name() {
         "experiment = \"diffusion-basis\"\nmesh = \"sphere:res=1\"\nk = 10\n[point_cloud]\nneighbors = 8\n",
     )
     .unwrap();
-    let e = err(p, &["run", "m.toml", "-o", "m"]);
+    let e = err_in(p, &["run", "m.toml", "-o", "m"]);
     assert!(e.contains("key 'point_cloud'"), "{e}");
     // Out of range, on a cloud.
     write_sphere_points(&p.join("ball.xyz"), 200);
-    let e = err(p, &["eigs", "ball.xyz", "-k", "5", "--neighbors", "1"]);
+    let e = err_in(p, &["eigs", "ball.xyz", "-k", "5", "--neighbors", "1"]);
     assert!(e.contains("--neighbors") && e.contains("at least 2"), "{e}");
-    let e = err(p, &["eigs", "ball.xyz", "-k", "5", "--mollify-factor=-1"]);
+    let e = err_in(p, &["eigs", "ball.xyz", "-k", "5", "--mollify-factor=-1"]);
     assert!(e.contains("--mollify-factor") && e.contains(">= 0"), "{e}");
     // The help shows the library's defaults.
-    let help = ok(p, &["heat", "--help"]);
+    let help = ok_in(p, &["heat", "--help"]);
     let d = PointCloudParams::default();
     for want in [
         format!("[default: {}]", d.neighbors),
@@ -392,8 +362,8 @@ fn batch_gives_the_options_to_its_clouds() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();
     write_sphere_points(&p.join("ball.xyz"), 600);
-    ok(p, &["batch", "ball.xyz", "-o", "defaults", "-k", "8"]);
-    ok(
+    ok_in(p, &["batch", "ball.xyz", "-o", "defaults", "-k", "8"]);
+    ok_in(
         p,
         &[
             "batch",
@@ -412,6 +382,6 @@ fn batch_gives_the_options_to_its_clouds() {
         params_hash(&p.join("defaults")),
         params_hash(&p.join("n12"))
     );
-    let e = err(p, &["batch", "ball.xyz", "-o", "bad", "--neighbors", "1"]);
+    let e = err_in(p, &["batch", "ball.xyz", "-o", "bad", "--neighbors", "1"]);
     assert!(e.contains("--neighbors") && e.contains("at least 2"), "{e}");
 }

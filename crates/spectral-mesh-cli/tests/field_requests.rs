@@ -6,38 +6,14 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
-use std::process::{Command, Output};
 
 use spectral_mesh::analysis::{Analysis, AnalysisOptions, FieldRequest};
 use spectral_mesh::shapes::build_str;
 
 const SPHERE: &str = "sphere:res=2";
 
-fn run_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_spectral-mesh"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn ok(dir: &Path, args: &[&str]) -> String {
-    let o = run_in(dir, args);
-    assert!(
-        o.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn values(p: &Path) -> Vec<f64> {
-    std::fs::read_to_string(p)
-        .unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-        .lines()
-        .map(|l| l.trim().parse().unwrap())
-        .collect()
-}
+mod common;
+use common::*;
 
 fn request(json: &str) -> FieldRequest {
     serde_json::from_str(json).unwrap()
@@ -208,7 +184,7 @@ fn every_request_kind_written_by_the_cli_equals_the_librarys_field() {
     ];
     let mut kinds: Vec<&str> = Vec::new();
     for (args, out, json) in &cases {
-        ok(p, args);
+        ok_in(p, args);
         let req = request(json);
         let cli = values(&p.join(out));
         assert_eq!(cli.len(), n);
@@ -358,15 +334,15 @@ fn save_experiment_on_each_field_command_replays_to_the_same_bytes() {
         // A multi-column signature writes every column to .txt: the replay has the drawn
         // one, so its .txt is compared through the drawn column's picture and scene.
         let multi = args.iter().any(|a| a.starts_with("auto:"));
-        ok(p, &direct);
+        ok_in(p, &direct);
         let text = std::fs::read_to_string(p.join(&toml)).unwrap();
         assert!(text.contains("experiment = \"field\""), "{text}");
         assert!(text.contains(&format!("kind = \"{kind}\"")), "{text}");
         assert!(text.contains("mesh_hash"), "{text}");
         let r1 = format!("{dir}/replay1");
         let r2 = format!("{dir}/replay2");
-        ok(p, &["run", &toml, "-o", &r1]);
-        ok(p, &["run", &toml, "-o", &r2]);
+        ok_in(p, &["run", &toml, "-o", &r1]);
+        ok_in(p, &["run", &toml, "-o", &r2]);
         for ext in ["png", "wrl", "txt"] {
             let replayed = p.join(&r1).join(format!("{kind}.{ext}"));
             if ext == "txt" && multi {
@@ -399,8 +375,8 @@ fn run_of_a_saved_field_file_reproduces_it_and_honours_basis_k() {
     // 40 pairs computed, the first 20 used: the field of the first 20 of 40 pairs.
     let file = "experiment = \"field\"\nmesh = \"sphere:res=2\"\nbasis_k = 40\n\n[figure]\nsize = 48\n\n[field]\nkind = \"distance\"\ndistance = \"commute\"\nk = 20\n";
     std::fs::write(p.join("e.toml"), file).unwrap();
-    ok(p, &["run", "e.toml", "-o", "a"]);
-    ok(p, &["run", "e.toml", "-o", "b"]);
+    ok_in(p, &["run", "e.toml", "-o", "a"]);
+    ok_in(p, &["run", "e.toml", "-o", "b"]);
     for name in [
         "distance.txt",
         "distance.png",

@@ -6,42 +6,13 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::process::{Command, Output};
 
 use spectral_mesh::Mesh;
 use spectral_mesh::io::{Input, read_input};
 use spectral_mesh_render::raster::{Camera, RenderOptions, View};
 
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_spectral-mesh"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn ok(args: &[&str]) -> String {
-    let o = run(args);
-    assert!(
-        o.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn err(args: &[&str]) -> String {
-    let o = run(args);
-    assert!(!o.status.success(), "{args:?} should fail");
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn values(p: &Path) -> Vec<f64> {
-    std::fs::read_to_string(p)
-        .unwrap()
-        .lines()
-        .map(|l| l.parse().unwrap())
-        .collect()
-}
+mod common;
+use common::*;
 
 /// `n` points on the sphere of radius `r` centred at `c` (Fibonacci lattice).
 fn sphere(n: usize, r: f64, c: [f64; 3]) -> Vec<[f64; 3]> {

@@ -3,31 +3,9 @@
 #![allow(clippy::unwrap_used)]
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_spectral-mesh"))
-}
-
-fn run_in(dir: &Path, args: &[&str]) -> Output {
-    bin().current_dir(dir).args(args).output().unwrap()
-}
-
-fn ok(dir: &Path, args: &[&str]) -> String {
-    let o = run_in(dir, args);
-    assert!(
-        o.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn err(dir: &Path, args: &[&str]) -> String {
-    let o = run_in(dir, args);
-    assert!(!o.status.success(), "{args:?} should fail");
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::*;
 
 /// Every file of `a` exists in `b` with the same bytes (and no file is missing).
 fn same_files(a: &Path, b: &Path) {
@@ -67,7 +45,7 @@ fn replay_is_bit_identical(args: &[&str]) {
         "--save-experiment",
         "files/exp.toml",
     ]);
-    ok(p, &direct);
+    ok_in(p, &direct);
     let text = std::fs::read_to_string(p.join("files/exp.toml")).unwrap();
     // Every parameter is explicit.
     for key in [
@@ -81,14 +59,14 @@ fn replay_is_bit_identical(args: &[&str]) {
     ] {
         assert!(text.contains(key), "{key} missing in\n{text}");
     }
-    ok(p, &["run", "files/exp.toml", "-o", "replay1"]);
-    ok(p, &["run", "files/exp.toml", "-o", "replay2"]);
+    ok_in(p, &["run", "files/exp.toml", "-o", "replay1"]);
+    ok_in(p, &["run", "files/exp.toml", "-o", "replay2"]);
     same_files(&p.join("direct"), &p.join("replay1"));
     same_files(&p.join("replay1"), &p.join("replay2"));
     // Without -o the file's own `out` (relative to the file) is used: the direct folder.
-    let e = err(p, &["run", "files/exp.toml"]);
+    let e = err_in(p, &["run", "files/exp.toml"]);
     assert!(e.contains("already exists"), "{e}");
-    ok(p, &["run", "files/exp.toml", "--force"]);
+    ok_in(p, &["run", "files/exp.toml", "--force"]);
     same_files(&p.join("direct"), &p.join("replay1"));
 }
 
@@ -154,7 +132,7 @@ fn a_changed_mesh_is_refused_naming_both_hashes() {
     let p = d.path();
     let mesh = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
     std::fs::write(p.join("tet.off"), mesh).unwrap();
-    ok(
+    ok_in(
         p,
         &[
             "experiment",
@@ -177,7 +155,7 @@ fn a_changed_mesh_is_refused_naming_both_hashes() {
         .trim_end_matches('"')
         .to_string();
     std::fs::write(p.join("tet.off"), mesh.replace("0 0 1\n3", "0 0 2\n3")).unwrap();
-    let e = err(p, &["run", "e/tet.toml", "-o", "b"]);
+    let e = err_in(p, &["run", "e/tet.toml", "-o", "b"]);
     assert!(e.contains(&old_hash), "{e}");
     assert!(e.contains("--allow-changed-mesh"), "{e}");
     let new_hash = e
@@ -189,7 +167,7 @@ fn a_changed_mesh_is_refused_naming_both_hashes() {
         .unwrap();
     assert_eq!(new_hash.len(), 64);
     assert_ne!(new_hash, old_hash);
-    ok(p, &["run", "e/tet.toml", "-o", "b", "--allow-changed-mesh"]);
+    ok_in(p, &["run", "e/tet.toml", "-o", "b", "--allow-changed-mesh"]);
 }
 
 #[test]
@@ -223,7 +201,7 @@ fn bad_experiment_files_name_the_key() {
         ),
     ] {
         std::fs::write(p.join("x.toml"), text).unwrap();
-        let e = err(p, &["run", "x.toml", "-o", "o"]);
+        let e = err_in(p, &["run", "x.toml", "-o", "o"]);
         assert!(e.contains(key), "{text:?}: {e}");
     }
 }
@@ -259,7 +237,7 @@ fn csv_rows(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
 fn truncation_study_writes_falling_curves() {
     let d = tempfile::tempdir().unwrap();
     let p = d.path();
-    ok(
+    ok_in(
         p,
         &[
             "study",
@@ -321,7 +299,7 @@ quantities = ["heat"]
 "#,
     )
     .unwrap();
-    let out = ok(p, &["study", "robustness", "s.toml", "-o", "r"]);
+    let out = ok_in(p, &["study", "robustness", "s.toml", "-o", "r"]);
     assert!(out.contains("### rigid"), "{out}");
     let (h, rows) = csv_rows(&p.join("r/robustness.csv"));
     assert_eq!(
@@ -352,14 +330,14 @@ quantities = ["heat"]
         "[[table]]\nname = \"x\"\nmeshes = [\"sphere:res=1\"]\nperturbations = [\"noise:abc\"]\n",
     )
     .unwrap();
-    let e = err(p, &["study", "robustness", "bad.toml", "-o", "b"]);
+    let e = err_in(p, &["study", "robustness", "bad.toml", "-o", "b"]);
     assert!(e.contains("table[0].perturbations[0]"), "{e}");
     std::fs::write(
         p.join("bad.toml"),
         "[[table]]\nname = \"x\"\nmeshes = [\"${SPECTRAL_MESH_NO_SUCH_VAR}/m.off\"]\nperturbations = [\"noise:0.1\"]\n",
     )
     .unwrap();
-    let e = err(p, &["study", "robustness", "bad.toml", "-o", "b"]);
+    let e = err_in(p, &["study", "robustness", "bad.toml", "-o", "b"]);
     assert!(
         e.contains("table[0].meshes[0]") && e.contains("SPECTRAL_MESH_NO_SUCH_VAR"),
         "{e}"
