@@ -95,6 +95,9 @@ def test_the_gil_is_released_during_a_solve():
 CTRL_C = textwrap.dedent(
     """
     import os, signal, sys, threading, time
+    # A parent that ignores SIGINT (a shell's background job) passes that on, and Python
+    # then raises no KeyboardInterrupt: take Python's own handler back.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     import spectral_mesh as sm
     what = sys.argv[1]
     if what == "solve":
