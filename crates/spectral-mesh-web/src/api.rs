@@ -525,6 +525,9 @@ fn mesh_reply(e: &MeshEntry) -> serde_json::Value {
         "source": e.source,
         "laplacians": e.laplacians(),
         "point_spacing": e.info.get("point_spacing").cloned().unwrap_or(serde_json::Value::Null),
+        // Splat radius over point spacing in the pictures (spectral-mesh-render's), so the
+        // page draws clouds as the PNGs do without a constant of its own.
+        "point_radius_factor": spectral_mesh_render::figure::POINT_RADIUS_FACTOR,
         "info": e.info,
     })
 }

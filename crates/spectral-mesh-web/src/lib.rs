@@ -24,7 +24,7 @@
 //!   `X-Filename`), read by [`spectral_mesh::io::read_input_from_bytes`]: meshes (OFF, OBJ,
 //!   PLY, STL) and point clouds (`.xyz`/`.pts`/`.txt`/`.csv` text, PLY with vertices and
 //!   no faces, with or without normals)
-//!   -> `{mesh_id, kind, n, m, source, laplacians, point_spacing, info}`. `kind` is
+//!   -> `{mesh_id, kind, n, m, source, laplacians, point_spacing, point_radius_factor, info}`. `kind` is
 //!   `"mesh"` or `"point cloud"`; `laplacians` the discretizations that apply (a cloud:
 //!   `["robust"]` only); `m` is 0 for a cloud. The id is the first 16 hex digits of the
 //!   content hash ([`spectral_mesh::Mesh::content_hash`], or

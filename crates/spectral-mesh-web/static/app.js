@@ -38,6 +38,7 @@ const app = {
   framed: null,          // mesh id the camera was aimed for
   isCloud: false,        // the input is a point cloud (drawn as splats, robust only)
   spacing: 0,            // a cloud's mean point spacing (the library's), sizes the splats
+  splatFactor: 0,        // splat radius / spacing (the server's pictures' factor)
   meshLaplacian: null,   // the Laplacian chosen for meshes, restored after a cloud
 };
 window.__app = app;
@@ -151,12 +152,12 @@ const fieldMaterial = new THREE.ShaderMaterial({
 
 // A point cloud: one round splat per point, coloured by the same colour map texture and
 // range (the uniforms are shared with the surface's material), a disc of radius
-// 0.65 x the library's mean point spacing (as the server's pictures), shaded as a small
+// `point_radius_factor` (the server's, as its pictures) x the library's mean point
+// spacing, shaded as a small
 // sphere. The splat is pushed back along the view ray by its radius, so that the level
 // lines and the markers on the surface stay in front of it. Level sets are not drawn in
 // this shader: the page asks the server for the library's level-set segments on the
 // triangle union of the cloud's Laplacian and draws them as lines.
-const POINT_RADIUS_FACTOR = 0.65;
 const splatMaterial = new THREE.ShaderMaterial({
   uniforms: {
     cmap: fieldMaterial.uniforms.cmap, lo: fieldMaterial.uniforms.lo, hi: fieldMaterial.uniforms.hi,
@@ -508,6 +509,7 @@ function applyInputKind(reply) {
   if (cloud && !app.isCloud) app.meshLaplacian = sel.value;
   app.isCloud = cloud;
   app.spacing = cloud ? (reply.point_spacing || 0) : 0;
+  app.splatFactor = cloud ? reply.point_radius_factor : 0;
   const allowed = new Set(reply.laplacians || [...sel.options].map((o) => o.value));
   for (const o of sel.options) o.disabled = !allowed.has(o.value);
   if (cloud) sel.value = 'robust';
@@ -579,7 +581,7 @@ function buildMeshObject() {
     }
     app.normals = nrm;
     if (!(app.spacing > 0)) app.spacing = 2 * radius / Math.sqrt(Math.max(app.n, 1)); // a guess
-    splatMaterial.uniforms.radius.value = POINT_RADIUS_FACTOR * app.spacing;
+    splatMaterial.uniforms.radius.value = app.splatFactor * app.spacing;
     meshObj = new THREE.Points(g, splatMaterial);
   } else {
     g.setIndex(new THREE.BufferAttribute(app.triangles, 1));
@@ -610,7 +612,7 @@ function frameSource(v) {
   const candidates = [base, base.clone().multiplyScalar(-1), base.clone().add(out).normalize(),
     base.clone().add(nrm).normalize(), nrm.clone(), out.clone()];
   const ray = new THREE.Raycaster();
-  ray.params.Points.threshold = POINT_RADIUS_FACTOR * app.spacing;
+  ray.params.Points.threshold = app.splatFactor * app.spacing;
   for (const dir of candidates) {
     if (!(dir.lengthSq() > 0.5)) continue;
     aimCamera(dir);
@@ -894,7 +896,7 @@ function vertexAt(clientX, clientY) {
   if (app.isCloud) {
     // The splat under the cursor: of the points within a splat radius of the ray, the one
     // nearest to the ray among those in the front layer (within two spacings of the first).
-    const rad = POINT_RADIUS_FACTOR * app.spacing;
+    const rad = app.splatFactor * app.spacing;
     raycaster.params.Points.threshold = rad;
     const hits = raycaster.intersectObject(meshObj);
     if (!hits.length) return null;

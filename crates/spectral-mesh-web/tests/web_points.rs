@@ -70,6 +70,12 @@ async fn cloud_matches_the_library(addr: SocketAddr, name: &str, bytes: &[u8], k
     assert_eq!(an.n(), n);
     let spacing = an.point_spacing().unwrap();
     assert_eq!(m["point_spacing"].as_f64().unwrap(), spacing, "{name}");
+    // The page sizes its splats as the pictures do, with the renderer's factor.
+    assert_eq!(
+        m["point_radius_factor"].as_f64().unwrap(),
+        spectral_mesh_render::figure::POINT_RADIUS_FACTOR,
+        "{name}"
+    );
     assert_eq!(
         m["info"]["union_triangles"].as_u64().unwrap() as usize,
         an.mesh().n_triangles()
