@@ -284,7 +284,7 @@ def hand_made_meshes():
 
 
 def arbitrary_mesh_bytes(switches, scale, verts, tris):
-    """Input of `arbitrary_mesh` (fuzz/src/lib.rs): i8 scale exponent, u8 vertex count,
+    """Input of `arbitrary_mesh` (crates/spectral-mesh-fuzz/src/lib.rs): i8 scale exponent, u8 vertex count,
     i8 triples, u8 triples; `validate_repair` reads a switch byte first."""
     b = bytes([switches]) if switches is not None else b""
     b += struct.pack("<bB", scale, len(verts))

@@ -35,13 +35,32 @@ if [ -n "${SPECTRAL_MESH_SHARED_MESHES:-}" ] && [ ! -d "$SPECTRAL_MESH_SHARED_ME
   exit 1
 fi
 
+# Installs that wait on the network rather than the processors run beside the Rust build:
+# the Python peers (scripts/setup-python.sh) and Debian's chromium for the browser tests.
+# Their output goes to target/ci-logs; the steps that need them wait for them.
+mkdir -p target/ci-logs
+bash scripts/setup-python.sh >target/ci-logs/python-path 2>target/ci-logs/setup-python.log &
+setup_python=$!
+bash web/e2e/setup.sh --browser-only >target/ci-logs/setup-browser.log 2>&1 &
+setup_browser=$!
+
 step "cargo fmt --check" cargo fmt --all -- --check
-step "cargo clippy" cargo clippy --workspace --all-targets --quiet -- -D warnings
-step "cargo test" cargo test --workspace --quiet --no-fail-fast
+# One build serves everything: clippy and the tests use the release profile, so the tests,
+# the CLI the conformance scripts run, the browser tests' server and the Python wheel share
+# the same compiled dependencies (and clippy shares their build scripts and macros).
+step "cargo clippy" cargo clippy --release --workspace --all-targets --quiet -- -D warnings
+# Also replays every fuzz seed and regression input through its target's checks
+# (crates/spectral-mesh-fuzz); the fuzzing itself is scripts/fuzz-smoke.sh and
+# fuzz/long-run.sh, run apart (RELIABILITY.md).
+step "cargo test" cargo test --release --workspace --quiet --no-fail-fast
 step "build release CLI" cargo build --release --quiet -p spectral-mesh-cli
 cli="$root/target/release/spectral-mesh"
 
-py="$(bash scripts/setup-python.sh)" || { echo "python peers could not be installed"; exit 1; }
+if ! wait "$setup_python"; then
+  cat target/ci-logs/setup-python.log
+  echo "python peers could not be installed"; exit 1
+fi
+py="$(cat target/ci-logs/python-path)"
 if [ -n "${SPECTRAL_MESH_SHARED_MESHES:-}" ]; then
   meshes=("$SPECTRAL_MESH_SHARED_MESHES"/*.off)
   step "conformance: operators vs libigl" "$py" conformance/operators_libigl.py --cli "$cli" "${meshes[@]}"
@@ -62,14 +81,9 @@ step "python package (build, install, pytest)" env SPECTRAL_MESH_CLI="$cli" bash
 # The web server under a bounded load (about 40 s; the long soak is web/soak.sh).
 step "web server soak (quick)" env SPECTRAL_MESH_CLI="$cli" SOAK_OUT="$root/target/soak-quick.json" bash web/soak.sh --quick
 
-# The web app in headless Chromium (installs Debian's chromium and the npm packages on
-# first use).
+# The web app in headless Chromium (Debian's chromium, installed above beside the build).
+wait "$setup_browser" || { cat target/ci-logs/setup-browser.log; echo "chromium could not be installed (the browser step will say why)"; }
 step "web app end-to-end (headless Chromium)" bash web/e2e/run.sh
-
-# Every fuzz target from its seeds within FUZZ_BUDGET seconds (default 180, the build of
-# the instrumented targets included; a first build on a new machine takes longer), see
-# scripts/fuzz-smoke.sh and RELIABILITY.md ("CI cost").
-step "fuzz smoke (cargo fuzz, every target)" bash scripts/fuzz-smoke.sh
 
 echo
 echo "disk: target folder $(du -sh target 2>/dev/null | cut -f1), $(($(df -Pk . | awk 'NR==2 {print $4}') / 1024)) MiB free"

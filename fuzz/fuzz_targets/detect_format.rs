@@ -1,44 +1,5 @@
-//! Format detection: `io::read_mesh_from_bytes` with a file name chosen by the first byte
-//! (no extension, each extension in several cases, a wrong one, an odd path). Besides the
-//! reader checks: when the mesh is read as another format than the name says, a warning
-//! says so.
+//! libFuzzer entry of `spectral_mesh_fuzz::targets::detect_format` (what it checks is
+//! documented there; `cargo test -p spectral-mesh-fuzz` replays this target's seeds).
 #![no_main]
 
-use libfuzzer_sys::fuzz_target;
-use spectral_mesh::io::MeshFormat;
-
-const NAMES: [&str; 14] = [
-    "",
-    "upload",
-    "mesh.off",
-    "MESH.OFF",
-    "m.obj",
-    "m.Obj",
-    "m.ply",
-    "m.stl",
-    "m.STL",
-    "m.txt",
-    "dir/sub/x.ply",
-    ".off",
-    "a.b.obj",
-    "noext.",
-];
-
-fuzz_target!(|data: &[u8]| {
-    let Some((&b, rest)) = data.split_first() else {
-        return;
-    };
-    let name = NAMES[usize::from(b) % NAMES.len()];
-    let Some(l) = spectral_mesh_fuzz::read_and_check(rest, name) else {
-        return;
-    };
-    let by_name = MeshFormat::from_path(std::path::Path::new(name));
-    if by_name != Some(l.format) {
-        assert!(
-            l.warnings.iter().any(|w| w.contains(&l.format.to_string())),
-            "{name} read as {} without a warning: {:?}",
-            l.format,
-            l.warnings
-        );
-    }
-});
+libfuzzer_sys::fuzz_target!(|data: &[u8]| spectral_mesh_fuzz::targets::detect_format::run(data));

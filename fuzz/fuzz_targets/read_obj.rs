@@ -1,9 +1,5 @@
-//! `io::read_mesh_from_bytes` on raw bytes named `fuzz.obj`: a clean error naming the
-//! file, or a valid mesh that survives a write-then-read round trip.
+//! libFuzzer entry of `spectral_mesh_fuzz::targets::read_obj` (what it checks is
+//! documented there; `cargo test -p spectral-mesh-fuzz` replays this target's seeds).
 #![no_main]
 
-use libfuzzer_sys::fuzz_target;
-
-fuzz_target!(|data: &[u8]| {
-    spectral_mesh_fuzz::read_and_check(data, "fuzz.obj");
-});
+libfuzzer_sys::fuzz_target!(|data: &[u8]| spectral_mesh_fuzz::targets::read_obj::run(data));

@@ -1,9 +1,5 @@
-//! `io::read_mesh_from_bytes` on raw bytes named `fuzz.stl` (the seeds are ASCII STL files;
-//! a binary one is recognised by its size).
+//! libFuzzer entry of `spectral_mesh_fuzz::targets::read_stl_ascii` (what it checks is
+//! documented there; `cargo test -p spectral-mesh-fuzz` replays this target's seeds).
 #![no_main]
 
-use libfuzzer_sys::fuzz_target;
-
-fuzz_target!(|data: &[u8]| {
-    spectral_mesh_fuzz::read_and_check(data, "fuzz.stl");
-});
+libfuzzer_sys::fuzz_target!(|data: &[u8]| spectral_mesh_fuzz::targets::read_stl_ascii::run(data));

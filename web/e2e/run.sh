@@ -18,12 +18,7 @@ set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 cd "$ROOT"
 
-if [ ! -x /usr/bin/chromium ]; then
-  apt-get update -qq && apt-get install -y -qq chromium >/dev/null
-fi
-if [ ! -d web/node_modules/three ] || [ ! -d web/node_modules/playwright-core ]; then
-  (cd web && npm ci --no-audit --no-fund)
-fi
+bash web/e2e/setup.sh
 
 cargo build --release -q -p spectral-mesh-cli
 BIN="${CARGO_TARGET_DIR:-$ROOT/target}/release/spectral-mesh"

@@ -3,14 +3,14 @@
 //! files and summaries record them, `run` replays a cloud experiment with them bit for
 //! bit, and with a mesh they are refused by name.
 //!
-//! The shared clouds come from `SPECTRAL_MESH_SHARED_POINTS` (default
-//! `/work/shared/points`); when that folder is absent the test that needs it says it was
-//! skipped.
+//! The shared clouds come from `spectral_mesh_testkit::shared_points` (beside
+//! `SPECTRAL_MESH_SHARED_MESHES`); unset, the test that needs it says it was skipped (it
+//! fails under CI).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use spectral_mesh::analysis::{Analysis, AnalysisInput, AnalysisOptions};
 use spectral_mesh::io::{Input, read_input};
@@ -19,22 +19,6 @@ use spectral_mesh::spectral::eigenbasis::EigenParams;
 
 mod common;
 use common::*;
-
-/// The shared point clouds' folder, or `None` (and a message) when it is absent.
-fn shared_points() -> Option<PathBuf> {
-    let dir = std::env::var_os("SPECTRAL_MESH_SHARED_POINTS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/work/shared/points"));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "skipped: the shared point clouds ({}) are absent; set SPECTRAL_MESH_SHARED_POINTS",
-            dir.display()
-        );
-        None
-    }
-}
 
 /// The eigenvalues (at least `k`) of the library's analysis of the cloud in `path` with
 /// `params`, as `eigs` computes them (the cloud as given, not scaled).
@@ -60,7 +44,7 @@ fn library_eigenvalues(path: &Path, params: PointCloudParams, k: usize) -> Vec<f
 
 #[test]
 fn eigs_of_a_shared_cloud_uses_the_neighbours_given() {
-    let Some(points) = shared_points() else {
+    let Some(points) = spectral_mesh_testkit::shared_points() else {
         return;
     };
     let cloud = points.join("blobby.xyz");

@@ -4,13 +4,13 @@
 //! to clouds as to meshes; a discretization that needs triangles is refused with a reason.
 //! Also: shape specs are refused above the vertex limit before they are built.
 //!
-//! The real clouds are read from `SPECTRAL_MESH_SHARED_POINTS` (default
-//! `/work/shared/points`); without them that part says it was skipped.
+//! The real clouds are the shared ones (`spectral_mesh_testkit::shared_points`, beside
+//! `SPECTRAL_MESH_SHARED_MESHES`); without them that part says it was skipped (it fails
+//! under CI).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::net::SocketAddr;
-use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use serde_json::json;
@@ -34,12 +34,6 @@ fn sphere_xyz(n: usize) -> Vec<u8> {
         s += &format!("{:.12} {:.12} {:.12}\n", r * th.cos(), y, r * th.sin());
     }
     s.into_bytes()
-}
-
-fn shared_points() -> PathBuf {
-    std::env::var_os("SPECTRAL_MESH_SHARED_POINTS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/work/shared/points"))
 }
 
 /// Uploads `bytes` as `name`, checks the reply says point cloud, asks a basis of `k`
@@ -150,21 +144,11 @@ async fn uploaded_clouds_give_the_librarys_fields() {
     // A generated one: always.
     cloud_matches_the_library(addr, "sphere600.xyz", &sphere_xyz(600), 12).await;
     // Real ones (a text scan with normals, a binary vertex-only PLY).
-    let dir = shared_points();
-    let mut seen = 0;
-    for (file, k) in [("kitten.xyz", 20), ("oni.ply", 20)] {
-        let path = dir.join(file);
-        let Ok(bytes) = std::fs::read(&path) else {
-            continue;
-        };
-        cloud_matches_the_library(addr, file, &bytes, k).await;
-        seen += 1;
-    }
-    if seen == 0 {
-        eprintln!(
-            "skipped the real point clouds: none in {} (set SPECTRAL_MESH_SHARED_POINTS)",
-            dir.display()
-        );
+    if let Some(dir) = spectral_mesh_testkit::shared_points() {
+        for (file, k) in [("kitten.xyz", 20), ("oni.ply", 20)] {
+            let bytes = std::fs::read(dir.join(file)).unwrap();
+            cloud_matches_the_library(addr, file, &bytes, k).await;
+        }
     }
     // A cloud's picture and files: a PNG, a PLY point set, the experiment file.
     let r = upload(addr, "sphere600.xyz", &sphere_xyz(600)).await;

@@ -4,8 +4,6 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::PathBuf;
-
 use spectral_mesh::Mesh;
 use spectral_mesh::experiments::harmonic::{HarmonicExperimentParams, harmonic_experiment};
 use spectral_mesh::fields::critical_points::critical_points;
@@ -51,20 +49,11 @@ fn weights_non_negative(mesh: &Mesh) -> bool {
 
 #[test]
 fn euler_relation_and_maximum_principle_on_closed_shared_meshes() {
-    let Some(dir) = std::env::var_os("SPECTRAL_MESH_SHARED_MESHES") else {
-        eprintln!("skipped: SPECTRAL_MESH_SHARED_MESHES unset");
+    let Some(names) = spectral_mesh_testkit::shared_mesh_files(Some("off")) else {
         return;
     };
-    let dir = PathBuf::from(dir);
-    assert!(dir.is_dir(), "{} is not a folder", dir.display());
     let mut checked = 0;
     let mut negative_weight_meshes = Vec::new();
-    let mut names: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "off"))
-        .collect();
-    names.sort();
     for path in names {
         let Ok(loaded) = read_mesh(&path) else {
             continue;

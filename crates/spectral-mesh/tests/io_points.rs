@@ -169,11 +169,9 @@ fn every_text_error_names_the_file_the_line_and_the_problem() {
 
 #[test]
 fn shared_point_clouds_load_with_their_counts() {
-    let Some(meshes) = std::env::var_os("SPECTRAL_MESH_SHARED_MESHES") else {
-        eprintln!("skipped: SPECTRAL_MESH_SHARED_MESHES unset");
+    let Some(dir) = spectral_mesh_testkit::shared_points() else {
         return;
     };
-    let dir = std::path::PathBuf::from(meshes).join("..").join("points");
     for (f, n, normals) in [
         ("sphere_20k.xyz", 21000, 0),
         ("kitten.xyz", 5210, 5210),

@@ -96,20 +96,11 @@ fn tetra() -> Mesh {
 
 #[test]
 fn shared_off_files_truncated_and_mangled_never_panic() {
-    let Some(dir) = std::env::var_os("SPECTRAL_MESH_SHARED_MESHES") else {
-        println!("skipped: SPECTRAL_MESH_SHARED_MESHES unset");
+    let Some(names) = spectral_mesh_testkit::shared_mesh_files(Some("off")) else {
         return;
     };
-    let dir = std::path::PathBuf::from(dir);
-    assert!(dir.is_dir(), "{} is not a folder", dir.display());
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
     let mut count = 0;
-    let mut names: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "off"))
-        .collect();
-    names.sort();
     for p in names {
         let bytes = std::fs::read(&p).unwrap();
         // The full file must load; a cut just before the end must not.

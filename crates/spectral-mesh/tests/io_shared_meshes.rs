@@ -1,6 +1,6 @@
 //! Every file of the project's shared mesh folder, with the outcome it must have.
 //!
-//! The folder comes from `SPECTRAL_MESH_SHARED_MESHES` (e.g. `/work/shared/meshes`); when
+//! The folder comes from `SPECTRAL_MESH_SHARED_MESHES` (e.g. `../shared/meshes`); when
 //! the variable is unset the tests print a note and pass, when it is set to a missing folder
 //! they fail.
 
@@ -77,21 +77,7 @@ fn table() -> Vec<(&'static str, Expect)> {
 
 /// The folder, or `None` (with a note) when the variable is unset.
 fn folder() -> Option<PathBuf> {
-    match std::env::var_os("SPECTRAL_MESH_SHARED_MESHES") {
-        None => {
-            println!("skipped: SPECTRAL_MESH_SHARED_MESHES unset");
-            None
-        }
-        Some(d) => {
-            let d = PathBuf::from(d);
-            assert!(
-                d.is_dir(),
-                "SPECTRAL_MESH_SHARED_MESHES={} is not a folder",
-                d.display()
-            );
-            Some(d)
-        }
-    }
+    spectral_mesh_testkit::shared_meshes()
 }
 
 /// Every file in the folder except README.md, sorted.

@@ -6,28 +6,14 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::PathBuf;
-
 use spectral_mesh::Mesh;
 use spectral_mesh::io::read_mesh;
 use spectral_mesh::linalg::{SparseCholesky, dense_generalized_eigen};
 use spectral_mesh::operators::{MassKind, cotan_stiffness, mass_matrix, uniform_laplacian};
 
 fn shared_meshes() -> Option<Vec<(String, Mesh)>> {
-    let Some(dir) = std::env::var_os("SPECTRAL_MESH_SHARED_MESHES") else {
-        eprintln!("skipped: SPECTRAL_MESH_SHARED_MESHES unset");
-        return None;
-    };
-    let dir = PathBuf::from(dir);
-    assert!(dir.is_dir(), "{} is not a folder", dir.display());
     let mut out = Vec::new();
-    let mut entries: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e != "md"))
-        .collect();
-    entries.sort();
-    for p in entries {
+    for p in spectral_mesh_testkit::shared_mesh_files(None)? {
         if let Ok(l) = read_mesh(&p) {
             out.push((
                 p.file_name().unwrap().to_string_lossy().into_owned(),

@@ -8,8 +8,6 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::PathBuf;
-
 use spectral_mesh::SparseMatrix;
 use spectral_mesh::mesh::{Mesh, PointCloud};
 use spectral_mesh::operators::{
@@ -463,20 +461,11 @@ fn degenerate_clouds_do_not_break_anything() {
 
 #[test]
 fn every_shared_point_cloud_loads_and_gives_finite_operators() {
-    let Some(meshes) = std::env::var_os("SPECTRAL_MESH_SHARED_MESHES") else {
-        eprintln!("skipped: SPECTRAL_MESH_SHARED_MESHES unset");
+    let Some(dir) = spectral_mesh_testkit::shared_points() else {
         return;
     };
-    let dir = PathBuf::from(meshes).join("..").join("points");
-    assert!(dir.is_dir(), "{} is not a folder", dir.display());
     let mut seen = 0;
-    let mut entries: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e != "md"))
-        .collect();
-    entries.sort();
-    for p in entries {
+    for p in spectral_mesh_testkit::files_in(&dir, None) {
         let input = spectral_mesh::io::read_input(&p).unwrap();
         let spectral_mesh::io::Input::Points(loaded) = input else {
             panic!("{}: read as a mesh", p.display());

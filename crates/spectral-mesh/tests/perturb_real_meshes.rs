@@ -1,51 +1,18 @@
-//! Perturbations of the project's real meshes (`/work/shared/meshes`, or the folder named
-//! by `SPECTRAL_MESH_MESHES`): the re-triangulations keep the topology of imperfect
-//! inputs and every new vertex on the surface. Skipped when the folder is absent.
+//! Perturbations of the shared real meshes (`SPECTRAL_MESH_SHARED_MESHES`, see the
+//! testkit crate): the re-triangulations keep the topology of imperfect inputs and every
+//! new vertex on the surface.
 
 #![allow(clippy::unwrap_used)]
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::mesh::{Mesh, norm, sub};
 use spectral_mesh::perturb::{self, SurfaceMap};
 
-fn meshes_dir() -> Option<PathBuf> {
-    let d = std::env::var_os("SPECTRAL_MESH_MESHES")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/work/shared/meshes"));
-    d.is_dir().then_some(d)
-}
-
-/// Minimal OFF reader for triangle-only files (enough for these tests).
+/// A shared mesh, read by the library's reader.
 fn read_off(path: &std::path::Path) -> Mesh {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut tokens = text
-        .lines()
-        .map(|l| l.split('#').next().unwrap_or(""))
-        .flat_map(str::split_whitespace);
-    assert!(tokens.next().unwrap().ends_with("OFF"));
-    let nv: usize = tokens.next().unwrap().parse().unwrap();
-    let nf: usize = tokens.next().unwrap().parse().unwrap();
-    let _ne = tokens.next();
-    let mut p = Vec::with_capacity(nv);
-    for _ in 0..nv {
-        let x: Vec<f64> = (0..3)
-            .map(|_| tokens.next().unwrap().parse().unwrap())
-            .collect();
-        p.push([x[0], x[1], x[2]]);
-    }
-    let mut f = Vec::with_capacity(nf);
-    for _ in 0..nf {
-        let k: usize = tokens.next().unwrap().parse().unwrap();
-        assert_eq!(k, 3, "triangle meshes only");
-        let t: Vec<usize> = (0..3)
-            .map(|_| tokens.next().unwrap().parse().unwrap())
-            .collect();
-        f.push([t[0], t[1], t[2]]);
-    }
-    Mesh::new(p, f).unwrap()
+    spectral_mesh::io::read_mesh(path).unwrap().mesh
 }
 
 fn signature(t: &Topology) -> (usize, usize, i64, usize, usize, usize) {
@@ -70,8 +37,7 @@ fn max_off_surface(orig: &Mesh, p: &perturb::Perturbed) -> f64 {
 
 #[test]
 fn retriangulations_of_real_meshes_keep_topology_and_surface() {
-    let Some(dir) = meshes_dir() else {
-        eprintln!("meshes folder not found; skipped");
+    let Some(dir) = spectral_mesh_testkit::shared_meshes() else {
         return;
     };
     for name in [
@@ -82,9 +48,7 @@ fn retriangulations_of_real_meshes_keep_topology_and_surface() {
         "knot1.off",
     ] {
         let path = dir.join(name);
-        if !path.is_file() {
-            continue;
-        }
+        assert!(path.is_file(), "{} is missing", path.display());
         let m = read_off(&path);
         let sig = signature(&Topology::new(&m));
         let start = Instant::now();

@@ -4,8 +4,6 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::PathBuf;
-
 use spectral_mesh::fields::segmentation::{SegmentParams, segment};
 use spectral_mesh::io::read_mesh;
 use spectral_mesh::spectral::eigenbasis::{EigenParams, compute_eigenbasis};
@@ -44,12 +42,9 @@ fn segmentation_of_the_three_torus_is_stable() {
 
 #[test]
 fn segmentation_of_shared_meshes_reports_patches() {
-    let Some(dir) = std::env::var_os("SPECTRAL_MESH_SHARED_MESHES") else {
-        eprintln!("skipped: SPECTRAL_MESH_SHARED_MESHES unset");
+    let Some(dir) = spectral_mesh_testkit::shared_meshes() else {
         return;
     };
-    let dir = PathBuf::from(dir);
-    assert!(dir.is_dir(), "{} is not a folder", dir.display());
     for name in ["hand.off", "cow.off", "eight.off"] {
         let mesh = read_mesh(&dir.join(name)).unwrap().mesh;
         let (n, genus) = patches(&mesh);

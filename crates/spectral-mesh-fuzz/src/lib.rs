@@ -1,10 +1,20 @@
-//! Checks shared by the fuzz targets in `fuzz_targets/`.
+//! The checks behind the fuzz targets, one module per target in [`targets`], and the
+//! helpers they share.
 //!
-//! Every target feeds fuzzer bytes to a library entry point and then asserts what the
-//! library promises: a clean `Err` whose message names the input, or a valid result (a
-//! [`Mesh`] that holds its invariants and survives a write-then-read round trip). A panic,
-//! an abort, a hang (libFuzzer's `-timeout`) or an allocation over `-rss_limit_mb` is a
+//! Every target feeds bytes to a library entry point and then asserts what the library
+//! promises: a clean `Err` whose message names the input, or a valid result (a [`Mesh`]
+//! that holds its invariants and survives a write-then-read round trip). A panic, an
+//! abort, a hang (libFuzzer's `-timeout`) or an allocation over `-rss_limit_mb` is a
 //! finding.
+//!
+//! Two callers: libFuzzer (`fuzz/fuzz_targets/NAME.rs`, one line each, built by
+//! `cargo fuzz`), and this crate's tests, which replay every committed seed
+//! (`fuzz/seeds/NAME`) and every regression input (`fuzz/regressions/NAME`) as ordinary
+//! tests of the workspace, so CI checks them without building instrumented binaries.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+pub mod targets;
 
 use arbitrary::{Arbitrary, Unstructured};
 use spectral_mesh::Mesh;

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Installs what the browser tests need: Debian's chromium (apt) and, unless
+# --browser-only, the page's npm packages (three.js, playwright-core) in web/node_modules.
+# Idempotent: does nothing for what is there. scripts/test.sh runs it with --browser-only
+# beside the Rust build (the web crate's build script runs `npm ci` itself); web/e2e/run.sh
+# runs it whole.
+set -euo pipefail
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+cd "$ROOT"
+if [ ! -x /usr/bin/chromium ]; then
+  apt-get update -qq && apt-get install -y -qq chromium >/dev/null
+fi
+if [ "${1:-}" != --browser-only ] \
+   && { [ ! -d web/node_modules/three ] || [ ! -d web/node_modules/playwright-core ]; }; then
+  (cd web && npm ci --no-audit --no-fund)
+fi
