@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Writes the seed corpora of the fuzz targets into fuzz/seeds/TARGET/.
 
-Sources: the small real meshes of /work/shared/meshes (copied as they are, so their own
+Sources: the small real meshes of ../shared/meshes beside the clone (copied as they are, so their own
 formatting, comments and edge counts are kept), pieces of the larger ones (their first
 faces, renumbered, so colours, polygons and large coordinates are represented), the
 same pieces written as OBJ, PLY (ASCII, binary both byte orders) and STL (ASCII and
-binary), the heads of the point clouds in /work/shared/points (read_points, and the
+binary), the heads of the point clouds in ../shared/points (read_points, and the
 PLY ones for read_ply_ascii), the experiment files and request bodies of
 docs/experiment-files.md, the web page's request bodies (web_body), and hand-made edge
 cases. Standard library only.
@@ -479,8 +479,10 @@ def web_body_seeds():
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--meshes", default="/work/shared/meshes")
-    ap.add_argument("--points", default="/work/shared/points")
+    # The shared folder beside the clone (../shared next to the repository's root).
+    shared = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared")
+    ap.add_argument("--meshes", default=os.path.join(shared, "meshes"))
+    ap.add_argument("--points", default=os.path.join(shared, "points"))
     ap.add_argument("--only", choices=["web_body"],
                     help="rewrite the seeds of this target only")
     args = ap.parse_args()

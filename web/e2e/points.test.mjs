@@ -1,7 +1,7 @@
 // End-to-end tests of point clouds in the web app, and of the page naming itself to the
 // server (X-Client-Id), in headless Chromium (run by run.sh, which starts the server and
-// sets SPECTRAL_MESH_URL). The real clouds come from SPECTRAL_MESH_SHARED_POINTS (default
-// /work/shared/points); a generated one is always used.
+// sets SPECTRAL_MESH_URL). The real clouds come from SPECTRAL_MESH_SHARED_POINTS (set by
+// run.sh: the points folder beside the shared meshes); a generated one is always used.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
@@ -10,7 +10,7 @@ import path from 'node:path';
 import { launch } from './common.mjs';
 
 const URL = process.env.SPECTRAL_MESH_URL;
-const POINTS = process.env.SPECTRAL_MESH_SHARED_POINTS || '/work/shared/points';
+const POINTS = process.env.SPECTRAL_MESH_SHARED_POINTS || '';
 
 let browser, page;
 const pageErrors = [];

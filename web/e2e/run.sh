@@ -6,9 +6,9 @@
 # and serves from there), stops the server. About 2-4 minutes on 2 loaded cores after the
 # build (most of it eigenbases: 3torus, a 10k-vertex torus at k = 100).
 #   SPECTRAL_MESH_SHARED_MESHES  folder with sphere966.off (default: ../shared/meshes beside
-#                                the clone, then /work/shared/meshes)
-#   SPECTRAL_MESH_SHARED_POINTS  folder with kitten.xyz (default: ../shared/points beside the
-#                                clone, then /work/shared/points); points.test.mjs skips its
+#                                the clone; under CI it must be set)
+#   SPECTRAL_MESH_SHARED_POINTS  folder with kitten.xyz (default: the points folder beside
+#                                the meshes' folder); points.test.mjs skips its
 #                                real-cloud test without it
 #   SPECTRAL_MESH_WEB_BENCH=1    also run the ~100k-vertex, k = 200 input-to-picture benchmark
 #   SPECTRAL_MESH_SCREENSHOT     where the test saves its screenshot of the app (default:
@@ -24,16 +24,17 @@ cargo build --release -q -p spectral-mesh-cli
 BIN="${CARGO_TARGET_DIR:-$ROOT/target}/release/spectral-mesh"
 export SPECTRAL_MESH_RELEASE_BIN="$BIN"
 
-if [ -z "${SPECTRAL_MESH_SHARED_MESHES:-}" ]; then
-  for d in "$ROOT/../shared/meshes" /work/shared/meshes; do
-    if [ -f "$d/sphere966.off" ]; then SPECTRAL_MESH_SHARED_MESHES="$d"; break; fi
-  done
+if [ -z "${SPECTRAL_MESH_SHARED_MESHES:-}" ] && [ -f "$ROOT/../shared/meshes/sphere966.off" ]; then
+  SPECTRAL_MESH_SHARED_MESHES="$ROOT/../shared/meshes"
+fi
+if [ -z "${SPECTRAL_MESH_SHARED_MESHES:-}" ] && [ "${CI:-}" = true ]; then
+  echo "SPECTRAL_MESH_SHARED_MESHES is not set under CI: the tests on shared meshes would be skipped" >&2
+  exit 1
 fi
 export SPECTRAL_MESH_SHARED_MESHES="${SPECTRAL_MESH_SHARED_MESHES:-}"
-if [ -z "${SPECTRAL_MESH_SHARED_POINTS:-}" ]; then
-  for d in "$ROOT/../shared/points" /work/shared/points; do
-    if [ -f "$d/kitten.xyz" ]; then SPECTRAL_MESH_SHARED_POINTS="$d"; break; fi
-  done
+# The shared point clouds: the points folder beside the meshes' folder.
+if [ -z "${SPECTRAL_MESH_SHARED_POINTS:-}" ] && [ -n "$SPECTRAL_MESH_SHARED_MESHES" ]; then
+  SPECTRAL_MESH_SHARED_POINTS="$(cd "$SPECTRAL_MESH_SHARED_MESHES/.." && pwd)/points"
 fi
 export SPECTRAL_MESH_SHARED_POINTS="${SPECTRAL_MESH_SHARED_POINTS:-}"
 

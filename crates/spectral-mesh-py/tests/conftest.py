@@ -2,7 +2,9 @@
 
 Run by ``bash scripts/test-python.sh`` (which builds and installs the package into the
 conformance venv first). Tests that use the shared real meshes read their folder from
-``SPECTRAL_MESH_SHARED_MESHES``; unset, they are skipped and say so.
+``SPECTRAL_MESH_SHARED_MESHES`` (the shared point clouds are in ``points`` beside it);
+unset, they are skipped and say so, except under CI (``CI`` set), where they fail: a CI
+that forgot the variable must not look green.
 """
 
 from __future__ import annotations
@@ -42,12 +44,43 @@ def pretzel():
     return sm.shape("3torus")
 
 
-def shared_mesh(name: str) -> Path:
+def under_ci() -> bool:
+    """Whether this run is CI's (``CI`` set, and not ``false`` or ``0``)."""
+    return os.environ.get("CI", "") not in ("", "false", "0")
+
+
+def shared_dir() -> Path | None:
+    """The folder of shared meshes; ``None`` when the variable is unset outside CI (the
+    caller skips or uses generated data); a failure under CI or when it is no folder."""
     if not SHARED:
+        if under_ci():
+            pytest.fail("SPECTRAL_MESH_SHARED_MESHES is not set under CI")
+        return None
+    d = Path(SHARED)
+    if not d.is_dir():
+        pytest.fail(f"SPECTRAL_MESH_SHARED_MESHES={SHARED} is not a folder")
+    return d
+
+
+def shared_mesh(name: str) -> Path:
+    d = shared_dir()
+    if d is None:
         pytest.skip("SPECTRAL_MESH_SHARED_MESHES is not set: test on shared meshes skipped")
-    p = Path(SHARED) / name
+    p = d / name
     if not p.exists():
         pytest.fail(f"{p} is missing from SPECTRAL_MESH_SHARED_MESHES")
+    return p
+
+
+def shared_point_cloud(name: str) -> Path | None:
+    """A shared point cloud (``points`` beside the meshes' folder), or ``None`` when the
+    variable is unset outside CI."""
+    d = shared_dir()
+    if d is None:
+        return None
+    p = d.parent / "points" / name
+    if not p.exists():
+        pytest.fail(f"{p} is missing (the points folder beside SPECTRAL_MESH_SHARED_MESHES)")
     return p
 
 

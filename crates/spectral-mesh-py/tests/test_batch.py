@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 import spectral_mesh as sm
+from conftest import shared_dir
 
 SHARED = ["cow.off", "elephant.off", "hand.off", "knot1.off", "homer.off", "cactus.off"]
 BROKEN = {
@@ -26,13 +27,13 @@ BROKEN = {
 PARAMS = dict(k=20, hks="auto:4", wks=3)
 
 
-def make_set(root: Path, shared_dir: str | None, generated: int) -> Path:
+def make_set(root: Path, shared: Path | None, generated: int) -> Path:
     """Shared meshes (when the folder is given), generated ones, and broken files."""
     src = root / "set"
     src.mkdir()
-    if shared_dir:
+    if shared is not None:
         for name in SHARED:
-            shutil.copy(Path(shared_dir) / name, src / name)
+            shutil.copy(shared / name, src / name)
     for i in range(generated):
         V, F = sm.shape(f"torus:res=3,R={1.2 + 0.1 * i},r=0.4")
         sm.write_mesh(src / f"gen{i}.off", V, F)
@@ -70,8 +71,7 @@ def check_rows(records, src: Path, out: Path):
 
 
 def test_local_pool_resumes_and_isolates_a_crash(tmp_path, monkeypatch):
-    shared = os.environ.get("SPECTRAL_MESH_SHARED_MESHES")
-    src = make_set(tmp_path, shared, 3)
+    src = make_set(tmp_path, shared_dir(), 3)
     # A valid mesh whose worker process aborts (the test hook): retried once, then its row.
     V, F = sm.shape("sphere:res=2")
     sm.write_mesh(src / "crash.off", V, F)
@@ -123,8 +123,7 @@ def _kill_one_worker_when_started(client, out: Path, killed: list, deadline: flo
 
 def test_dask_cluster_with_a_killed_worker_gives_the_local_results(tmp_path):
     distributed = pytest.importorskip("distributed")
-    shared = os.environ.get("SPECTRAL_MESH_SHARED_MESHES")
-    src = make_set(tmp_path, shared, 6)
+    src = make_set(tmp_path, shared_dir(), 6)
     local = tmp_path / "local"
     reference = sm.batch(src, local, processes=2, **PARAMS)
     good = check_rows(reference, src, local)

@@ -3,9 +3,9 @@
 field kind on a cloud, and bad input as ``ValueError`` with the library's message.
 
 The command line is ``SPECTRAL_MESH_CLI`` (``scripts/test-python.sh`` builds it), else the
-workspace's ``target/{release,debug}/spectral-mesh``; the shared clouds come from
-``SPECTRAL_MESH_SHARED_POINTS`` (default ``/work/shared/points``). Tests that need one of
-them and do not find it are skipped and say so.
+workspace's ``target/{release,debug}/spectral-mesh``; the shared clouds are the ``points``
+folder beside ``SPECTRAL_MESH_SHARED_MESHES`` (conftest); without it a generated sphere
+stands in (under CI the missing folder fails).
 """
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 import spectral_mesh as sm
+from conftest import shared_point_cloud
 
 ROOT = Path(__file__).resolve().parents[3]
-SHARED_POINTS = Path(os.environ.get("SPECTRAL_MESH_SHARED_POINTS", "/work/shared/points"))
 
 
 def cli() -> str:
@@ -55,8 +55,8 @@ def sphere_points(n: int) -> np.ndarray:
 @pytest.fixture(scope="module")
 def cloud_file(tmp_path_factory) -> Path:
     """A shared real cloud (a smooth closed scan), or a generated sphere when absent."""
-    shared = SHARED_POINTS / "blobby.xyz"
-    if shared.exists():
+    shared = shared_point_cloud("blobby.xyz")
+    if shared is not None:
         return shared
     p = tmp_path_factory.mktemp("cloud") / "sphere.xyz"
     np.savetxt(p, sphere_points(1500), fmt="%.17g")
