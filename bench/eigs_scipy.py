@@ -2,7 +2,7 @@
 """SciPy reference for the eigenbasis benchmark.
 
 Builds the cotangent stiffness S (positive semi-definite) and a mass matrix B from an OFF
-file with NumPy (the formulas of MATH.md), then times scipy.sparse.linalg.eigsh in
+file with NumPy (the formulas of docs/MATH.md), then times scipy.sparse.linalg.eigsh in
 shift-invert mode (SuperLU, or a CHOLMOD factorization through scikit-sparse with
 --cholmod). Prints one `key=value` line like the Rust example `bench_eigs`.
 

@@ -1,4 +1,4 @@
-"""Fields of the analysis object checked against their definitions (MATH.md), basis
+"""Fields of the analysis object checked against their definitions (docs/MATH.md), basis
 files, pictures and the example script."""
 
 from __future__ import annotations

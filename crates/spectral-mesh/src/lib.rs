@@ -5,7 +5,8 @@
 //! Data flows one way: a file or a built-in shape becomes a [`Mesh`]; the mesh gives
 //! operators ([`operators::Operators`]: the stiffness S, positive semi-definite, and a
 //! mass B); operators give an eigenbasis; the basis (or a direct solve) gives fields.
-//! Conventions are those of the project's `MATH.md`.
+//! Conventions are those of the repository's `docs/MATH.md` (every formula with its sign,
+//! scale and implementing file); the layout is in `docs/ARCHITECTURE.md`.
 
 pub mod analysis;
 pub mod batch;

@@ -16,7 +16,7 @@ Point clouds (scans: ``.xyz``, ``.pts``, PLY without faces) go wherever a mesh d
 ``Analysis.from_points(P, n_neighbors=30)`` or ``Analysis.from_file("scan.ply")`` analyse
 them with their point-cloud Laplacian (as robust-laplacian's), with every field above.
 
-Conventions (the project's MATH.md): ``S`` is positive semi-definite (libigl's
+Conventions (the repository's docs/MATH.md): ``S`` is positive semi-definite (libigl's
 ``cotmatrix`` is ``-S``), ``B`` symmetric positive definite, eigenvalues ascending and
 ``>= 0``, eigenvectors B-orthonormal with their largest-magnitude entry positive, filters
 given as weights ``w = 1/phi``. :func:`eigenbasis` and :func:`laplacian` use the mesh as

@@ -243,7 +243,7 @@ impl Mesh {
     }
 
     /// Returns a copy uniformly scaled about the origin so that the total area is 1
-    /// (the unit-area normalisation of `MATH.md`), with the factor applied.
+    /// (the unit-area normalisation of `docs/MATH.md`), with the factor applied.
     pub fn normalized_to_unit_area(&self) -> (Self, f64) {
         let a = self.area();
         let s = if a > 0.0 { 1.0 / a.sqrt() } else { 1.0 };

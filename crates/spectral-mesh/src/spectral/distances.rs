@@ -1,5 +1,5 @@
 //! Filtered spectral distances and the generalized Green kernel (Sect. 5 of the paper;
-//! `MATH.md`, "Filtered spectral distances").
+//! `docs/MATH.md`, "Filtered spectral distances").
 //!
 //! With the weights `w_k = w(lambda_k)` of a [`Filter`] (`w = 1/phi`; zero eigenvalues get
 //! weight 0 and are skipped):

@@ -1,6 +1,6 @@
 //! Spectral filters: the weight `w = 1/phi` applied to the Laplacian eigenvalues.
 //!
-//! Convention (`MATH.md`, "Filtered spectral distances"): a filter is stored and evaluated
+//! Convention (`docs/MATH.md`, "Filters"): a filter is stored and evaluated
 //! as its **weight** `w(s) = 1/phi(s)`, so that
 //!
 //! ```text

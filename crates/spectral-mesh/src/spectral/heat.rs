@@ -1,4 +1,4 @@
-//! The heat kernel on a truncated eigenbasis (Sect. 4 of the paper; `MATH.md`, "Heat
+//! The heat kernel on a truncated eigenbasis (Sect. 4 of the paper; `docs/MATH.md`, "Heat
 //! kernel"), a dense non-truncated reference, a time-stepping reference, and the analytic
 //! kernel of the round sphere.
 //!

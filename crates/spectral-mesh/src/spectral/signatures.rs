@@ -1,5 +1,5 @@
 //! Point signatures from an eigenbasis: heat kernel signature (HKS), wave kernel signature
-//! (WKS) and auto-diffusion function (ADF), with pyFM's conventions (see `PEERS.md`).
+//! (WKS) and auto-diffusion function (ADF), with pyFM's conventions (see `docs/MATH.md`, "Signatures").
 //!
 //! - HKS: `hks_t(p) = sum_k exp(-lambda_k t) x_k(p)^2` over **all** pairs of the basis (the
 //!   zero eigenvalue included, as pyFM does); scaled: divided by the heat trace
