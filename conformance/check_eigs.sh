@@ -9,16 +9,14 @@ meshes="${SPECTRAL_MESH_SHARED_MESHES:-}"
 [ -n "$meshes" ] || { echo "skipped: SPECTRAL_MESH_SHARED_MESHES unset"; exit 0; }
 cargo build --release --quiet -p spectral-mesh --example bench_eigs
 ex="$root/target/release/examples/bench_eigs"
-pass=0; fail=0
-while read -r m k; do
-  for mass in fem voronoi-cot; do
-    if "$py" "$root/conformance/eigs_scipy.py" "$meshes/$m.off" --k "$k" --mass "$mass" --bin "$ex" > /tmp/eigs_conf.$$ 2>&1; then
-      pass=$((pass + 1))
-    else
-      fail=$((fail + 1)); echo "FAIL: $m ($mass)"; cat /tmp/eigs_conf.$$
-    fi
-  done
-done <<'LIST'
+# The 20 cases run two at a time (each is mostly Python start-up and one eigsh), one log
+# per case, printed when it fails.
+logs="$(mktemp -d)"
+trap 'rm -rf "$logs"' EXIT
+cases() {
+  while read -r m k; do
+    for mass in fem voronoi-cot; do echo "$m $k $mass"; done
+  done <<'LIST'
 sphere966 40
 eight 40
 homer 50
@@ -30,6 +28,24 @@ elephant 50
 knot1 50
 holes 50
 LIST
-rm -f /tmp/eigs_conf.$$
+}
+run_case() {
+  local m="$1" k="$2" mass="$3"
+  if "$py" "$root/conformance/eigs_scipy.py" "$meshes/$m.off" --k "$k" --mass "$mass" --bin "$ex" \
+      > "$logs/$m.$mass.log" 2>&1; then
+    touch "$logs/$m.$mass.ok"
+  fi
+}
+export -f run_case
+export py root meshes ex logs
+cases | xargs -P 2 -L 1 bash -c 'run_case "$@"' _
+pass=0; fail=0
+while read -r m _k mass; do
+  if [ -e "$logs/$m.$mass.ok" ]; then
+    pass=$((pass + 1))
+  else
+    fail=$((fail + 1)); echo "FAIL: $m ($mass)"; cat "$logs/$m.$mass.log"
+  fi
+done < <(cases)
 echo "eigenpairs vs SciPy: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

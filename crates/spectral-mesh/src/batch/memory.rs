@@ -31,7 +31,8 @@ mod tests {
             eprintln!("SKIPPED: no /proc/self/status");
             return;
         };
-        let big = vec![1u8; 64 << 20];
+        // black_box: an optimized build would otherwise drop the unused allocation.
+        let big = std::hint::black_box(vec![1u8; 64 << 20]);
         let after = peak_bytes().unwrap();
         assert!(after >= before && after >= 64 << 20, "{before} -> {after}");
         drop(big);
