@@ -1,11 +1,18 @@
-//! Dense helpers of the eigensolver: Gram products `A^T B`, row-split matrix products
-//! and the small symmetric eigenproblems, all with a fixed split of the rows so that the
-//! results do not depend on the number of threads.
+//! Dense linear algebra of the eigensolvers: Gram products `A^T B` and row-split matrix
+//! products (with a fixed split of the rows, so that the results do not depend on the
+//! number of threads), the one dense symmetric eigensolver, and the dense generalized
+//! symmetric eigensolver built on it, for small problems and as a reference:
+//! `S x = lambda B x` through `B = L L^T`, `C = L^-1 S L^-T`, `C y = lambda y`,
+//! `x = L^-T y`.
 
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par};
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
+use faer::{Accum, Mat, MatRef, Par, Side};
 
 use super::types::SparseEigenError;
+use crate::linalg::SparseMatrix;
 
 pub(super) fn view(x: &[f64], n: usize, c: usize) -> MatRef<'_, f64> {
     MatRef::from_column_major_slice(&x[..n * c], n, c)
@@ -91,16 +98,17 @@ pub(super) fn product(v: &[f64], c: MatRef<'_, f64>, n: usize) -> Vec<f64> {
     out
 }
 
-/// The dense symmetric eigen-decomposition of `h` (ascending; lower triangle read).
-/// Sequential: the projected matrices are small and fine-grained parallelism costs more
-/// than it gains on a shared machine.
-pub(super) fn sym_eig(h: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), SparseEigenError> {
+/// The dense symmetric eigen-decomposition of `h` (ascending; lower triangle read), the
+/// one dense symmetric eigensolver of the crate. The projected problems of the
+/// iterations call it sequentially ([`sym_eig`]): they are small and fine-grained
+/// parallelism costs more than it gains on a shared machine; the dense generalized path
+/// ([`dense_generalized_eigen`], `n` up to a few thousand) uses every thread.
+fn sym_evd(h: MatRef<'_, f64>, par: Par) -> Option<(Vec<f64>, Mat<f64>)> {
     use faer::dyn_stack::{MemBuffer, MemStack};
     use faer::linalg::evd;
     let n = h.nrows();
     let mut u = Mat::<f64>::zeros(n, n);
     let mut d = faer::diag::Diag::<f64>::zeros(n);
-    let par = Par::Seq;
     let mut mem = MemBuffer::new(evd::self_adjoint_evd_scratch::<f64>(
         n,
         evd::ComputeEigenvectors::Yes,
@@ -115,10 +123,85 @@ pub(super) fn sym_eig(h: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), Sparse
         MemStack::new(&mut mem),
         Default::default(),
     )
-    .map_err(|_| SparseEigenError::NonFinite)?;
+    .ok()?;
     let vals: Vec<f64> = (0..n).map(|i| d[i]).collect();
     if vals.iter().any(|v| !v.is_finite()) {
-        return Err(SparseEigenError::NonFinite);
+        return None;
     }
-    Ok((vals, u))
+    Some((vals, u))
+}
+
+/// [`sym_evd`] sequentially, for the small projected problems of the iterations.
+pub(super) fn sym_eig(h: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), SparseEigenError> {
+    sym_evd(h, Par::Seq).ok_or(SparseEigenError::NonFinite)
+}
+
+/// Errors of the dense path.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum DenseEigenError {
+    /// B is not positive definite.
+    #[error("the mass matrix is not positive definite (is some vertex unreferenced?)")]
+    MassNotPositiveDefinite,
+    /// The eigen-decomposition did not converge.
+    #[error("the dense eigen-decomposition did not converge")]
+    NoConvergence,
+}
+
+fn to_dense(a: &SparseMatrix, scale: f64) -> Mat<f64> {
+    let mut m = Mat::<f64>::zeros(a.nrows(), a.ncols());
+    for c in 0..a.ncols() {
+        let (rows, vals) = a.col(c);
+        for (&r, &v) in rows.iter().zip(vals) {
+            m[(r, c)] = v / scale;
+        }
+    }
+    m
+}
+
+/// All `n` generalized eigenpairs of (S, B), eigenvalues ascending, eigenvectors
+/// B-orthonormal, returned as (values, column-major `n x n` vectors). O(n^3): for
+/// `n` up to a few thousand.
+pub fn dense_generalized_eigen(
+    s: &SparseMatrix,
+    b: &SparseMatrix,
+) -> Result<(Vec<f64>, Vec<f64>), DenseEigenError> {
+    let n = s.nrows();
+    // Work on unit-scaled copies: faer's dense eigensolver is not invariant to the
+    // overall scale of its input (entries near 1e-12 or 1e20 lose all accuracy), and a
+    // mesh scaled by alpha scales B by alpha^2. The eigenvalues are scaled back below.
+    let s_scale = s.max_abs().max(f64::MIN_POSITIVE);
+    let b_scale = b.max_abs().max(f64::MIN_POSITIVE);
+    let sd = to_dense(s, s_scale);
+    let bd = to_dense(b, b_scale);
+    let llt = bd
+        .llt(Side::Lower)
+        .map_err(|_| DenseEigenError::MassNotPositiveDefinite)?;
+    let l = llt.L().to_owned();
+    // C = L^-1 S L^-T: solve L Y = S, then L Z = Y^T (C symmetric).
+    let mut y = sd;
+    solve_lower_triangular_in_place(l.as_ref(), y.as_mut(), Par::rayon(0));
+    let mut c = y.transpose().to_owned();
+    solve_lower_triangular_in_place(l.as_ref(), c.as_mut(), Par::rayon(0));
+    // Symmetrize exactly.
+    for j in 0..n {
+        for i in 0..j {
+            let v = 0.5 * (c[(i, j)] + c[(j, i)]);
+            c[(i, j)] = v;
+            c[(j, i)] = v;
+        }
+    }
+    let (evals, mut x) =
+        sym_evd(c.as_ref(), Par::rayon(0)).ok_or(DenseEigenError::NoConvergence)?;
+    let ratio = s_scale / b_scale;
+    let values: Vec<f64> = evals.iter().map(|v| v * ratio).collect();
+    solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::rayon(0));
+    let mut out = vec![0.0; n * n];
+    // x is orthonormal in the scaled B: rescale to X^T B X = I.
+    let xs = 1.0 / b_scale.sqrt();
+    for j in 0..n {
+        for i in 0..n {
+            out[j * n + i] = x[(i, j)] * xs;
+        }
+    }
+    Ok((values, out))
 }

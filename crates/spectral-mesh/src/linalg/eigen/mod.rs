@@ -21,7 +21,8 @@
 //! Each file depends only on the ones above it in this list (no cycle):
 //!
 //! - `types.rs`: options, the choice of iteration, progress reports, errors;
-//! - `dense.rs`: Gram products, row-split matrix products, small symmetric eigenproblems;
+//! - `dense.rs`: Gram products, row-split matrix products, the dense symmetric
+//!   eigensolver and the dense generalized one ([`dense_generalized_eigen`]);
 //! - `kernels.rs`: the symmetric sparse product, norms, residuals, the orthogonality check
 //!   (its row buffer lives in `linalg/scratch.rs`);
 //! - `result.rs`: [`PartialEigen`] and its packaging;
@@ -45,6 +46,7 @@ mod shift_invert;
 mod types;
 
 pub use deflation::{ComponentNullSpace, connected_components};
+pub use dense::{DenseEigenError, dense_generalized_eigen};
 pub use kernels::{b_orthogonality_error, norm1, relative_residuals, sym_spmm, sym_spmm_into};
 pub use result::PartialEigen;
 pub use shift_invert::{ShiftInvert, default_shift};
