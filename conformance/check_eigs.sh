@@ -7,7 +7,8 @@ py="$2"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 meshes="${SPECTRAL_MESH_SHARED_MESHES:-}"
 [ -n "$meshes" ] || { echo "skipped: SPECTRAL_MESH_SHARED_MESHES unset"; exit 0; }
-cargo build --release --quiet -p spectral-mesh --example bench_eigs
+# --workspace: the features of `cargo test --release --workspace`, whose build this reuses.
+cargo build --release --quiet --workspace --example bench_eigs
 ex="$root/target/release/examples/bench_eigs"
 # The 20 cases run two at a time (each is mostly Python start-up and one eigsh), one log
 # per case, printed when it fails.

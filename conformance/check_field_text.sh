@@ -4,5 +4,5 @@
 # subnormals, -0.0 and a spread of bit patterns). Arguments: CLI PYTHON.
 set -euo pipefail
 py="$2"
-SPECTRAL_MESH_PYTHON="$py" cargo test --quiet --workspace --test io_roundtrip_props \
+SPECTRAL_MESH_PYTHON="$py" cargo test --release --quiet --workspace --test io_roundtrip_props \
   field_text_reads_back_in_numpy -- --nocapture

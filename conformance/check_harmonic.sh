@@ -7,7 +7,8 @@ py="$2"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 meshes="${SPECTRAL_MESH_SHARED_MESHES:-}"
 [ -n "$meshes" ] || { echo "skipped: SPECTRAL_MESH_SHARED_MESHES unset"; exit 0; }
-cargo build --release --quiet -p spectral-mesh --example harmonic_field
+# --workspace: the features of `cargo test --release --workspace`, whose build this reuses.
+cargo build --release --quiet --workspace --example harmonic_field
 ex="$root/target/release/examples/harmonic_field"
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 pass=0; fail=0

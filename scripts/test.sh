@@ -53,8 +53,10 @@ step "cargo clippy" cargo clippy --release --workspace --all-targets --quiet -- 
 # (crates/spectral-mesh-fuzz); the fuzzing itself is scripts/fuzz-smoke.sh and
 # fuzz/long-run.sh, run apart (RELIABILITY.md).
 step "cargo test" cargo test --release --workspace --quiet --no-fail-fast
-step "build release CLI" cargo build --release --quiet -p spectral-mesh-cli
+# The CLI the tests ran (their build made it, with the workspace's features: a separate
+# `cargo build -p spectral-mesh-cli` would resolve them otherwise and rebuild the library).
 cli="$root/target/release/spectral-mesh"
+step "release CLI from the test build" test -x "$cli"
 
 if ! wait "$setup_python"; then
   cat target/ci-logs/setup-python.log
@@ -83,7 +85,7 @@ step "web server soak (quick)" env SPECTRAL_MESH_CLI="$cli" SOAK_OUT="$root/targ
 
 # The web app in headless Chromium (Debian's chromium, installed above beside the build).
 wait "$setup_browser" || { cat target/ci-logs/setup-browser.log; echo "chromium could not be installed (the browser step will say why)"; }
-step "web app end-to-end (headless Chromium)" bash web/e2e/run.sh
+step "web app end-to-end (headless Chromium)" env SPECTRAL_MESH_CLI="$cli" bash web/e2e/run.sh
 
 echo
 echo "disk: target folder $(du -sh target 2>/dev/null | cut -f1), $(($(df -Pk . | awk 'NR==2 {print $4}') / 1024)) MiB free"

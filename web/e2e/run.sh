@@ -20,8 +20,13 @@ cd "$ROOT"
 
 bash web/e2e/setup.sh
 
-cargo build --release -q -p spectral-mesh-cli
-BIN="${CARGO_TARGET_DIR:-$ROOT/target}/release/spectral-mesh"
+# The release CLI: SPECTRAL_MESH_CLI when given (scripts/test.sh gives the one its test build
+# made), else built here.
+BIN=${SPECTRAL_MESH_CLI:-}
+if [ -z "$BIN" ]; then
+  cargo build --release -q -p spectral-mesh-cli
+  BIN="${CARGO_TARGET_DIR:-$ROOT/target}/release/spectral-mesh"
+fi
 export SPECTRAL_MESH_RELEASE_BIN="$BIN"
 
 if [ -z "${SPECTRAL_MESH_SHARED_MESHES:-}" ] && [ -f "$ROOT/../shared/meshes/sphere966.off" ]; then
