@@ -170,7 +170,7 @@ fn a_cloud_experiment_with_its_parameters_replays_bit_for_bit() {
     assert!(text.contains("[point_cloud]"), "{text}");
     assert!(text.contains("neighbors = 6"), "{text}");
     assert!(text.contains("normals = \"estimate\""), "{text}");
-    ok_in(p, &["run", "diffusion.toml", "-o", "replay"]);
+    ok_in_with(p, "run diffusion.toml -o replay", &[]);
     same_bytes(
         &p.join("first/diffusion-basis.txt"),
         &p.join("replay/diffusion-basis.txt"),
@@ -220,7 +220,7 @@ fn a_cloud_experiment_with_its_parameters_replays_bit_for_bit() {
     ];
     args.extend(cloud_opts);
     ok_in(p, &args);
-    ok_in(p, &["run", "heat.toml", "-o", "heat-replay"]);
+    ok_in_with(p, "run heat.toml -o heat-replay", &[]);
     same_bytes(&p.join("heat.txt"), &p.join("heat-replay/heat.txt"));
     // The same field as the experiment (both the heat basis function at the same anchor).
     same_bytes(&p.join("heat.txt"), &p.join("first/diffusion-basis.txt"));
@@ -237,7 +237,7 @@ fn a_cloud_experiment_with_its_parameters_replays_bit_for_bit() {
     ];
     args.extend(cloud_opts);
     ok_in(p, &args);
-    ok_in(p, &["run", "harm.toml", "-o", "harm-replay"]);
+    ok_in_with(p, "run harm.toml -o harm-replay", &[]);
     same_bytes(
         &p.join("harm/harmonic-field-1.txt"),
         &p.join("harm-replay/harmonic-field-1.txt"),
@@ -252,7 +252,7 @@ fn a_cloud_experiment_with_its_parameters_replays_bit_for_bit() {
 fn point_cloud_options_with_a_mesh_are_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();
-    let e = err_in(p, &["eigs", "sphere:res=2", "-k", "5", "--neighbors", "8"]);
+    let e = err_in_with(p, "eigs sphere:res=2 -k 5 --neighbors 8", &[]);
     assert!(
         e.contains("--neighbors applies only to point clouds")
             && e.contains("sphere:res=2 is a mesh"),
@@ -311,16 +311,16 @@ fn point_cloud_options_with_a_mesh_are_refused_by_name() {
         "experiment = \"diffusion-basis\"\nmesh = \"sphere:res=1\"\nk = 10\n[point_cloud]\nneighbors = 8\n",
     )
     .unwrap();
-    let e = err_in(p, &["run", "m.toml", "-o", "m"]);
+    let e = err_in_with(p, "run m.toml -o m", &[]);
     assert!(e.contains("key 'point_cloud'"), "{e}");
     // Out of range, on a cloud.
     write_sphere_points(&p.join("ball.xyz"), 200);
-    let e = err_in(p, &["eigs", "ball.xyz", "-k", "5", "--neighbors", "1"]);
+    let e = err_in_with(p, "eigs ball.xyz -k 5 --neighbors 1", &[]);
     assert!(e.contains("--neighbors") && e.contains("at least 2"), "{e}");
-    let e = err_in(p, &["eigs", "ball.xyz", "-k", "5", "--mollify-factor=-1"]);
+    let e = err_in_with(p, "eigs ball.xyz -k 5 --mollify-factor=-1", &[]);
     assert!(e.contains("--mollify-factor") && e.contains(">= 0"), "{e}");
     // The help shows the library's defaults.
-    let help = ok_in(p, &["heat", "--help"]);
+    let help = ok_in_with(p, "heat --help", &[]);
     let d = PointCloudParams::default();
     for want in [
         format!("[default: {}]", d.neighbors),
@@ -346,7 +346,7 @@ fn batch_gives_the_options_to_its_clouds() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();
     write_sphere_points(&p.join("ball.xyz"), 600);
-    ok_in(p, &["batch", "ball.xyz", "-o", "defaults", "-k", "8"]);
+    ok_in_with(p, "batch ball.xyz -o defaults -k 8", &[]);
     ok_in(
         p,
         &[
@@ -366,6 +366,6 @@ fn batch_gives_the_options_to_its_clouds() {
         params_hash(&p.join("defaults")),
         params_hash(&p.join("n12"))
     );
-    let e = err_in(p, &["batch", "ball.xyz", "-o", "bad", "--neighbors", "1"]);
+    let e = err_in_with(p, "batch ball.xyz -o bad --neighbors 1", &[]);
     assert!(e.contains("--neighbors") && e.contains("at least 2"), "{e}");
 }

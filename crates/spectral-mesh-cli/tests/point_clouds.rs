@@ -194,8 +194,7 @@ fn a_point_cloud_field_picture_has_coloured_discs_where_the_points_are() {
 
 #[test]
 fn what_does_not_apply_to_a_point_cloud_says_so_by_name() {
-    let dir = tempfile::tempdir().unwrap();
-    let xyz = dir.path().join("ball.xyz");
+    let (dir, [xyz]) = temp_paths(["ball.xyz"]);
     write_xyz(&xyz, &sphere(200, 1.0, [0.0; 3]));
     let f = xyz.to_str().unwrap();
     let e = err(&["eigs", f, "-k", "5", "--laplacian", "fem"]);
@@ -211,7 +210,7 @@ fn what_does_not_apply_to_a_point_cloud_says_so_by_name() {
         "{e}"
     );
     // The help lists robust and says what applies to point clouds.
-    let help = ok(&["distance", "--help"]);
+    let help = ok_with("distance --help", &[]);
     assert!(
         help.contains("robust") && help.to_lowercase().contains("point cloud"),
         "{help}"
