@@ -33,8 +33,9 @@ import scipy.sparse as sp
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
 from eigs_scipy import read_off  # noqa: E402
 
-TOL = 1e-12
+from common import verdict  # noqa: E402
 
+TOL = 1e-12
 
 
 def _cmp(ours, theirs, res, name):
@@ -121,11 +122,7 @@ def main():
             elif r["status"] == "FAIL":
                 compared += 1
                 failures += 1
-    print(f"operators vs libigl: {compared - failures} passed, {failures} failed")
-    if compared < args.min_meshes:
-        print(f"only {compared} meshes compared, need at least {args.min_meshes}")
-        return 1
-    return 1 if failures else 0
+    return verdict("operators vs libigl", compared, failures, args.min_meshes, "meshes")
 
 
 if __name__ == "__main__":
