@@ -20,13 +20,8 @@ fn sphere(n: usize, r: f64, c: [f64; 3]) -> Vec<[f64; 3]> {
     (0..n)
         .map(|i| {
             let y = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let s = (1.0 - y * y).sqrt();
-            let th = golden * i as f64;
-            [
-                c[0] + r * s * th.cos(),
-                c[1] + r * y,
-                c[2] + r * s * th.sin(),
-            ]
+            let (rs, th) = (r * (1.0 - y * y).sqrt(), golden * i as f64); // ring radius, angle
+            [c[0] + rs * th.cos(), c[1] + r * y, c[2] + rs * th.sin()]
         })
         .collect()
 }

@@ -132,19 +132,10 @@ fn a_changed_mesh_is_refused_naming_both_hashes() {
     let p = d.path();
     let mesh = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
     std::fs::write(p.join("tet.off"), mesh).unwrap();
-    ok_in(
+    ok_in_with(
         p,
-        &[
-            "experiment",
-            "harmonic",
-            "tet.off",
-            "--size",
-            "32",
-            "-o",
-            "a",
-            "--save-experiment",
-            "e/tet.toml",
-        ],
+        "experiment harmonic tet.off --size 32 -o a --save-experiment e/tet.toml",
+        &[],
     );
     let text = std::fs::read_to_string(p.join("e/tet.toml")).unwrap();
     assert!(text.contains("mesh = \"../tet.off\""), "{text}");
@@ -237,19 +228,10 @@ fn csv_rows(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
 fn truncation_study_writes_falling_curves() {
     let d = tempfile::tempdir().unwrap();
     let p = d.path();
-    ok_in(
+    ok_in_with(
         p,
-        &[
-            "study",
-            "truncation",
-            "torus:res=1",
-            "--t",
-            "0.01,0.1",
-            "-k",
-            "5,50,all",
-            "-o",
-            "t",
-        ],
+        "study truncation torus:res=1 --t 0.01,0.1 -k 5,50,all -o t",
+        &[],
     );
     let (h, rows) = csv_rows(&p.join("t/truncation.csv"));
     assert_eq!(
