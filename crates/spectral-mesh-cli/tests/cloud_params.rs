@@ -249,11 +249,11 @@ fn point_cloud_options_with_a_mesh_are_refused_by_name() {
     );
     assert!(e.contains("--mollify-factor applies only"), "{e}");
     // A replay of a file with [point_cloud] on a mesh.
-    std::fs::write(
-        p.join("m.toml"),
+    write_in(
+        p,
+        "m.toml",
         "experiment = \"diffusion-basis\"\nmesh = \"sphere:res=1\"\nk = 10\n[point_cloud]\nneighbors = 8\n",
-    )
-    .unwrap();
+    );
     let e = err_in_with(p, "run m.toml -o m", &[]);
     assert!(e.contains("key 'point_cloud'"), "{e}");
     // Out of range, on a cloud.

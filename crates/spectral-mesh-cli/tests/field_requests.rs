@@ -55,7 +55,7 @@ fn every_request_kind_written_by_the_cli_equals_the_librarys_field() {
     // A signal for the diffusion: the height, as a field file.
     let signal: Vec<f64> = mesh.positions().iter().map(|q| q[2]).collect();
     let text: String = signal.iter().map(|v| format!("{v:?}\n")).collect();
-    std::fs::write(p.join("signal.txt"), text).unwrap();
+    write_in(p, "signal.txt", text);
     let signal_json = serde_json::to_string(&signal).unwrap();
 
     for (name, kind) in [
@@ -127,7 +127,7 @@ fn save_experiment_on_each_field_command_replays_to_the_same_bytes() {
     let field: String = (0..162)
         .map(|i| format!("{}\n", (i as f64 * 0.37).sin()))
         .collect();
-    std::fs::write(p.join("f.txt"), field).unwrap();
+    write_in(p, "f.txt", field);
     // (command line without outputs, the kind the replay writes)
     #[rustfmt::skip]
     let cases: Vec<(&str, &str)> = vec![
@@ -211,7 +211,7 @@ fn run_of_a_saved_field_file_reproduces_it_and_honours_basis_k() {
     let p = d.path();
     // 40 pairs computed, the first 20 used: the field of the first 20 of 40 pairs.
     let file = "experiment = \"field\"\nmesh = \"sphere:res=2\"\nbasis_k = 40\n\n[figure]\nsize = 48\n\n[field]\nkind = \"distance\"\ndistance = \"commute\"\nk = 20\n";
-    std::fs::write(p.join("e.toml"), file).unwrap();
+    write_in(p, "e.toml", file);
     ok_in_with(p, "run e.toml -o a", &[]);
     ok_in_with(p, "run e.toml -o b", &[]);
     for name in [

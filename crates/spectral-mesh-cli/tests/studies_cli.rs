@@ -131,7 +131,7 @@ fn a_changed_mesh_is_refused_naming_both_hashes() {
     let d = tempfile::tempdir().unwrap();
     let p = d.path();
     let mesh = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
-    std::fs::write(p.join("tet.off"), mesh).unwrap();
+    write_in(p, "tet.off", mesh);
     ok_in_with(
         p,
         "experiment harmonic tet.off --size 32 -o a --save-experiment e/tet.toml",
@@ -191,7 +191,7 @@ fn bad_experiment_files_name_the_key() {
             "anchor",
         ),
     ] {
-        std::fs::write(p.join("x.toml"), text).unwrap();
+        write_in(p, "x.toml", text);
         let e = err_in_with(p, "run x.toml -o o", &[]);
         assert!(e.contains(key), "{text:?}: {e}");
     }
@@ -307,18 +307,18 @@ quantities = ["heat"]
     }
     assert!(p.join("r/noise-heat.png").exists());
     // Errors name the key.
-    std::fs::write(
-        p.join("bad.toml"),
+    write_in(
+        p,
+        "bad.toml",
         "[[table]]\nname = \"x\"\nmeshes = [\"sphere:res=1\"]\nperturbations = [\"noise:abc\"]\n",
-    )
-    .unwrap();
+    );
     let e = err_in_with(p, "study robustness bad.toml -o b", &[]);
     assert!(e.contains("table[0].perturbations[0]"), "{e}");
-    std::fs::write(
-        p.join("bad.toml"),
+    write_in(
+        p,
+        "bad.toml",
         "[[table]]\nname = \"x\"\nmeshes = [\"${SPECTRAL_MESH_NO_SUCH_VAR}/m.off\"]\nperturbations = [\"noise:0.1\"]\n",
-    )
-    .unwrap();
+    );
     let e = err_in_with(p, "study robustness bad.toml -o b", &[]);
     assert!(
         e.contains("table[0].meshes[0]") && e.contains("SPECTRAL_MESH_NO_SUCH_VAR"),

@@ -44,17 +44,17 @@ fn off_truncated_and_wrong_counts() {
     #[rustfmt::skip]
     let cases = [
         // Truncated inside the vertices.
-        ("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1".into(), "t.off", "t.off:5: ", "ends inside vertex 2 of 4"),
+        ("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1".into(), "t.off:5: ", "ends inside vertex 2 of 4"),
         // Header promises more faces than there are.
-        (format!("{TETRA_HEAD}3 0 2 1\n3 0 1 3\n"), "t.off", "t.off:9: ", "after 2 of 4 faces"),
+        (format!("{TETRA_HEAD}3 0 2 1\n3 0 1 3\n"), "t.off:9: ", "after 2 of 4 faces"),
         // Truncated inside a face.
-        (format!("{TETRA_HEAD}3 0 2 1\n3 0 1"), "t.off", "t.off:8: ", "inside face 1"),
+        (format!("{TETRA_HEAD}3 0 2 1\n3 0 1"), "t.off:8: ", "inside face 1"),
         // Header promises more vertices: the faces get read as coordinates and run out.
-        ("OFF\n5 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n".into(), "t.off", "t.off:7: ",
+        ("OFF\n5 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n".into(), "t.off:7: ",
          "ends inside vertex 4 of 5"),
         // Counts that are not numbers.
-        ("OFF\nfour 4 0\n".into(), "t.off", "t.off:2: ", "vertex count 'four'"),
-        ("OFF\n".into(), "t.off", "t.off:", "before the vertex count"),
+        ("OFF\nfour 4 0\n".into(), "t.off:2: ", "vertex count 'four'"),
+        ("OFF\n".into(), "t.off:", "before the vertex count"),
     ];
     check_all::<String>(err, &cases);
 }
@@ -62,12 +62,12 @@ fn off_truncated_and_wrong_counts() {
 #[test]
 fn off_non_finite_and_non_numeric_coordinates() {
     #[rustfmt::skip]
-    let cases: &[(&[u8], &str, &str, &str)] = &[
-        (b"OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", "n.off",
+    let cases: &[(&[u8], &str, &str)] = &[
+        (b"OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n",
          "n.off:4: ", "vertex 1 has a non-finite coordinate (y = NaN)"),
-        (b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 inf\n3 0 1 2\n", "n.off",
+        (b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 inf\n3 0 1 2\n",
          "n.off:5: ", "non-finite coordinate (z = inf)"),
-        (b"OFF\n3 1 0\n0 0 0\n1 0 x0\n0 1 0\n3 0 1 2\n", "n.off",
+        (b"OFF\n3 1 0\n0 0 0\n1 0 x0\n0 1 0\n3 0 1 2\n",
          "n.off:4: ", "coordinate z 'x0' is not a number"),
     ];
     check_all(err, cases);
@@ -77,9 +77,9 @@ fn off_non_finite_and_non_numeric_coordinates() {
 fn off_small_faces_and_repeated_vertices() {
     #[rustfmt::skip]
     let cases = [
-        (format!("{TETRA_HEAD}2 0 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n"), "f.off", "f.off:7: ",
+        (format!("{TETRA_HEAD}2 0 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n"), "f.off:7: ",
          "face 0 has 2 vertices; a face needs at least 3"),
-        (format!("{TETRA_HEAD}3 0 2 1\n3 0 1 3\n4 1 2 3 1\n3 0 3 2\n"), "f.off", "f.off:9: ",
+        (format!("{TETRA_HEAD}3 0 2 1\n3 0 1 3\n4 1 2 3 1\n3 0 3 2\n"), "f.off:9: ",
          "face 2 uses vertex 1 more than once"),
     ];
     check_all::<String>(err, &cases);
@@ -88,12 +88,12 @@ fn off_small_faces_and_repeated_vertices() {
 #[test]
 fn empty_meshes_and_empty_files() {
     #[rustfmt::skip]
-    let cases: &[(&[u8], &str, &str, &str)] = &[
-        (b"OFF\n0 0 0\n", "e.off", "e.off: ", "empty"),
-        (b"OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "e.off", "e.off: ", "no faces"),
-        (b"", "e.off", "e.off: ", "empty"),
-        (b"# only a comment\n", "e.off", "e.off: ", "no content"),
-        (b"v 0 0 0\n", "e.obj", "e.obj: ", "no faces"),
+    let cases: &[(&[u8], &str, &str)] = &[
+        (b"OFF\n0 0 0\n", "e.off: ", "empty"),
+        (b"OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "e.off: ", "no faces"),
+        (b"", "e.off: ", "empty"),
+        (b"# only a comment\n", "e.off: ", "no content"),
+        (b"v 0 0 0\n", "e.obj: ", "no faces"),
     ];
     check_all(err, cases);
 }
@@ -120,17 +120,17 @@ fn obj_errors_name_lines_and_one_based_indices() {
     let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
     #[rustfmt::skip]
     let cases = [
-        (format!("{head}f 1 2 4\n"), "m.obj", "m.obj:4: ",
+        (format!("{head}f 1 2 4\n"), "m.obj:4: ",
          "face 0 refers to vertex 4 but the file has 3 vertices"),
-        (format!("{head}f 1 2 0\n"), "m.obj", "m.obj:4: ", "OBJ indices start at 1"),
-        (format!("{head}\nf -1 -2 -4\n"), "m.obj", "m.obj:5: ",
+        (format!("{head}f 1 2 0\n"), "m.obj:4: ", "OBJ indices start at 1"),
+        (format!("{head}\nf -1 -2 -4\n"), "m.obj:5: ",
          "refers to vertex -4 (relative) but only 3 vertices"),
-        (format!("{head}f 1 2\n"), "m.obj", "m.obj:4: ", "face 0 has 2 vertices"),
-        (format!("{head}f 1 2 2\n"), "m.obj", "m.obj:4: ", "uses vertex 2 more than once"),
-        ("v 0 0\nf 1 2 3\n".into(), "m.obj", "m.obj:1: ", "vertex 1 has 2 coordinates"),
-        ("v 0 0 0\nv 0 -inf 0\nv 0 1 0\nf 1 2 3\n".into(), "m.obj",
+        (format!("{head}f 1 2\n"), "m.obj:4: ", "face 0 has 2 vertices"),
+        (format!("{head}f 1 2 2\n"), "m.obj:4: ", "uses vertex 2 more than once"),
+        ("v 0 0\nf 1 2 3\n".into(), "m.obj:1: ", "vertex 1 has 2 coordinates"),
+        ("v 0 0 0\nv 0 -inf 0\nv 0 1 0\nf 1 2 3\n".into(),
          "m.obj:2: ", "vertex 2 has a non-finite coordinate (y = -inf)"),
-        (format!("{head}f 1/x 2 3\n"), "m.obj", "m.obj:4: ", "not of the form"),
+        (format!("{head}f 1/x 2 3\n"), "m.obj:4: ", "not of the form"),
     ];
     check_all::<String>(err, &cases);
 }

@@ -108,16 +108,16 @@ fn ply_without_faces_is_a_point_cloud_and_with_faces_a_mesh() {
 #[test]
 fn every_text_error_names_the_file_the_line_and_the_problem() {
     #[rustfmt::skip]
-    let cases: &[(&[u8], &str, &str, &str)] = &[
-        (b"0 0 0\n1 2\n", "a.xyz", "a.xyz:2: ", "2 values on this line, but line 1 has 3"),
-        (b"# c\n1 2 3 4\n", "a.xyz", "a.xyz:2: ", "expected 3 (x y z) or 6"),
-        (b"0 0 0\n1 zz 3\n", "a.xyz", "a.xyz:2: ", "y = \"zz\" is not a number"),
-        (b"0 0 0\n1 nan 3\n", "a.xyz", "a.xyz:2: ", "non-finite coordinate (y = nan)"),
-        (b"0 0 0 0 inf 0\n", "a.xyz", "a.xyz:1: ", "non-finite normal component (ny = inf)"),
-        (b"3\n0 0 0\n1 1 1\n", "a.pts", "a.pts:1: ", "says 3 points but the file has 2"),
-        (b"0 0 0\n\xff\xfe 1 1\n", "a.xyz", "a.xyz:2: ", "not text"),
-        (b"# only comments\n\n", "a.xyz", "a.xyz: ", "no points"),
-        (b"", "a.xyz", "a.xyz: ", "empty"),
+    let cases: &[(&[u8], &str, &str)] = &[
+        (b"0 0 0\n1 2\n", "a.xyz:2: ", "2 values on this line, but line 1 has 3"),
+        (b"# c\n1 2 3 4\n", "a.xyz:2: ", "expected 3 (x y z) or 6"),
+        (b"0 0 0\n1 zz 3\n", "a.xyz:2: ", "y = \"zz\" is not a number"),
+        (b"0 0 0\n1 nan 3\n", "a.xyz:2: ", "non-finite coordinate (y = nan)"),
+        (b"0 0 0 0 inf 0\n", "a.xyz:1: ", "non-finite normal component (ny = inf)"),
+        (b"3\n0 0 0\n1 1 1\n", "a.pts:1: ", "says 3 points but the file has 2"),
+        (b"0 0 0\n\xff\xfe 1 1\n", "a.xyz:2: ", "not text"),
+        (b"# only comments\n\n", "a.xyz: ", "no points"),
+        (b"", "a.xyz: ", "empty"),
     ];
     check_all(err, cases);
     let e = err(b"0 0 0\n1 2\n", "dir/x.txt");

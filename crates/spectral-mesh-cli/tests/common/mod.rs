@@ -136,3 +136,8 @@ pub fn temp_paths<const N: usize>(names: [&str; N]) -> (tempfile::TempDir, [Path
     let paths = names.map(|n| dir.path().join(n));
     (dir, paths)
 }
+
+/// Writes `text` to the file `name` in `dir`.
+pub fn write_in(dir: &Path, name: &str, text: impl AsRef<[u8]>) {
+    std::fs::write(dir.join(name), text).unwrap();
+}

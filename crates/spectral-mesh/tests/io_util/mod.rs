@@ -11,13 +11,11 @@ pub fn check(e: &IoError, prefix: &str, problem: &str) {
     assert!(s.contains(problem), "{s:?} should mention {problem:?}");
 }
 
-/// Each `(source, name, prefix, problem)`: reading `source` as file `name` with `read`
-/// fails with `prefix...problem...`.
-pub fn check_all<S: AsRef<[u8]>>(
-    read: fn(&[u8], &str) -> IoError,
-    cases: &[(S, &str, &str, &str)],
-) {
-    for (src, name, prefix, problem) in cases {
+/// Each `(source, prefix, problem)`: reading `source` with `read`, as the file named by
+/// `prefix` up to its first `:`, fails with `prefix...problem...`.
+pub fn check_all<S: AsRef<[u8]>>(read: fn(&[u8], &str) -> IoError, cases: &[(S, &str, &str)]) {
+    for (src, prefix, problem) in cases {
+        let name = prefix.split(':').next().unwrap_or_default();
         check(&read(src.as_ref(), name), prefix, problem);
     }
 }
