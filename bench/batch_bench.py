@@ -119,16 +119,7 @@ def loadavg():
 def run_process(cmd, env, timeout):
     """Wall seconds, exit code, stdout, stderr and the peak RSS (MiB) from wait4: the
     largest of the process and its waited-for descendants (workers, pool processes)."""
-    saved = {key: os.environ.get(key) for key in env}
-    os.environ.update(env)
-    try:
-        status, code, stdout, stderr, wall, maxrss = eg.run_once(cmd, timeout)
-    finally:
-        for key, value in saved.items():
-            if value is None:
-                del os.environ[key]
-            else:
-                os.environ[key] = value
+    status, code, stdout, stderr, wall, maxrss = eg.run_once_with_env(cmd, timeout, env)
     if status == "timeout":
         code = -9
     return wall, code, stdout, stderr, maxrss
@@ -250,19 +241,17 @@ def render(records, a):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="step", required=True)
-    g = sub.add_parser("generate")
-    g.add_argument("--cli", default=str(ROOT / "target/release/spectral-mesh"))
-    g.add_argument("--meshes", default=str(ROOT / "bench/meshes/batch"))
-    g.add_argument("--count", type=int, default=200)
+    both = argparse.ArgumentParser(add_help=False)  # the options of both steps
+    both.add_argument("--cli", default=str(ROOT / "target/release/spectral-mesh"))
+    both.add_argument("--meshes", default=str(ROOT / "bench/meshes/batch"))
+    both.add_argument("--count", type=int, default=200)
+    g = sub.add_parser("generate", parents=[both])
     g.add_argument("--min-vertices", type=int, default=5000)
     g.add_argument("--max-vertices", type=int, default=50000)
     g.add_argument("--seed", type=int, default=1)
     g.add_argument("--force", action="store_true")
-    r = sub.add_parser("run")
-    r.add_argument("--cli", default=str(ROOT / "target/release/spectral-mesh"))
+    r = sub.add_parser("run", parents=[both])
     r.add_argument("--python", required=True, help="the bench venv's python")
-    r.add_argument("--meshes", default=str(ROOT / "bench/meshes/batch"))
-    r.add_argument("--count", type=int, default=200)
     r.add_argument("-k", type=int, default=50)
     r.add_argument("--hks", type=int, default=16)
     r.add_argument("--runs", type=int, default=1)

@@ -18,12 +18,8 @@ Usually started through bench/e2e_grid.sh, which builds the CLI and the venv:
 """
 import argparse
 import datetime
-import json
-import os
 import re
-import shlex
 import shutil
-import signal
 import statistics
 import sys
 import tempfile
@@ -68,24 +64,10 @@ def measure(route, label, mesh, vertices, k, run, a):
     env = {"SPECTRAL_MESH_EIG_TIMINGS": "1"}
     if a.scipy_blas_threads > 0:
         env["OPENBLAS_NUM_THREADS"] = str(a.scipy_blas_threads)
-    saved = {key: os.environ.get(key) for key in env}
-    os.environ.update(env)
-    try:
-        status, code, stdout, stderr, wall, maxrss = eg.run_once(cmd, a.timeout)
-    finally:
-        for key, value in saved.items():
-            if value is None:
-                del os.environ[key]
-            else:
-                os.environ[key] = value
+    status, code, stdout, stderr, wall, maxrss = eg.run_once_with_env(cmd, a.timeout, env)
     written = sum(f.stat().st_size for f in out.rglob("*") if f.is_file())
     shutil.rmtree(out, ignore_errors=True)
-    reason = None
-    if status == "timeout":
-        reason = f"killed after {a.timeout:g} s"
-    elif code != 0:
-        last = stderr.strip().splitlines()[-1:] or [""]
-        status, reason = "failed", f"exit code {code}" + (f": {last[0][:200]}" if last[0] else "")
+    status, reason = eg.failure(status, code, stderr, a.timeout)
     solve = None
     if route == "scipy":
         keys = eg.parse_line(stdout)
@@ -101,38 +83,19 @@ def measure(route, label, mesh, vertices, k, run, a):
     record = {
         "time": started, "mesh": label, "mesh_path": str(mesh), "vertices": vertices,
         "k": k, "route": route, "run": run, "status": status, "reason": reason,
-        "exit_code": code, "laplacian": a.laplacian, "wall_seconds": round(wall, 3),
-        "wait4_maxrss_mib": round(maxrss, 1) if maxrss is not None else None,
+        "exit_code": code, "laplacian": a.laplacian,
         "solve_seconds": solve, "solver_phases": phases,
         "phase_sum_seconds": round(sum(phases.values()), 3) if phases else None,
         "bytes_written": written, "scipy_blas_threads": a.scipy_blas_threads,
-        "loadavg_before": before, "loadavg_after": eg.loadavg(), "command": shlex.join(cmd),
     }
-    if status != "ok":
-        record["stdout_tail"] = stdout[-2000:]
-        record["stderr_tail"] = stderr[-2000:]
-    with open(a.out, "a") as f:
-        f.write(json.dumps(record) + "\n")
-    shown = f"{wall:.2f} s (solve {solve})" if status == "ok" else f"{status} ({reason})"
-    print(f"[{started}] load {' '.join(before or [])} | {label} k={k} {route} run {run}: "
-          f"{shown}", file=sys.stderr)
-    return record
+    return eg.save_record(a, record, (cmd, wall, maxrss, before), (stdout, stderr),
+                          f"{wall:.2f} s (solve {solve})")
 
 
 def run_cell(label, mesh, vertices, k, a):
-    records = []
-    active = list(a.routes)
     runs = a.runs_large if vertices and vertices > a.large else a.runs
-    for run in range(1, runs + 1):
-        for route in list(active):
-            rec = measure(route, label, mesh, vertices, k, run, a)
-            records.append(rec)
-            slow = rec["status"] == "ok" and rec["wall_seconds"] > a.slow_seconds
-            if rec["status"] != "ok" or slow:
-                active.remove(route)
-        if not active:
-            break
-    return records
+    return eg.run_cell(label, mesh, vertices, k, a, measure, runs,
+                       lambda rec: rec["wall_seconds"])
 
 
 def median_of(records, key):
@@ -146,19 +109,11 @@ def render_table(records, a, command):
     cells = {}
     for rec in records:
         cells.setdefault((rec["mesh"], rec["k"]), {}).setdefault(rec["route"], []).append(rec)
-    loads = [float(rec["loadavg_before"][0]) for rec in records if rec.get("loadavg_before")]
-    times = [rec["time"] for rec in records]
-    lines = [
+    lines = eg.table_head(
+        records,
         "# End-to-end: each spectral command against SciPy + CHOLMOD writing the same .npz",
-        "",
-        f"- command: `{command}`",
-        f"- machine: {eg.machine_text()}",
-        f"- commit: {eg.git_text()}; Laplacian: {a.laplacian}; SciPy's OpenBLAS threads: "
-        + ", ".join(sorted({str(r.get("scipy_blas_threads") or "default") for r in records})),
-    ]
-    if times:
-        lines.append(f"- runs: {min(times)} to {max(times)}, {len(records)} processes; "
-                     f"1-min load average before a run: {min(loads):.2f} to {max(loads):.2f}")
+        command, f"Laplacian: {a.laplacian}; SciPy's OpenBLAS threads: "
+        + ", ".join(sorted({str(r.get("scipy_blas_threads") or "default") for r in records})))
     lines += [
         "- whole process, wall seconds (mesh file in, outputs written), median "
         "(number of runs), and in brackets SciPy's median over the command's; commands: "
@@ -205,12 +160,7 @@ def render_table(records, a, command):
                   if x["status"] == "ok" and x.get("solve_seconds")]
             row.append(f"{statistics.median(xs):.3f}" if xs else "-")
         lines.append("| " + " | ".join(row) + " |")
-    reasons = sorted({f"{rec['mesh']} k={rec['k']} {rec['route']}: {rec['status']} "
-                      f"({rec['reason']})" for rec in records if rec["status"] != "ok"})
-    if reasons:
-        lines += ["", "Runs that did not finish (details in the JSONL):", ""]
-        lines += [f"- {r}" for r in reasons]
-    return "\n".join(lines) + "\n"
+    return eg.table_end(lines, records)
 
 
 def parse_args(argv):
@@ -243,12 +193,7 @@ def parse_args(argv):
     ap.add_argument("--work-dir", type=Path, default=None,
                     help="where the per-run output folders go (default: the system's tmp)")
     ap.add_argument("--render-only", action="store_true")
-    a = ap.parse_args(argv)
-    a.routes = [r for r in a.routes.split(",") if r]
-    unknown = [r for r in a.routes if r not in ROUTES]
-    if unknown:
-        ap.error(f"unknown routes {unknown}; known: {', '.join(ROUTES)}")
-    a.ks = [int(k) for k in a.ks.split(",") if k]
+    a = eg.parse_lists(ap, argv, ROUTES)
     if not a.render_only:
         if not (a.cli and a.cli.is_file()):
             ap.error("--cli: the spectral-mesh binary is needed")
@@ -258,30 +203,7 @@ def parse_args(argv):
 
 
 def main(argv=None):
-    a = parse_args(sys.argv[1:] if argv is None else argv)
-    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
-    command = os.environ.get("E2E_GRID_COMMAND") or shlex.join(
-        ["bench/e2e_grid.py"] + (sys.argv[1:] if argv is None else argv))
-    a.out.parent.mkdir(parents=True, exist_ok=True)
-    a.table.parent.mkdir(parents=True, exist_ok=True)
-    if a.render_only:
-        records = [json.loads(ln) for ln in a.out.read_text().splitlines() if ln.strip()]
-        a.table.write_text(render_table(records, a, command))
-        print(a.table.read_text())
-        return 0
-    entries = [s for s in a.sizes.split(",") if s] + a.mesh
-    meshes = [eg.resolve_mesh(e, a.mesh_dir, a.cli) for e in entries]
-    meshes = [(label, path, eg.off_vertex_count(path)) for label, path in meshes]
-    records = []
-    for label, path, vertices in meshes:
-        for k in a.ks:
-            records += run_cell(label, path, vertices, k, a)
-            a.table.write_text(render_table(records, a, command))
-    table = render_table(records, a, command)
-    a.table.write_text(table)
-    print(table)
-    print(f"raw runs appended to {a.out}; table in {a.table}", file=sys.stderr)
-    return 0
+    return eg.grid_main(argv, "e2e_grid", parse_args, render_table, run_cell)
 
 
 if __name__ == "__main__":

@@ -143,6 +143,32 @@ def run_once(cmd, timeout):
         return status, code, out.read(), err.read(), wall, maxrss
 
 
+def run_once_with_env(cmd, timeout, env):
+    """As run_once, with the variables of env set in this process's environment for the
+    run (the run inherits them) and restored afterwards."""
+    saved = {key: os.environ.get(key) for key in env}
+    os.environ.update(env)
+    try:
+        return run_once(cmd, timeout)
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                del os.environ[key]
+            else:
+                os.environ[key] = value
+
+
+def failure(status, code, stderr, timeout):
+    """(status, reason) of a finished run: reason None for a run that succeeded, else the
+    timeout or the exit code with the last line of stderr (status becomes 'failed')."""
+    if status == "timeout":
+        return status, f"killed after {timeout:g} s"
+    if code != 0:
+        last = stderr.strip().splitlines()[-1:] or [""]
+        return "failed", f"exit code {code}" + (f": {last[0][:200]}" if last[0] else "")
+    return status, None
+
+
 def parse_line(stdout):
     """The last line with key=value pairs, numbers converted."""
     lines = [ln for ln in stdout.splitlines() if "=" in ln]
@@ -166,13 +192,8 @@ def measure(route, label, mesh, vertices, k, run, a):
     started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     status, code, stdout, stderr, wall, maxrss = run_once(cmd, a.timeout)
     keys = parse_line(stdout) if status == "ok" else {}
-    reason = None
-    if status == "timeout":
-        reason = f"killed after {a.timeout:g} s"
-    elif code != 0:
-        last = stderr.strip().splitlines()[-1:] or [""]
-        status, reason = "failed", f"exit code {code}" + (f": {last[0][:200]}" if last[0] else "")
-    else:
+    status, reason = failure(status, code, stderr, a.timeout)
+    if status == "ok":
         missing = [key for key in REQUIRED_KEYS if key not in keys]
         if missing:
             status, reason = "failed", f"missing keys {', '.join(missing)}"
@@ -180,33 +201,49 @@ def measure(route, label, mesh, vertices, k, run, a):
         "time": started, "mesh": label, "mesh_path": str(mesh), "vertices": vertices,
         "k": k, "route": route, "run": run, "status": status, "reason": reason,
         "exit_code": code, "timeout_seconds": a.timeout, "laplacian": a.laplacian,
-        "tol": a.tol, "scipy_tol": a.scipy_tol,
+        "tol": a.tol, "scipy_tol": a.scipy_tol, "keys": keys,
+    }
+    return save_record(a, record, (cmd, wall, maxrss, before), (stdout, stderr),
+                       f"{keys.get('seconds')} s")
+
+
+def save_record(a, record, run, output, shown):
+    """Completes record with run = (cmd, wall seconds, peak RSS, load before), adds the
+    tails of output = (stdout, stderr) when the run failed, appends it to --out and prints
+    one line: shown for a run that succeeded, the status and reason otherwise."""
+    cmd, wall, maxrss, before = run
+    record.update({
         "wall_seconds": round(wall, 3),
         "wait4_maxrss_mib": round(maxrss, 1) if maxrss is not None else None,
         "loadavg_before": before, "loadavg_after": loadavg(), "command": shlex.join(cmd),
-        "keys": keys,
-    }
+    })
+    status = record["status"]
     if status != "ok":
-        record["stdout_tail"] = stdout[-2000:]
-        record["stderr_tail"] = stderr[-2000:]
+        record["stdout_tail"] = output[0][-2000:]
+        record["stderr_tail"] = output[1][-2000:]
     with open(a.out, "a") as f:
         f.write(json.dumps(record) + "\n")
-    shown = f"{keys.get('seconds')} s" if status == "ok" else f"{status} ({reason})"
-    print(f"[{started}] load {' '.join(before or [])} | {label} k={k} {route} run {run}: "
-          f"{shown}", file=sys.stderr)
+    if status != "ok":
+        shown = f"{status} ({record['reason']})"
+    print(f"[{record['time']}] load {' '.join(before or [])} | {record['mesh']} "
+          f"k={record['k']} {record['route']} run {record['run']}: {shown}", file=sys.stderr)
     return record
 
 
-def run_cell(label, mesh, vertices, k, a):
+def run_cell(label, mesh, vertices, k, a, measure=None, runs=None, seconds=None):
     """All runs of one cell, alternating routes. A route stops after a timeout or a
-    failure, and after its first run when that took longer than --slow-seconds."""
+    failure, and after its first run when that took longer than --slow-seconds.
+    measure, runs and seconds (a record's time) default to this grid's; e2e_grid passes
+    its own."""
+    measure = measure or globals()["measure"]
+    seconds = seconds or (lambda rec: rec["keys"]["seconds"])
     records = []
     active = list(a.routes)
-    for run in range(1, a.runs + 1):
+    for run in range(1, (runs or a.runs) + 1):
         for route in list(active):
             rec = measure(route, label, mesh, vertices, k, run, a)
             records.append(rec)
-            slow = rec["status"] == "ok" and rec["keys"]["seconds"] > a.slow_seconds
+            slow = rec["status"] == "ok" and seconds(rec) > a.slow_seconds
             if rec["status"] != "ok" or slow:
                 active.remove(route)
         if not active:
@@ -330,19 +367,10 @@ def render_table(records, a, command):
         seen = {str(rec.get(key, getattr(a, key))) for rec in records}
         return " / ".join(sorted(seen)) if seen else str(getattr(a, key))
 
-    loads = [float(rec["loadavg_before"][0]) for rec in records if rec.get("loadavg_before")]
-    times = [rec["time"] for rec in records]
-    lines = [
-        "# Eigensolver benchmark: ours vs SciPy eigsh (shift-invert)",
-        "",
-        f"- command: `{command}`",
-        f"- machine: {machine_text()}",
-        f"- commit: {git_text()}; Laplacian: {values('laplacian')}; tolerance: ours "
-        f"{values('tol').replace('None', 'default (1e-10)')}, SciPy eigsh tol={values('scipy_tol')}",
-    ]
-    if times:
-        lines.append(f"- runs: {min(times)} to {max(times)}, {len(records)} processes; "
-                     f"1-min load average before a run: {min(loads):.2f} to {max(loads):.2f}")
+    lines = table_head(
+        records, "# Eigensolver benchmark: ours vs SciPy eigsh (shift-invert)", command,
+        f"Laplacian: {values('laplacian')}; tolerance: ours "
+        f"{values('tol').replace('None', 'default (1e-10)')}, SciPy eigsh tol={values('scipy_tol')}")
     lines += [
         "- times: seconds of the eigensolve (factorization included, assembly and mesh "
         "reading excluded), median [min, max] (number of runs); peak RSS in MiB (whole "
@@ -372,6 +400,29 @@ def render_table(records, a, command):
         if len(routes) > 1:
             row.append(lambda_text(c))
         lines.append("| " + " | ".join(row) + " |")
+    return table_end(lines, records)
+
+
+def table_head(records, title, command, settings):
+    """The table's title and its lines on the command, machine, commit + settings and the
+    runs' times and load."""
+    loads = [float(rec["loadavg_before"][0]) for rec in records if rec.get("loadavg_before")]
+    times = [rec["time"] for rec in records]
+    lines = [
+        title,
+        "",
+        f"- command: `{command}`",
+        f"- machine: {machine_text()}",
+        f"- commit: {git_text()}; {settings}",
+    ]
+    if times:
+        lines.append(f"- runs: {min(times)} to {max(times)}, {len(records)} processes; "
+                     f"1-min load average before a run: {min(loads):.2f} to {max(loads):.2f}")
+    return lines
+
+
+def table_end(lines, records):
+    """The table's text: lines, then the runs that did not finish."""
     reasons = sorted({f"{rec['mesh']} k={rec['k']} {rec['route']}: {rec['status']} "
                       f"({rec['reason']})" for rec in records if rec["status"] != "ok"})
     if reasons:
@@ -414,12 +465,7 @@ def parse_args(argv):
     ap.add_argument("--mesh-dir", type=Path, default=ROOT / "bench" / "meshes")
     ap.add_argument("--render-only", action="store_true",
                     help="rewrite --table from all records in --out, run nothing")
-    a = ap.parse_args(argv)
-    a.routes = [r for r in a.routes.split(",") if r]
-    unknown = [r for r in a.routes if r not in ROUTES]
-    if unknown:
-        ap.error(f"unknown routes {unknown}; known: {', '.join(ROUTES)}")
-    a.ks = [int(k) for k in a.ks.split(",") if k]
+    a = parse_lists(ap, argv, ROUTES)
     if not a.render_only:
         if "ours" in a.routes and not (a.bench_eigs and a.bench_eigs.is_file()):
             ap.error("--bench-eigs: the bench_eigs binary is needed for route 'ours'")
@@ -428,11 +474,26 @@ def parse_args(argv):
     return a
 
 
-def main(argv=None):
-    a = parse_args(sys.argv[1:] if argv is None else argv)
+def parse_lists(ap, argv, routes):
+    """Parses argv with ap and splits --routes (checked against routes) and --ks."""
+    a = ap.parse_args(argv)
+    a.routes = [r for r in a.routes.split(",") if r]
+    unknown = [r for r in a.routes if r not in routes]
+    if unknown:
+        ap.error(f"unknown routes {unknown}; known: {', '.join(routes)}")
+    a.ks = [int(k) for k in a.ks.split(",") if k]
+    return a
+
+
+def grid_main(argv, script, parse_args, render_table, run_cell, show_meshes=False):
+    """A grid's main: parse argv, then rewrite the table from --out (--render-only) or run
+    every (mesh, k) cell, rewriting the table after each. The command shown in the table is
+    $<SCRIPT>_COMMAND (e.g. EIGS_GRID_COMMAND) when set, else bench/<script>.py ARGS."""
+    argv = sys.argv[1:] if argv is None else argv
+    a = parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
-    command = os.environ.get("EIGS_GRID_COMMAND") or shlex.join(
-        ["bench/eigs_grid.py"] + (sys.argv[1:] if argv is None else argv))
+    command = os.environ.get(f"{script.upper()}_COMMAND") or shlex.join(
+        [f"bench/{script}.py"] + argv)
     a.out.parent.mkdir(parents=True, exist_ok=True)
     a.table.parent.mkdir(parents=True, exist_ok=True)
     if a.render_only:
@@ -444,8 +505,9 @@ def main(argv=None):
     entries = [s for s in a.sizes.split(",") if s] + a.mesh
     meshes = [resolve_mesh(e, a.mesh_dir, a.cli) for e in entries]
     meshes = [(label, path, off_vertex_count(path)) for label, path in meshes]
-    for label, path, vertices in meshes:
-        print(f"mesh {label}: {path} ({vertices} vertices)", file=sys.stderr)
+    if show_meshes:
+        for label, path, vertices in meshes:
+            print(f"mesh {label}: {path} ({vertices} vertices)", file=sys.stderr)
     records = []
     for label, path, vertices in meshes:
         for k in a.ks:
@@ -456,6 +518,10 @@ def main(argv=None):
     print(table)
     print(f"raw runs appended to {a.out}; table in {a.table}", file=sys.stderr)
     return 0
+
+
+def main(argv=None):
+    return grid_main(argv, "eigs_grid", parse_args, render_table, run_cell, show_meshes=True)
 
 
 if __name__ == "__main__":

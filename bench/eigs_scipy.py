@@ -23,7 +23,9 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
 
-def read_off(path):
+def read_off(path, triangles=False):
+    """Vertices and triangles of a plain OFF file; polygons are fanned into triangles, or
+    refused with `triangles=True` (for files our CLI writes, which hold only triangles)."""
     toks = []
     with open(path) as f:
         for line in f:
@@ -42,6 +44,8 @@ def read_off(path):
     faces = []
     for _ in range(nf):
         c = int(toks[i])
+        if triangles and c != 3:
+            raise SystemExit(f"{path}: face {len(faces)} is not a triangle")
         idx = [int(t) for t in toks[i + 1:i + 1 + c]]
         i += 1 + c
         for j in range(1, c - 1):  # fan triangulation

@@ -3,13 +3,9 @@
 # eigenvector subspaces per cluster (principal angles < 1e-6), for fem and voronoi-cot on
 # ten shared meshes. Arguments: CLI PYTHON.
 set -euo pipefail
-py="$2"
-root="$(cd "$(dirname "$0")/.." && pwd)"
-meshes="${SPECTRAL_MESH_SHARED_MESHES:-}"
-[ -n "$meshes" ] || { echo "skipped: SPECTRAL_MESH_SHARED_MESHES unset"; exit 0; }
-# --workspace: the features of `cargo test --release --workspace`, whose build this reuses.
-cargo build --release --quiet --workspace --example bench_eigs
-ex="$root/target/release/examples/bench_eigs"
+# shellcheck source=conformance/common.sh
+source "$(dirname "$0")/common.sh"
+build_example bench_eigs
 # The 20 cases run two at a time (each is mostly Python start-up and one eigsh), one log
 # per case, printed when it fails.
 logs="$(mktemp -d)"

@@ -3,13 +3,9 @@
 # meshes, with 2 and 6 default constraints. Arguments: CLI PYTHON (the CLI is unused:
 # the fields come from the harmonic_field example).
 set -euo pipefail
-py="$2"
-root="$(cd "$(dirname "$0")/.." && pwd)"
-meshes="${SPECTRAL_MESH_SHARED_MESHES:-}"
-[ -n "$meshes" ] || { echo "skipped: SPECTRAL_MESH_SHARED_MESHES unset"; exit 0; }
-# --workspace: the features of `cargo test --release --workspace`, whose build this reuses.
-cargo build --release --quiet --workspace --example harmonic_field
-ex="$root/target/release/examples/harmonic_field"
+# shellcheck source=conformance/common.sh
+source "$(dirname "$0")/common.sh"
+build_example harmonic_field
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 pass=0; fail=0
 for m in sphere966 cow hand elephant knot1 eight mesh_with_border elephant-with-holes holes; do

@@ -3,13 +3,9 @@
 # independent NumPy computation from SciPy's eigsh (shift-invert) basis, to 1e-8.
 # Arguments: CLI PYTHON.
 set -euo pipefail
-py="$2"
-root="$(cd "$(dirname "$0")/.." && pwd)"
-meshes="${SPECTRAL_MESH_SHARED_MESHES:-}"
-[ -n "$meshes" ] || { echo "skipped: SPECTRAL_MESH_SHARED_MESHES unset"; exit 0; }
-# --workspace: the features of `cargo test --release --workspace`, whose build this reuses.
-cargo build --release --quiet --workspace --example spectral_fields
-ex="$root/target/release/examples/spectral_fields"
+# shellcheck source=conformance/common.sh
+source "$(dirname "$0")/common.sh"
+build_example spectral_fields
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 pass=0; fail=0
 # mesh k t anchors

@@ -6,11 +6,8 @@
 # (the peer's point-cloud operator differs by design: docs/point-clouds.md).
 # Arguments: CLI PYTHON.
 set -euo pipefail
-cli="$1"
-py="$2"
-root="$(cd "$(dirname "$0")/.." && pwd)"
-meshes="${SPECTRAL_MESH_SHARED_MESHES:-}"
-[ -n "$meshes" ] || { echo "skipped: SPECTRAL_MESH_SHARED_MESHES unset"; exit 0; }
+# shellcheck source=conformance/common.sh
+source "$(dirname "$0")/common.sh"
 points="$meshes/../points"
 clouds=()
 if [ -d "$points" ]; then

@@ -24,6 +24,7 @@ absolute difference), 1 otherwise. Requires numpy, scipy and libigl (pip install
 """
 
 import argparse
+import os
 import sys
 
 import igl
@@ -31,26 +32,9 @@ import numpy as np
 import scipy.sparse  # noqa: F401  (libigl returns scipy sparse matrices)
 
 
-def read_off(path):
-    tokens = []
-    with open(path) as fh:
-        for line in fh:
-            tokens.extend(line.split("#", 1)[0].split())
-    i = 0
-    if tokens and tokens[0].endswith("OFF"):
-        i = 1
-    nv, nf = int(tokens[i]), int(tokens[i + 1])
-    i += 3
-    v = np.array(tokens[i:i + 3 * nv], dtype=float).reshape(nv, 3)
-    i += 3 * nv
-    faces = []
-    for _ in range(nf):
-        k = int(tokens[i])
-        poly = [int(t) for t in tokens[i + 1:i + 1 + k]]
-        i += 1 + k
-        for j in range(1, k - 1):
-            faces.append((poly[0], poly[j], poly[j + 1]))
-    return v, np.array(faces, dtype=np.int64)
+# The OFF reader the benches and the other conformance scripts share.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
+from eigs_scipy import read_off  # noqa: E402
 
 
 def read_constraints(path):

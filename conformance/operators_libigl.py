@@ -29,25 +29,13 @@ import numpy as np
 import scipy.io
 import scipy.sparse as sp
 
+# The OFF reader the benches and the other conformance scripts share.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
+from eigs_scipy import read_off  # noqa: E402
+
+from common import verdict  # noqa: E402
+
 TOL = 1e-12
-
-
-def read_plain_off(path):
-    """Reads the plain OFF our CLI writes (header, counts, coordinates, triangles)."""
-    with open(path) as f:
-        tokens = [t for line in f for t in line.split("#", 1)[0].split()]
-    assert tokens[0] == "OFF", f"{path}: not a plain OFF"
-    nv, nf = int(tokens[1]), int(tokens[2])
-    pos = 4
-    V = np.array(tokens[pos : pos + 3 * nv], dtype=np.float64).reshape(nv, 3)
-    pos += 3 * nv
-    F = np.empty((nf, 3), dtype=np.int64)
-    for i in range(nf):
-        k = int(tokens[pos])
-        assert k == 3, f"{path}: face {i} is not a triangle"
-        F[i] = [int(x) for x in tokens[pos + 1 : pos + 4]]
-        pos += 4
-    return V, F
 
 
 def _cmp(ours, theirs, res, name):
@@ -85,7 +73,7 @@ def compare(cli, mesh, workdir):
     )
     if proc.returncode != 0:
         return {"mesh": mesh, "status": "refused by spectral-mesh", "reason": proc.stderr.strip()}
-    V, F = read_plain_off(os.path.join(out, "mesh.off"))
+    V, F = read_off(os.path.join(out, "mesh.off"), triangles=True)
     res = {"mesh": os.path.basename(mesh), "n": int(V.shape[0]), "m": int(F.shape[0])}
     S = scipy.io.mmread(os.path.join(out, "S.mtx"))
     res["S"] = rel_err_sparse(S, -igl.cotmatrix(V, F), res, "S")
@@ -134,11 +122,7 @@ def main():
             elif r["status"] == "FAIL":
                 compared += 1
                 failures += 1
-    print(f"operators vs libigl: {compared - failures} passed, {failures} failed")
-    if compared < args.min_meshes:
-        print(f"only {compared} meshes compared, need at least {args.min_meshes}")
-        return 1
-    return 1 if failures else 0
+    return verdict("operators vs libigl", compared, failures, args.min_meshes, "meshes")
 
 
 if __name__ == "__main__":

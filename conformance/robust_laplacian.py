@@ -36,21 +36,14 @@ _here = os.path.dirname(os.path.abspath(__file__))
 sys.path = [p for p in sys.path if os.path.abspath(p or ".") != _here]
 import robust_laplacian  # noqa: E402
 
+# The OFF reader the benches and the other conformance scripts share.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
+from eigs_scipy import read_off  # noqa: E402
+
+sys.path.insert(0, _here)  # the package is imported: this folder's modules are safe now
+from common import verdict  # noqa: E402
+
 TOL = 1e-10
-
-
-def read_plain_off(path):
-    """Reads the plain OFF our CLI writes (header, counts, coordinates, triangles)."""
-    with open(path) as f:
-        tokens = [t for line in f for t in line.split("#", 1)[0].split()]
-    assert tokens[0] == "OFF", f"{path}: not a plain OFF"
-    nv, nf = int(tokens[1]), int(tokens[2])
-    pos = 4
-    V = np.array(tokens[pos : pos + 3 * nv], dtype=np.float64).reshape(nv, 3)
-    pos += 3 * nv
-    F = np.array(tokens[pos : pos + 4 * nf], dtype=np.int64).reshape(nf, 4)
-    assert (F[:, 0] == 3).all(), f"{path}: not all faces are triangles"
-    return V, F[:, 1:].copy()
 
 
 def rel_diff(ours, theirs, keep):
@@ -69,7 +62,7 @@ def compare_mesh(cli, mesh, workdir, mollify):
     )
     if proc.returncode != 0:
         return {"mesh": mesh, "status": "refused by spectral-mesh", "reason": proc.stderr.strip()}
-    V, F = read_plain_off(os.path.join(out, "mesh.off"))
+    V, F = read_off(os.path.join(out, "mesh.off"), triangles=True)
     S = sp.csc_matrix(scipy.io.mmread(os.path.join(out, "S_robust.mtx")))
     B = sp.csc_matrix(scipy.io.mmread(os.path.join(out, "B_robust.mtx")))
     L, M = robust_laplacian.mesh_laplacian(V, F, mollify_factor=mollify)
@@ -179,11 +172,8 @@ def main():
             print(json.dumps(r, default=float))
             compared += 1
             failures += r["status"] == "FAIL"
-    print(f"robust Laplacian vs robust_laplacian: {compared - failures} passed, {failures} failed")
-    if compared < args.min_meshes:
-        print(f"only {compared} inputs compared, need at least {args.min_meshes}")
-        return 1
-    return 1 if failures else 0
+    return verdict("robust Laplacian vs robust_laplacian", compared, failures, args.min_meshes,
+                   "inputs")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,7 @@ import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { launch, writeTorusOff, writePyramidOff } from './common.mjs';
+import { launch, pageHelpers, writeTorusOff, writePyramidOff } from './common.mjs';
 
 const URL = process.env.SPECTRAL_MESH_URL;
 const SHARED = process.env.SPECTRAL_MESH_SHARED_MESHES || '';
@@ -27,35 +27,13 @@ after(async () => { await browser?.close(); });
 
 // Fields drawn so far; also notes the errors shown so far, so that waitField sees only
 // the new ones.
-let errorsBefore = 0;
-const count = () => page.evaluate(() => [window.__fieldCount || 0, window.__errorCount || 0])
-  .then(([f, e]) => { errorsBefore = e; return f; });
+const { count, errorCount, waitField, waitError, setValue, pickPoints } =
+  pageHelpers(() => page, { fieldTimeout: 180000, errorTimeout: 60000 });
 const lastError = () => page.evaluate(() => window.__lastError);
 const lastField = () => page.evaluate(() => window.__lastFieldPlain());
 
-async function waitField(before, timeout = 180000) {
-  await page.waitForFunction(([b, e]) => (window.__fieldCount || 0) > b || (window.__errorCount || 0) > e,
-    [before, errorsBefore], { timeout });
-  const [errors, err] = await page.evaluate(() => [window.__errorCount || 0, window.__lastError]);
-  assert.ok(errors === errorsBefore, `page shows an error: ${err}`);
-  return lastField();
-}
 
-async function waitError(before, timeout = 60000) {
-  await page.waitForFunction((e) => (window.__errorCount || 0) > e && window.__lastError, before, { timeout });
-  return page.evaluate(() => ({ msg: window.__lastError, at: window.__lastErrorFor }));
-}
-const errorCount = () => page.evaluate(() => window.__errorCount || 0);
 
-async function setValue(id, value, event = 'change') {
-  const before = await count();
-  await page.evaluate(([i, v, e]) => {
-    const el = document.getElementById(i);
-    el.value = String(v);
-    el.dispatchEvent(new Event(e, { bubbles: true }));
-  }, [id, value, event]);
-  return before;
-}
 
 // The values the page shows, against the server's own f64 computation for the same
 // parameters (the txt download goes through the library's code path, not the page's).
@@ -75,20 +53,7 @@ async function checkAgainstLibrary() {
 }
 
 // Screen points of the canvas that hit the surface, with the vertex each picks.
-async function surfacePoints() {
-  return page.evaluate(() => {
-    const c = document.querySelector('#view canvas').getBoundingClientRect();
-    const out = [];
-    for (let i = 1; i < 16; i++) {
-      for (let j = 1; j < 12; j++) {
-        const x = c.left + (c.width * i) / 16, y = c.top + (c.height * j) / 12;
-        const v = window.__vertexAt(x, y);
-        if (v !== null) out.push({ x, y, v });
-      }
-    }
-    return out;
-  });
-}
+const surfacePoints = pickPoints;
 
 test('the first screen explains itself: field, colour bar, legend, guidance, visible source', async () => {
   await page.waitForFunction(() => window.__ready, null, { timeout: 30000 });

@@ -3,6 +3,7 @@
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
+import assert from 'node:assert/strict';
 import { chromium } from 'playwright-core';
 
 // Headless Chromium with a fresh profile (the flags that work on a closed network; see
@@ -53,4 +54,57 @@ export function writeTorusOff(file, nu, nv) {
   }
   fs.writeFileSync(file, lines.join('\n') + '\n');
   return file;
+}
+
+// What the page tests ask of the page, for the page `getPage()` returns (set in `before`):
+// counts of fields and errors, waiting for the next field or error (at most
+// `fieldTimeout` / `errorTimeout` ms), setting a control's value, and the screen points
+// of the canvas that hit the shape with the vertex (point) each picks.
+export function pageHelpers(getPage, { fieldTimeout, errorTimeout }) {
+  let errorsBefore = 0;
+  const count = () => getPage().evaluate(() => [window.__fieldCount || 0, window.__errorCount || 0])
+    .then(([f, e]) => { errorsBefore = e; return f; });
+  const errorCount = () => getPage().evaluate(() => window.__errorCount || 0);
+
+  async function waitField(before, timeout = fieldTimeout) {
+    const page = getPage();
+    await page.waitForFunction(([b, e]) => (window.__fieldCount || 0) > b || (window.__errorCount || 0) > e,
+      [before, errorsBefore], { timeout });
+    const [errors, err] = await page.evaluate(() => [window.__errorCount || 0, window.__lastError]);
+    assert.ok(errors === errorsBefore, `page shows an error: ${err}`);
+    return page.evaluate(() => window.__lastFieldPlain());
+  }
+
+  async function waitError(before, timeout = errorTimeout) {
+    const page = getPage();
+    await page.waitForFunction((e) => (window.__errorCount || 0) > e && window.__lastError, before, { timeout });
+    return page.evaluate(() => ({ msg: window.__lastError, at: window.__lastErrorFor }));
+  }
+
+  async function setValue(id, value, event = 'change') {
+    const before = await count();
+    await getPage().evaluate(([i, v, e]) => {
+      const el = document.getElementById(i);
+      el.value = String(v);
+      el.dispatchEvent(new Event(e, { bubbles: true }));
+    }, [id, value, event]);
+    return before;
+  }
+
+  function pickPoints() {
+    return getPage().evaluate(() => {
+      const c = document.querySelector('#view canvas').getBoundingClientRect();
+      const out = [];
+      for (let i = 1; i < 16; i++) {
+        for (let j = 1; j < 12; j++) {
+          const x = c.left + (c.width * i) / 16, y = c.top + (c.height * j) / 12;
+          const v = window.__vertexAt(x, y);
+          if (v !== null) out.push({ x, y, v });
+        }
+      }
+      return out;
+    });
+  }
+
+  return { count, errorCount, waitField, waitError, setValue, pickPoints };
 }

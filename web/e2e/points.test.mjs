@@ -7,7 +7,7 @@ import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { launch } from './common.mjs';
+import { launch, pageHelpers } from './common.mjs';
 
 const URL = process.env.SPECTRAL_MESH_URL;
 const POINTS = process.env.SPECTRAL_MESH_SHARED_POINTS || '';
@@ -37,33 +37,11 @@ after(async () => {
   if (dir) fs.rmSync(dir, { recursive: true, force: true });
 });
 
-let errorsBefore = 0;
-const count = () => page.evaluate(() => [window.__fieldCount || 0, window.__errorCount || 0])
-  .then(([f, e]) => { errorsBefore = e; return f; });
-const errorCount = () => page.evaluate(() => window.__errorCount || 0);
+const { count, errorCount, waitField, waitError, setValue, pickPoints } =
+  pageHelpers(() => page, { fieldTimeout: 300000, errorTimeout: 120000 });
 
-async function waitField(before, timeout = 300000) {
-  await page.waitForFunction(([b, e]) => (window.__fieldCount || 0) > b || (window.__errorCount || 0) > e,
-    [before, errorsBefore], { timeout });
-  const [errors, err] = await page.evaluate(() => [window.__errorCount || 0, window.__lastError]);
-  assert.ok(errors === errorsBefore, `page shows an error: ${err}`);
-  return page.evaluate(() => window.__lastFieldPlain());
-}
 
-async function waitError(before, timeout = 120000) {
-  await page.waitForFunction((e) => (window.__errorCount || 0) > e && window.__lastError, before, { timeout });
-  return page.evaluate(() => ({ msg: window.__lastError, at: window.__lastErrorFor }));
-}
 
-async function setValue(id, value, event = 'change') {
-  const before = await count();
-  await page.evaluate(([i, v, e]) => {
-    const el = document.getElementById(i);
-    el.value = String(v);
-    el.dispatchEvent(new Event(e, { bubbles: true }));
-  }, [id, value, event]);
-  return before;
-}
 
 async function uploadFile(file) {
   const loaded = await page.evaluate(() => window.__meshLoaded || 0);
@@ -76,20 +54,7 @@ async function uploadFile(file) {
 const health = () => page.evaluate(async () => (await fetch('/api/health')).json());
 
 // Screen points of the canvas that hit the shape, with the vertex (point) each picks.
-async function shapePoints() {
-  return page.evaluate(() => {
-    const c = document.querySelector('#view canvas').getBoundingClientRect();
-    const out = [];
-    for (let i = 1; i < 16; i++) {
-      for (let j = 1; j < 12; j++) {
-        const x = c.left + (c.width * i) / 16, y = c.top + (c.height * j) / 12;
-        const v = window.__vertexAt(x, y);
-        if (v !== null) out.push({ x, y, v });
-      }
-    }
-    return out;
-  });
-}
+const shapePoints = pickPoints;
 
 // Pixels of the 3D view that are neither the white background nor grey: the colour map.
 const colouredPixels = () => page.evaluate(() => {

@@ -18,6 +18,16 @@ fn run(cmd: &mut Command) -> Output {
     cmd.output().expect("the binary runs")
 }
 
+/// Adds `batch SRC --out OUT` to `cmd`.
+fn batch_args<'c>(cmd: &'c mut Command, src: &Path, out: &Path) -> &'c mut Command {
+    cmd.args([
+        "batch",
+        src.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
 }
@@ -78,37 +88,39 @@ fn temporaries(out: &Path) -> Vec<PathBuf> {
 fn good_and_broken_meshes_each_get_their_row() {
     let d = tempfile::tempdir().unwrap();
     let (src, out) = (d.path().join("set"), d.path().join("out"));
-    shape(&src, "sphere.off", "sphere:res=2");
-    shape(&src, "torus.ply", "torus:res=1");
-    shape(&src, "disk.obj", "disk:res=1");
-    // A valid mesh on which the worker process aborts (the test hook stands for a crash
-    // of native code or the out-of-memory killer).
-    shape(&src, "crash.off", "sphere:res=1");
-    std::fs::write(
-        src.join("bad-index.off"),
-        "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n",
-    )
-    .unwrap();
-    std::fs::write(src.join("truncated.off"), "OFF\n4 2 0\n0 0 0\n1 0 0\n").unwrap();
-    std::fs::write(src.join("empty.stl"), "").unwrap();
+    // crash.off: a valid mesh on which the worker process aborts (the test hook stands
+    // for a crash of native code or the out-of-memory killer).
+    for (name, spec) in [
+        ("sphere.off", "sphere:res=2"),
+        ("torus.ply", "torus:res=1"),
+        ("disk.obj", "disk:res=1"),
+        ("crash.off", "sphere:res=1"),
+    ] {
+        shape(&src, name, spec);
+    }
+    for (name, text) in [
+        (
+            "bad-index.off",
+            "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n",
+        ),
+        ("truncated.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n"),
+        ("empty.stl", ""),
+    ] {
+        std::fs::write(src.join(name), text).unwrap();
+    }
     let args = |cmd: &mut Command| {
-        cmd.args([
-            "batch",
-            src.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .args([
-            "-k",
-            "8",
-            "--hks",
-            "auto:3",
-            "--thumbnail",
-            "64",
-            "--jobs",
-            "2",
-        ])
-        .env("SPECTRAL_MESH_BATCH_TEST_ABORT", "crash.off");
+        batch_args(cmd, &src, &out)
+            .args([
+                "-k",
+                "8",
+                "--hks",
+                "auto:3",
+                "--thumbnail",
+                "64",
+                "--jobs",
+                "2",
+            ])
+            .env("SPECTRAL_MESH_BATCH_TEST_ABORT", "crash.off");
     };
     let mut c = bin();
     args(&mut c);
@@ -214,13 +226,7 @@ fn a_killed_run_resumes_to_the_same_files_as_a_clean_run() {
     }
     let batch = |out: &Path, jobs: &str| {
         let mut c = bin();
-        c.args([
-            "batch",
-            src.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .args([
+        batch_args(&mut c, &src, out).args([
             "-k", "24", "--wks", "auto:4", "--adf", "0.01,0.1", "--jobs", jobs,
         ]);
         c

@@ -3,31 +3,9 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_spectral-mesh"))
-}
-
-fn run(args: &[&str]) -> Output {
-    bin().args(args).output().expect("the binary runs")
-}
-
-fn ok(args: &[&str]) -> String {
-    let o = run(args);
-    assert!(
-        o.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn err(args: &[&str]) -> String {
-    let o = run(args);
-    assert!(!o.status.success(), "{args:?} should fail");
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::*;
 
 fn lines(p: &Path) -> Vec<f64> {
     std::fs::read_to_string(p)
@@ -40,16 +18,11 @@ fn lines(p: &Path) -> Vec<f64> {
 #[test]
 fn harmonic_experiment_writes_the_papers_files_and_a_true_summary() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().to_str().unwrap();
-    ok(&[
-        "experiment",
-        "harmonic",
-        "torus:res=2",
-        "--out",
-        out,
-        "--size",
-        "200",
-    ]);
+    let out = dir.path();
+    ok_with(
+        "experiment harmonic torus:res=2 --out {} --size 200",
+        &[out],
+    );
     for i in 1..=3 {
         for ext in ["wrl", "png"] {
             assert!(dir.path().join(format!("harmonic-map-{i}.{ext}")).is_file());
@@ -74,57 +47,30 @@ fn harmonic_experiment_writes_the_papers_files_and_a_true_summary() {
     assert_eq!(first["chi"], 0);
     assert_eq!(first["critical_points"]["euler_check"]["holds"], true);
     // A second run must not overwrite without --force.
-    let e = err(&["experiment", "harmonic", "torus:res=2", "--out", out]);
+    let e = err_with("experiment harmonic torus:res=2 --out {}", &[out]);
     assert!(e.contains("already exists") && e.contains("--force"), "{e}");
-    ok(&[
-        "experiment",
-        "harmonic",
-        "torus:res=2",
-        "--out",
-        out,
-        "--force",
-        "--size",
-        "64",
-    ]);
+    ok_with(
+        "experiment harmonic torus:res=2 --out {} --force --size 64",
+        &[out],
+    );
 }
 
 #[test]
 fn distance_and_diffusion_experiments_write_fields_of_the_right_length() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path().join("d");
-    ok(&[
-        "experiment",
-        "spectral-distance",
-        "sphere:res=2",
-        "-k",
-        "30",
-        "--source",
-        "5",
-        "--size",
-        "128",
-        "--out",
-        d.to_str().unwrap(),
-    ]);
+    let (dir, [d]) = temp_paths(["d"]);
+    ok_with(
+        "experiment spectral-distance sphere:res=2 -k 30 --source 5 --size 128 --out {}",
+        &[&d],
+    );
     let dist = lines(&d.join("filtered-spectral-distance.txt"));
     assert_eq!(dist.len(), 162);
     assert_eq!(dist[5], 0.0, "distance from the source to itself");
     assert!(dist.iter().all(|&v| v >= 0.0));
     let h = dir.path().join("h");
-    ok(&[
-        "experiment",
-        "diffusion-basis",
-        "sphere:res=2",
-        "-k",
-        "30",
-        "--t",
-        "0.01",
-        "--anchor",
-        "7",
-        "--size",
-        "128",
-        "--out",
-        h.to_str().unwrap(),
-    ]);
+    ok_with(
+        "experiment diffusion-basis sphere:res=2 -k 30 --t 0.01 --anchor 7 --size 128 --out {}",
+        &[&h],
+    );
     let f = lines(&h.join("diffusion-basis.txt"));
     let max = f.iter().copied().fold(f64::MIN, f64::max);
     assert_eq!(f[7], max, "the heat kernel peaks at its anchor");
@@ -132,85 +78,51 @@ fn distance_and_diffusion_experiments_write_fields_of_the_right_length() {
 
 #[test]
 fn render_refuses_bad_fields_with_file_and_line() {
-    let dir = tempfile::tempdir().unwrap();
-    let field = dir.path().join("f.txt");
+    let (dir, [field]) = temp_paths(["f.txt"]);
     std::fs::write(&field, "1\n2\nnan\n").unwrap();
     let out = dir.path().join("o.png");
-    let e = err(&[
-        "render",
-        "tetrahedron-does-not-exist.off",
-        "--field",
-        field.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let e = err_with(
+        "render tetrahedron-does-not-exist.off --field {} -o {}",
+        &[&field, &out],
+    );
     assert!(e.contains("tetrahedron-does-not-exist.off"), "{e}");
-    let e = err(&[
-        "render",
-        "sphere:res=1",
-        "--field",
-        field.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let e = err_with("render sphere:res=1 --field {} -o {}", &[&field, &out]);
     assert!(e.contains("f.txt:3") && e.contains("not finite"), "{e}");
     std::fs::write(&field, "1\n2\n").unwrap();
-    let e = err(&[
-        "render",
-        "sphere:res=1",
-        "--field",
-        field.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let e = err_with("render sphere:res=1 --field {} -o {}", &[&field, &out]);
     assert!(e.contains("2 values") && e.contains("42 vertices"), "{e}");
     let vals: String = (0..42).map(|i| format!("{i}\n")).collect();
     std::fs::write(&field, vals).unwrap();
-    ok(&[
-        "render",
-        "sphere:res=1",
-        "--field",
-        field.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--size",
-        "64",
-    ]);
+    ok_with(
+        "render sphere:res=1 --field {} -o {} --size 64",
+        &[&field, &out],
+    );
     let png = std::fs::read(&out).unwrap();
     assert_eq!(&png[1..4], b"PNG");
     let wrl = dir.path().join("o.wrl");
-    ok(&[
-        "render",
-        "sphere:res=1",
-        "--field",
-        field.to_str().unwrap(),
-        "-o",
-        wrl.to_str().unwrap(),
-    ]);
+    ok_with("render sphere:res=1 --field {} -o {}", &[&field, &wrl]);
     let text = std::fs::read_to_string(&wrl).unwrap();
     assert!(text.starts_with("#VRML V2.0 utf8"));
 }
 
 #[test]
 fn info_reports_topology_and_bad_files_name_file_and_line() {
-    let out = ok(&["info", "3torus", "--json"]);
+    let out = ok_with("info 3torus --json", &[]);
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["euler_characteristic"], -4);
     assert_eq!(v["components"], 1);
-    let dir = tempfile::tempdir().unwrap();
-    let bad = dir.path().join("bad.off");
+    let (_dir, [bad]) = temp_paths(["bad.off"]);
     std::fs::write(&bad, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n").unwrap();
-    let e = err(&["info", bad.to_str().unwrap()]);
+    let e = err_with("info {}", &[&bad]);
     assert!(e.contains("bad.off:6"), "{e}");
-    let e = err(&["info", "spherez"]);
+    let e = err_with("info spherez", &[]);
     assert!(e.contains("unknown shape"), "{e}");
 }
 
 #[test]
 fn operators_export_matrix_market_files() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("ops");
-    ok(&["operators", "sphere:res=1", "--out", out.to_str().unwrap()]);
+    let (_dir, [out]) = temp_paths(["ops"]);
+    ok_with("operators sphere:res=1 --out {}", &[&out]);
     let s = std::fs::read_to_string(out.join("S.mtx")).unwrap();
     assert!(s.starts_with("%%MatrixMarket matrix coordinate real general"));
     let header = s.lines().find(|l| !l.starts_with('%')).unwrap();

@@ -42,19 +42,11 @@ fn number_after(text: &str, key: &str) -> f64 {
 
 #[test]
 fn eigs_summary_and_eigenvalues_are_right_for_the_sphere() {
-    let dir = tempfile::tempdir().unwrap();
-    let ev = dir.path().join("ev.txt");
-    let plot = dir.path().join("spectrum.png");
-    let out = ok(&[
-        "eigs",
-        SPHERE,
-        "-k",
-        "16",
-        "--eigenvalues-txt",
-        s(&ev),
-        "--plot",
-        s(&plot),
-    ]);
+    let (_dir, [ev, plot]) = temp_paths(["ev.txt", "spectrum.png"]);
+    let out = ok_with(
+        "eigs sphere:res=2 -k 16 --eigenvalues-txt {} --plot {}",
+        &[&ev, &plot],
+    );
     let v = values(&ev);
     assert_eq!(v.len(), 16);
     assert!(v.windows(2).all(|w| w[0] <= w[1]), "not ascending: {v:?}");
@@ -73,22 +65,16 @@ fn eigs_summary_and_eigenvalues_are_right_for_the_sphere() {
 
 #[test]
 fn eigs_dirichlet_refuses_a_closed_mesh_and_pins_the_disk() {
-    let e = err(&["eigs", SPHERE, "-k", "5", "--dirichlet-boundary"]);
+    let e = err_with("eigs sphere:res=2 -k 5 --dirichlet-boundary", &[]);
     assert!(
         e.contains("--dirichlet-boundary") && e.contains("closed"),
         "{e}"
     );
-    let dir = tempfile::tempdir().unwrap();
-    let ev = dir.path().join("ev.txt");
-    let out = ok(&[
-        "eigs",
-        "disk:res=2",
-        "-k",
-        "6",
-        "--dirichlet-boundary",
-        "--eigenvalues-txt",
-        s(&ev),
-    ]);
+    let (_dir, [ev]) = temp_paths(["ev.txt"]);
+    let out = ok_with(
+        "eigs disk:res=2 -k 6 --dirichlet-boundary --eigenvalues-txt {}",
+        &[&ev],
+    );
     let v = values(&ev);
     assert!(v[0] > 1e-3, "Dirichlet spectrum starts above 0: {v:?}");
     assert!(out.contains(": 0; expected 0"), "{out}");
@@ -96,25 +82,11 @@ fn eigs_dirichlet_refuses_a_closed_mesh_and_pins_the_disk() {
 
 #[test]
 fn heat_basis_function_peaks_at_the_anchor_and_keeps_the_mass() {
-    let dir = tempfile::tempdir().unwrap();
-    let txt = dir.path().join("h.txt");
-    let png = dir.path().join("h.png");
-    let out = ok(&[
-        "heat",
-        SPHERE,
-        "--anchor",
-        "7",
-        "--t",
-        "0.05",
-        "-k",
-        "30",
-        "-o",
-        s(&txt),
-        "-o",
-        s(&png),
-        "--size",
-        "200",
-    ]);
+    let (_dir, [txt, png]) = temp_paths(["h.txt", "h.png"]);
+    let out = ok_with(
+        "heat sphere:res=2 --anchor 7 --t 0.05 -k 30 -o {} -o {} --size 200",
+        &[&txt, &png],
+    );
     let f = values(&txt);
     assert_eq!(f.len(), 162);
     let argmax = (0..f.len()).fold(0, |b, i| if f[i] > f[b] { i } else { b });
@@ -126,20 +98,11 @@ fn heat_basis_function_peaks_at_the_anchor_and_keeps_the_mass() {
 
 #[test]
 fn heat_diffuses_an_indicator_and_conserves_its_mass() {
-    let dir = tempfile::tempdir().unwrap();
-    let txt = dir.path().join("h.txt");
-    let out = ok(&[
-        "heat",
-        SPHERE,
-        "--indicator",
-        "0,0.4",
-        "--t",
-        "0.02",
-        "-k",
-        "30",
-        "-o",
-        s(&txt),
-    ]);
+    let (_dir, [txt]) = temp_paths(["h.txt"]);
+    let out = ok_with(
+        "heat sphere:res=2 --indicator 0,0.4 --t 0.02 -k 30 -o {}",
+        &[&txt],
+    );
     let f = values(&txt);
     let m_in = number_after(&out, "input ");
     let m_out = number_after(&out, "output ");
@@ -148,9 +111,9 @@ fn heat_diffuses_an_indicator_and_conserves_its_mass() {
     // The heat spreads: the values are below the indicator's 1 and above 0 far away.
     assert!(f.iter().all(|v| *v < 1.0));
     // A bad indicator is refused, naming the option.
-    let e = err(&["heat", SPHERE, "--indicator", "0", "-o", s(&txt)]);
+    let e = err_with("heat sphere:res=2 --indicator 0 -o {}", &[&txt]);
     assert!(e.contains("--indicator"), "{e}");
-    let e = err(&["heat", SPHERE, "--indicator", "999,0.1", "-o", "x.txt"]);
+    let e = err_with("heat sphere:res=2 --indicator 999,0.1 -o x.txt", &[]);
     assert!(e.contains("999") && e.contains("162"), "{e}");
 }
 
@@ -175,18 +138,10 @@ fn distance_is_zero_at_the_source_and_symmetric() {
             s(p),
         ]);
     }
-    ok(&[
-        "distance",
-        SPHERE,
-        "--source",
-        "11",
-        "--distance",
-        "diffusion:t=0.1",
-        "-k",
-        "30",
-        "--all-pairs",
-        s(&ap),
-    ]);
+    ok_with(
+        "distance sphere:res=2 --source 11 --distance diffusion:t=0.1 -k 30 --all-pairs {}",
+        &[&ap],
+    );
     let (fa, fb) = (values(&da), values(&db));
     assert_eq!(fa[a], 0.0);
     assert_eq!(fb[b], 0.0);
@@ -221,63 +176,33 @@ fn distance_is_zero_at_the_source_and_symmetric() {
 
 #[test]
 fn bad_filters_are_refused_with_the_reason() {
-    let e = err(&[
-        "distance",
-        SPHERE,
-        "-k",
-        "10",
-        "--distance",
-        "custom-w:s+",
-        "-o",
-        "never.txt",
-    ]);
+    let e = err_with(
+        "distance sphere:res=2 -k 10 --distance custom-w:s+ -o never.txt",
+        &[],
+    );
     assert!(e.contains("custom-w:s+") && e.contains("expression"), "{e}");
-    let e = err(&[
-        "distance",
-        SPHERE,
-        "-k",
-        "10",
-        "--distance",
-        "custom-w:-s",
-        "-o",
-        "never.txt",
-    ]);
+    let e = err_with(
+        "distance sphere:res=2 -k 10 --distance custom-w:-s -o never.txt",
+        &[],
+    );
     assert!(e.contains("not strictly positive"), "{e}");
-    let e = err(&[
-        "distance",
-        SPHERE,
-        "--distance",
-        "gaussian:t=1",
-        "-o",
-        "never.txt",
-    ]);
+    let e = err_with(
+        "distance sphere:res=2 --distance gaussian:t=1 -o never.txt",
+        &[],
+    );
     assert!(e.contains("unknown filter 'gaussian'"), "{e}");
-    let e = err(&["embed", SPHERE, "--filter", "poly", "-o", "never.off"]);
+    let e = err_with("embed sphere:res=2 --filter poly -o never.off", &[]);
     assert!(e.contains("--filter poly") && e.contains("needs p"), "{e}");
     assert!(!Path::new("never.txt").exists() && !Path::new("never.off").exists());
 }
 
 #[test]
 fn signature_writes_one_column_per_time_and_draws_the_chosen_one() {
-    let dir = tempfile::tempdir().unwrap();
-    let txt = dir.path().join("hks.txt");
-    let ply = dir.path().join("hks.ply");
-    let out = ok(&[
-        "signature",
-        SPHERE,
-        "--kind",
-        "hks",
-        "--times",
-        "0.01,0.1,1",
-        "-k",
-        "30",
-        "--column",
-        "1",
-        "-o",
-        s(&txt),
-        "-o",
-        s(&ply),
-    ]);
+    let (dir, [txt, ply]) = temp_paths(["hks.txt", "hks.ply"]);
+    let out = ok_with(
+        "signature sphere:res=2 --kind hks --times 0.01,0.1,1 -k 30 --column 1 -o {} -o {}",
+        &[&txt, &ply],
+    );
     let r = rows(&txt);
     assert_eq!(r.len(), 162);
     assert!(r.iter().all(|row| row.len() == 3));
@@ -301,9 +226,7 @@ fn signature_writes_one_column_per_time_and_draws_the_chosen_one() {
 
 #[test]
 fn segment_labels_every_vertex_and_reports_the_patch_count() {
-    let dir = tempfile::tempdir().unwrap();
-    let labels = dir.path().join("labels.txt");
-    let png = dir.path().join("labels.png");
+    let (dir, [labels, png]) = temp_paths(["labels.txt", "labels.png"]);
     // Two spheres' worth of bumps: the Fiedler-like field of an elongated shape.
     let field = dir.path().join("f.txt");
     let mesh = read_mesh_shape(SPHERE);
@@ -351,24 +274,11 @@ fn read_mesh_shape(spec: &str) -> spectral_mesh::Mesh {
 
 #[test]
 fn embed_keeps_the_triangles_and_realizes_the_distance() {
-    let dir = tempfile::tempdir().unwrap();
-    let off = dir.path().join("e.off");
-    let coords = dir.path().join("c.txt");
-    let dist = dir.path().join("d.txt");
-    ok(&[
-        "embed",
-        SPHERE,
-        "--filter",
-        "commute",
-        "--dims",
-        "29",
-        "-k",
-        "30",
-        "-o",
-        s(&off),
-        "--coords",
-        s(&coords),
-    ]);
+    let (_dir, [off, coords, dist]) = temp_paths(["e.off", "c.txt", "d.txt"]);
+    ok_with(
+        "embed sphere:res=2 --filter commute --dims 29 -k 30 -o {} --coords {}",
+        &[&off, &coords],
+    );
     let m = read_mesh(&off).unwrap().mesh;
     let orig = read_mesh_shape(SPHERE);
     assert_eq!(m.n_triangles(), orig.n_triangles());
@@ -377,18 +287,10 @@ fn embed_keeps_the_triangles_and_realizes_the_distance() {
     assert_eq!(c.len(), 162);
     assert!(c.iter().all(|r| r.len() == 29));
     // With every non-zero pair, embedded Euclidean distance = the commute distance.
-    ok(&[
-        "distance",
-        SPHERE,
-        "--distance",
-        "commute",
-        "--source",
-        "4",
-        "-k",
-        "30",
-        "-o",
-        s(&dist),
-    ]);
+    ok_with(
+        "distance sphere:res=2 --distance commute --source 4 -k 30 -o {}",
+        &[&dist],
+    );
     let d = values(&dist);
     for j in [0usize, 50, 161] {
         let e: f64 = (0..29)
@@ -401,19 +303,11 @@ fn embed_keeps_the_triangles_and_realizes_the_distance() {
 
 #[test]
 fn perturb_noise_moves_vertices_and_keeps_the_connectivity() {
-    let dir = tempfile::tempdir().unwrap();
-    let off = dir.path().join("p.off");
-    let map = dir.path().join("map.txt");
-    let out = ok(&[
-        "perturb",
-        SPHERE,
-        "--apply",
-        "noise:0.1,seed=4",
-        "-o",
-        s(&off),
-        "--map",
-        s(&map),
-    ]);
+    let (_dir, [off, map]) = temp_paths(["p.off", "map.txt"]);
+    let out = ok_with(
+        "perturb sphere:res=2 --apply noise:0.1,seed=4 -o {} --map {}",
+        &[&off, &map],
+    );
     let p = read_mesh(&off).unwrap().mesh;
     let o = read_mesh_shape(SPHERE);
     assert_eq!(p.triangles(), o.triangles());
@@ -437,23 +331,11 @@ fn perturb_noise_moves_vertices_and_keeps_the_connectivity() {
 
 #[test]
 fn perturb_chain_map_reproduces_resampled_positions() {
-    let dir = tempfile::tempdir().unwrap();
-    let off = dir.path().join("p.off");
-    let map = dir.path().join("map.txt");
-    ok(&[
-        "perturb",
-        SPHERE,
-        "--apply",
-        "resample:1.5",
-        "--apply",
-        "scale:1",
-        "--apply",
-        "resample:1.5,seed=2",
-        "-o",
-        s(&off),
-        "--map",
-        s(&map),
-    ]);
+    let (_dir, [off, map]) = temp_paths(["p.off", "map.txt"]);
+    ok_with(
+        "perturb sphere:res=2 --apply resample:1.5 --apply scale:1 --apply resample:1.5,seed=2 -o {} --map {}",
+        &[&off, &map],
+    );
     let p = read_mesh(&off).unwrap().mesh;
     let o = read_mesh_shape(SPHERE);
     let r = rows(&map);
@@ -468,14 +350,13 @@ fn perturb_chain_map_reproduces_resampled_positions() {
             assert!((x - q[d]).abs() < 1e-9, "{x} vs {}", q[d]);
         }
     }
-    let e = err(&["perturb", SPHERE, "--apply", "wobble:3", "-o", s(&off)]);
+    let e = err_with("perturb sphere:res=2 --apply wobble:3 -o {}", &[&off]);
     assert!(e.contains("--apply wobble:3"), "{e}");
 }
 
 #[test]
 fn outputs_are_never_overwritten_without_force() {
-    let dir = tempfile::tempdir().unwrap();
-    let txt = dir.path().join("h.txt");
+    let (dir, [txt]) = temp_paths(["h.txt"]);
     std::fs::write(&txt, "keep me\n").unwrap();
     for args in [
         vec!["heat", SPHERE, "-k", "5", "-o", s(&txt)],
@@ -500,7 +381,7 @@ fn outputs_are_never_overwritten_without_force() {
         assert_eq!(std::fs::read_to_string(&txt).unwrap(), "keep me\n");
     }
     assert!(!Path::new("x.off").exists());
-    ok(&["heat", SPHERE, "-k", "5", "-o", s(&txt), "--force"]);
+    ok_with("heat sphere:res=2 -k 5 -o {} --force", &[&txt]);
     assert_eq!(values(&txt).len(), 162);
     // Unknown output types are refused before any computation.
     let e = err(&["heat", SPHERE, "-o", s(&dir.path().join("h.jpg"))]);
@@ -512,21 +393,11 @@ fn outputs_are_never_overwritten_without_force() {
 
 #[test]
 fn eigs_npz_reads_back_with_the_same_eigenvalues() {
-    let dir = tempfile::tempdir().unwrap();
-    let npz = dir.path().join("basis.npz");
-    let ev = dir.path().join("ev.txt");
-    ok(&[
-        "eigs",
-        SPHERE,
-        "-k",
-        "12",
-        "--laplacian",
-        "voronoi-cot",
-        "-o",
-        s(&npz),
-        "--eigenvalues-txt",
-        s(&ev),
-    ]);
+    let (dir, [npz, ev]) = temp_paths(["basis.npz", "ev.txt"]);
+    ok_with(
+        "eigs sphere:res=2 -k 12 --laplacian voronoi-cot -o {} --eigenvalues-txt {}",
+        &[&npz, &ev],
+    );
     let (basis, meta) = spectral_mesh::spectral::store::load_npz(&npz).unwrap();
     let v = values(&ev);
     assert_eq!(
@@ -541,7 +412,7 @@ fn eigs_npz_reads_back_with_the_same_eigenvalues() {
     let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
     assert_eq!(names.len(), 2);
     // Refuses to overwrite, and a wrong extension.
-    let e = err(&["eigs", SPHERE, "-k", "3", "-o", s(&npz)]);
+    let e = err_with("eigs sphere:res=2 -k 3 -o {}", &[&npz]);
     assert!(e.contains("already exists"), "{e}");
     let e = err(&[
         "eigs",
@@ -570,31 +441,10 @@ fn eigs_npz_reads_back_with_the_same_eigenvalues() {
 
 #[test]
 fn cache_is_filled_then_used() {
-    let dir = tempfile::tempdir().unwrap();
-    let cache = dir.path().join("cache");
-    let a = dir.path().join("a.txt");
-    let b = dir.path().join("b.txt");
-    let first = ok(&[
-        "distance",
-        SPHERE,
-        "-k",
-        "8",
-        "--cache",
-        s(&cache),
-        "-o",
-        s(&a),
-    ]);
+    let (_dir, [cache, a, b]) = temp_paths(["cache", "a.txt", "b.txt"]);
+    let first = ok_with("distance sphere:res=2 -k 8 --cache {} -o {}", &[&cache, &a]);
     assert!(first.contains("computed and stored in"), "{first}");
-    let second = ok(&[
-        "distance",
-        SPHERE,
-        "-k",
-        "8",
-        "--cache",
-        s(&cache),
-        "-o",
-        s(&b),
-    ]);
+    let second = ok_with("distance sphere:res=2 -k 8 --cache {} -o {}", &[&cache, &b]);
     assert!(second.contains("loaded from"), "{second}");
     assert_eq!(values(&a), values(&b));
 }

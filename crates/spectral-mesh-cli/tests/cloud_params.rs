@@ -144,60 +144,42 @@ fn same_bytes(a: &Path, b: &Path) {
     assert!(x == y, "{} and {} differ", a.display(), b.display());
 }
 
+/// As [`same_bytes`], for two files of folder `dir`.
+fn same_bytes_in(dir: &Path, a: &str, b: &str) {
+    same_bytes(&dir.join(a), &dir.join(b));
+}
+
 #[test]
 fn a_cloud_experiment_with_its_parameters_replays_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();
     write_random_sphere_points(&p.join("ball.xyz"), 900);
-    let cloud_opts = ["--neighbors", "6", "--mollify-factor", "2e-5"];
+    let cloud_opts = "--neighbors 6 --mollify-factor 2e-5";
     // The paper's diffusion basis, saved and replayed.
-    let mut args = vec![
-        "experiment",
-        "diffusion-basis",
-        "ball.xyz",
-        "-k",
-        "20",
-        "--t",
-        "0.02",
-        "-o",
-        "first",
-        "--save-experiment",
-        "diffusion.toml",
-    ];
-    args.extend(cloud_opts);
-    ok_in(p, &args);
+    ok_in_with(
+        p,
+        &format!(
+            "experiment diffusion-basis ball.xyz -k 20 --t 0.02 -o first --save-experiment diffusion.toml {cloud_opts}"
+        ),
+        &[],
+    );
     let text = std::fs::read_to_string(p.join("diffusion.toml")).unwrap();
     assert!(text.contains("[point_cloud]"), "{text}");
     assert!(text.contains("neighbors = 6"), "{text}");
     assert!(text.contains("normals = \"estimate\""), "{text}");
-    ok_in(p, &["run", "diffusion.toml", "-o", "replay"]);
-    same_bytes(
-        &p.join("first/diffusion-basis.txt"),
-        &p.join("replay/diffusion-basis.txt"),
-    );
-    same_bytes(
-        &p.join("first/summary.json"),
-        &p.join("replay/summary.json"),
-    );
+    ok_in_with(p, "run diffusion.toml -o replay", &[]);
+    same_bytes_in(p, "first/diffusion-basis.txt", "replay/diffusion-basis.txt");
+    same_bytes_in(p, "first/summary.json", "replay/summary.json");
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(p.join("first/summary.json")).unwrap()).unwrap();
     let pc = &summary["mesh"]["point_cloud"];
     assert_eq!(pc["neighbors"], 6, "{summary}");
     assert_eq!(pc["mollify_factor"], 2e-5, "{summary}");
     // The parameters matter: the defaults give another field.
-    ok_in(
+    ok_in_with(
         p,
-        &[
-            "experiment",
-            "diffusion-basis",
-            "ball.xyz",
-            "-k",
-            "20",
-            "--t",
-            "0.02",
-            "-o",
-            "defaults",
-        ],
+        "experiment diffusion-basis ball.xyz -k 20 --t 0.02 -o defaults",
+        &[],
     );
     let (a, b) = (
         values(&p.join("first/diffusion-basis.txt")),
@@ -206,121 +188,82 @@ fn a_cloud_experiment_with_its_parameters_replays_bit_for_bit() {
     assert!(a != b, "--neighbors 6 gave the default field");
 
     // A field command's --save-experiment records them too.
-    let mut args = vec![
-        "heat",
-        "ball.xyz",
-        "-k",
-        "20",
-        "--t",
-        "0.02",
-        "-o",
-        "heat.txt",
-        "--save-experiment",
-        "heat.toml",
-    ];
-    args.extend(cloud_opts);
-    ok_in(p, &args);
-    ok_in(p, &["run", "heat.toml", "-o", "heat-replay"]);
-    same_bytes(&p.join("heat.txt"), &p.join("heat-replay/heat.txt"));
+    ok_in_with(
+        p,
+        &format!(
+            "heat ball.xyz -k 20 --t 0.02 -o heat.txt --save-experiment heat.toml {cloud_opts}"
+        ),
+        &[],
+    );
+    ok_in_with(p, "run heat.toml -o heat-replay", &[]);
+    same_bytes_in(p, "heat.txt", "heat-replay/heat.txt");
     // The same field as the experiment (both the heat basis function at the same anchor).
-    same_bytes(&p.join("heat.txt"), &p.join("first/diffusion-basis.txt"));
+    same_bytes_in(p, "heat.txt", "first/diffusion-basis.txt");
 
     // The harmonic maps of a cloud are drawn on its triangle union: recorded as well.
-    let mut args = vec![
-        "experiment",
-        "harmonic",
-        "ball.xyz",
-        "-o",
-        "harm",
-        "--save-experiment",
-        "harm.toml",
-    ];
-    args.extend(cloud_opts);
-    ok_in(p, &args);
-    ok_in(p, &["run", "harm.toml", "-o", "harm-replay"]);
-    same_bytes(
-        &p.join("harm/harmonic-field-1.txt"),
-        &p.join("harm-replay/harmonic-field-1.txt"),
+    ok_in_with(
+        p,
+        &format!("experiment harmonic ball.xyz -o harm --save-experiment harm.toml {cloud_opts}"),
+        &[],
     );
-    same_bytes(
-        &p.join("harm/summary.json"),
-        &p.join("harm-replay/summary.json"),
+    ok_in_with(p, "run harm.toml -o harm-replay", &[]);
+    same_bytes_in(
+        p,
+        "harm/harmonic-field-1.txt",
+        "harm-replay/harmonic-field-1.txt",
     );
+    same_bytes_in(p, "harm/summary.json", "harm-replay/summary.json");
 }
 
 #[test]
 fn point_cloud_options_with_a_mesh_are_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();
-    let e = err_in(p, &["eigs", "sphere:res=2", "-k", "5", "--neighbors", "8"]);
+    let e = err_in_with(p, "eigs sphere:res=2 -k 5 --neighbors 8", &[]);
     assert!(
         e.contains("--neighbors applies only to point clouds")
             && e.contains("sphere:res=2 is a mesh"),
         "{e}"
     );
-    let e = err_in(
+    let e = err_in_with(
         p,
-        &[
-            "experiment",
-            "harmonic",
-            "sphere:res=1",
-            "--use-normals",
-            "--mollify-factor",
-            "1e-4",
-            "-o",
-            "h",
-        ],
+        "experiment harmonic sphere:res=1 --use-normals --mollify-factor 1e-4 -o h",
+        &[],
     );
     assert!(
         e.contains("--use-normals, --mollify-factor apply only to point clouds"),
         "{e}"
     );
-    let e = err_in(
-        p,
-        &["render", "sphere:res=1", "--neighbors", "8", "-o", "r.png"],
-    );
+    let e = err_in_with(p, "render sphere:res=1 --neighbors 8 -o r.png", &[]);
     assert!(e.contains("--neighbors"), "{e}");
     // operators: --mollify-factor sets the robust Laplacian of a mesh, and only that.
-    ok_in(
+    ok_in_with(
         p,
-        &[
-            "operators",
-            "sphere:res=1",
-            "--robust",
-            "--mollify-factor",
-            "1e-4",
-            "-o",
-            "ops",
-        ],
+        "operators sphere:res=1 --robust --mollify-factor 1e-4 -o ops",
+        &[],
     );
-    let e = err_in(
+    let e = err_in_with(
         p,
-        &[
-            "operators",
-            "sphere:res=1",
-            "--mollify-factor",
-            "1e-4",
-            "-o",
-            "ops2",
-        ],
+        "operators sphere:res=1 --mollify-factor 1e-4 -o ops2",
+        &[],
     );
     assert!(e.contains("--mollify-factor applies only"), "{e}");
     // A replay of a file with [point_cloud] on a mesh.
-    std::fs::write(
-        p.join("m.toml"),
+    write_in(
+        p,
+        "m.toml",
         "experiment = \"diffusion-basis\"\nmesh = \"sphere:res=1\"\nk = 10\n[point_cloud]\nneighbors = 8\n",
-    )
-    .unwrap();
-    let e = err_in(p, &["run", "m.toml", "-o", "m"]);
+    );
+    let e = err_in_with(p, "run m.toml -o m", &[]);
     assert!(e.contains("key 'point_cloud'"), "{e}");
     // Out of range, on a cloud.
     write_sphere_points(&p.join("ball.xyz"), 200);
-    let e = err_in(p, &["eigs", "ball.xyz", "-k", "5", "--neighbors", "1"]);
+    let e = err_in_with(p, "eigs ball.xyz -k 5 --neighbors 1", &[]);
     assert!(e.contains("--neighbors") && e.contains("at least 2"), "{e}");
-    let e = err_in(p, &["eigs", "ball.xyz", "-k", "5", "--mollify-factor=-1"]);
+    let e = err_in_with(p, "eigs ball.xyz -k 5 --mollify-factor=-1", &[]);
     assert!(e.contains("--mollify-factor") && e.contains(">= 0"), "{e}");
     // The help shows the library's defaults.
-    let help = ok_in(p, &["heat", "--help"]);
+    let help = ok_in_with(p, "heat --help", &[]);
     let d = PointCloudParams::default();
     for want in [
         format!("[default: {}]", d.neighbors),
@@ -346,26 +289,14 @@ fn batch_gives_the_options_to_its_clouds() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();
     write_sphere_points(&p.join("ball.xyz"), 600);
-    ok_in(p, &["batch", "ball.xyz", "-o", "defaults", "-k", "8"]);
-    ok_in(
-        p,
-        &[
-            "batch",
-            "ball.xyz",
-            "-o",
-            "n12",
-            "-k",
-            "8",
-            "--neighbors",
-            "12",
-        ],
-    );
+    ok_in_with(p, "batch ball.xyz -o defaults -k 8", &[]);
+    ok_in_with(p, "batch ball.xyz -o n12 -k 8 --neighbors 12", &[]);
     // The parameters are part of every result's parameter hash (a rerun with others
     // computes again).
     assert_ne!(
         params_hash(&p.join("defaults")),
         params_hash(&p.join("n12"))
     );
-    let e = err_in(p, &["batch", "ball.xyz", "-o", "bad", "--neighbors", "1"]);
+    let e = err_in_with(p, "batch ball.xyz -o bad --neighbors 1", &[]);
     assert!(e.contains("--neighbors") && e.contains("at least 2"), "{e}");
 }

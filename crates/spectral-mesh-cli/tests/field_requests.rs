@@ -55,7 +55,7 @@ fn every_request_kind_written_by_the_cli_equals_the_librarys_field() {
     // A signal for the diffusion: the height, as a field file.
     let signal: Vec<f64> = mesh.positions().iter().map(|q| q[2]).collect();
     let text: String = signal.iter().map(|v| format!("{v:?}\n")).collect();
-    std::fs::write(p.join("signal.txt"), text).unwrap();
+    write_in(p, "signal.txt", text);
     let signal_json = serde_json::to_string(&signal).unwrap();
 
     for (name, kind) in [
@@ -72,119 +72,34 @@ fn every_request_kind_written_by_the_cli_equals_the_librarys_field() {
         );
     }
     // (CLI arguments, output written, the library's request with defaults only.)
-    let cases: Vec<(Vec<&str>, &str, String)> = vec![
-        (
-            vec!["heat", SPHERE, "-o", "heat.txt"],
-            "heat.txt",
-            r#"{"kind": "heat"}"#.into(),
-        ),
-        (
-            vec!["heat", SPHERE, "--signal", "signal.txt", "-o", "diff.txt"],
-            "diff.txt",
-            format!(r#"{{"kind": "diffusion", "signal": {{"values": {signal_json}}}}}"#),
-        ),
-        (
-            vec!["heat", SPHERE, "--indicator", "5,0.4", "-o", "ball.txt"],
-            "ball.txt",
-            r#"{"kind": "diffusion", "signal": {"ball": {"vertex": 5, "radius": 0.4}}}"#.into(),
-        ),
-        (
-            vec!["distance", SPHERE, "-o", "dist.txt"],
-            "dist.txt",
-            r#"{"kind": "distance"}"#.into(),
-        ),
-        (
-            vec![
-                "distance",
-                SPHERE,
-                "--distance",
-                "wfem-diffusion",
-                "-o",
-                "wfem.txt",
-            ],
-            "wfem.txt",
-            r#"{"kind": "distance", "distance": "wfem-diffusion"}"#.into(),
-        ),
-        (
-            vec!["signature", SPHERE, "-o", "hks.txt"],
-            "hks.txt",
-            r#"{"kind": "hks"}"#.into(),
-        ),
-        (
-            vec!["signature", SPHERE, "--kind", "adf", "-o", "adf.txt"],
-            "adf.txt",
-            r#"{"kind": "adf"}"#.into(),
-        ),
-        (
-            vec![
-                "signature",
-                SPHERE,
-                "--kind",
-                "wks",
-                "--energies",
-                "5",
-                "-o",
-                "wks.txt",
-            ],
-            "wks.txt",
-            r#"{"kind": "wks", "energy": 5}"#.into(),
-        ),
-        (
-            vec![
-                "signature",
-                SPHERE,
-                "--kind",
-                "spectral-function",
-                "-o",
-                "sf.txt",
-            ],
-            "sf.txt",
-            r#"{"kind": "spectral-function"}"#.into(),
-        ),
-        (
-            vec!["segment", SPHERE, "-o", "seg.txt"],
-            "seg.txt",
-            r#"{"kind": "segmentation"}"#.into(),
-        ),
-        (
-            vec![
-                "experiment",
-                "harmonic",
-                SPHERE,
-                "--constraints",
-                "2",
-                "--size",
-                "32",
-                "-o",
-                "harm",
-            ],
-            "harm/harmonic-field-1.txt",
-            r#"{"kind": "harmonic"}"#.into(),
-        ),
-        (
-            vec!["run", "emb.toml", "-o", "emb"],
-            "emb/embedding.txt",
-            r#"{"kind": "embedding"}"#.into(),
-        ),
-        (
-            vec!["run", "eig.toml", "-o", "eig"],
-            "eig/eigenfunction.txt",
-            r#"{"kind": "eigenfunction"}"#.into(),
-        ),
-        (
-            vec!["run", "green.toml", "-o", "green"],
-            "green/green.txt",
-            r#"{"kind": "green"}"#.into(),
-        ),
-        (
-            vec!["run", "harmonic.toml", "-o", "harmonic"],
-            "harmonic/harmonic.txt",
-            r#"{"kind": "harmonic"}"#.into(),
-        ),
+    #[rustfmt::skip]
+    let cases: Vec<(&str, &str, String)> = vec![
+        ("heat sphere:res=2 -o heat.txt", "heat.txt", r#"{"kind": "heat"}"#.into()),
+        ("heat sphere:res=2 --signal signal.txt -o diff.txt",
+         "diff.txt", format!(r#"{{"kind": "diffusion", "signal": {{"values": {signal_json}}}}}"#)),
+        ("heat sphere:res=2 --indicator 5,0.4 -o ball.txt",
+         "ball.txt", r#"{"kind": "diffusion", "signal": {"ball": {"vertex": 5, "radius": 0.4}}}"#.into()),
+        ("distance sphere:res=2 -o dist.txt", "dist.txt", r#"{"kind": "distance"}"#.into()),
+        ("distance sphere:res=2 --distance wfem-diffusion -o wfem.txt",
+         "wfem.txt", r#"{"kind": "distance", "distance": "wfem-diffusion"}"#.into()),
+        ("signature sphere:res=2 -o hks.txt", "hks.txt", r#"{"kind": "hks"}"#.into()),
+        ("signature sphere:res=2 --kind adf -o adf.txt", "adf.txt", r#"{"kind": "adf"}"#.into()),
+        ("signature sphere:res=2 --kind wks --energies 5 -o wks.txt",
+         "wks.txt", r#"{"kind": "wks", "energy": 5}"#.into()),
+        ("signature sphere:res=2 --kind spectral-function -o sf.txt",
+         "sf.txt", r#"{"kind": "spectral-function"}"#.into()),
+        ("segment sphere:res=2 -o seg.txt", "seg.txt", r#"{"kind": "segmentation"}"#.into()),
+        ("experiment harmonic sphere:res=2 --constraints 2 --size 32 -o harm",
+         "harm/harmonic-field-1.txt", r#"{"kind": "harmonic"}"#.into()),
+        ("run emb.toml -o emb", "emb/embedding.txt", r#"{"kind": "embedding"}"#.into()),
+        ("run eig.toml -o eig", "eig/eigenfunction.txt", r#"{"kind": "eigenfunction"}"#.into()),
+        ("run green.toml -o green", "green/green.txt", r#"{"kind": "green"}"#.into()),
+        ("run harmonic.toml -o harmonic",
+         "harmonic/harmonic.txt", r#"{"kind": "harmonic"}"#.into()),
     ];
     let mut kinds: Vec<&str> = Vec::new();
     for (args, out, json) in &cases {
-        ok_in(p, args);
+        ok_in_with(p, args, &[]);
         let req = request(json);
         let cli = values(&p.join(out));
         assert_eq!(cli.len(), n);
@@ -212,100 +127,22 @@ fn save_experiment_on_each_field_command_replays_to_the_same_bytes() {
     let field: String = (0..162)
         .map(|i| format!("{}\n", (i as f64 * 0.37).sin()))
         .collect();
-    std::fs::write(p.join("f.txt"), field).unwrap();
+    write_in(p, "f.txt", field);
     // (command line without outputs, the kind the replay writes)
-    let cases: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["heat", SPHERE, "-k", "30", "--t", "0.05"], "heat"),
-        (
-            vec![
-                "heat",
-                SPHERE,
-                "-k",
-                "30",
-                "--indicator",
-                "3,0.5",
-                "--kernel",
-                "voronoi-cot",
-            ],
-            "diffusion",
-        ),
-        (
-            vec!["heat", SPHERE, "-k", "30", "--signal", "f.txt"],
-            "diffusion",
-        ),
-        (
-            vec![
-                "distance",
-                SPHERE,
-                "-k",
-                "30",
-                "--source",
-                "9",
-                "--distance",
-                "mix:a=0.3,t=0.2",
-                "--no-normalize",
-            ],
-            "distance",
-        ),
-        (
-            vec![
-                "distance",
-                SPHERE,
-                "-k",
-                "25",
-                "--distance",
-                "wfem-diffusion:t=0.05",
-                "--laplacian",
-                "voronoi-cot",
-            ],
-            "distance",
-        ),
-        (
-            vec![
-                "signature",
-                SPHERE,
-                "-k",
-                "30",
-                "--kind",
-                "wks",
-                "--energies",
-                "auto:4",
-                "--column",
-                "2",
-                "--scaled",
-            ],
-            "wks",
-        ),
-        (
-            vec![
-                "signature",
-                SPHERE,
-                "-k",
-                "30",
-                "--times",
-                "auto:3",
-                "--column",
-                "1",
-            ],
-            "hks",
-        ),
-        (
-            vec![
-                "segment",
-                SPHERE,
-                "-k",
-                "30",
-                "--signature",
-                "wks:e=4,sigma=0.4",
-                "--persistence",
-                "0.02",
-            ],
-            "segmentation",
-        ),
-        (
-            vec!["segment", SPHERE, "--signature", "field:f.txt"],
-            "segmentation",
-        ),
+    #[rustfmt::skip]
+    let cases: Vec<(&str, &str)> = vec![
+        ("heat sphere:res=2 -k 30 --t 0.05", "heat"),
+        ("heat sphere:res=2 -k 30 --indicator 3,0.5 --kernel voronoi-cot", "diffusion"),
+        ("heat sphere:res=2 -k 30 --signal f.txt", "diffusion"),
+        ("distance sphere:res=2 -k 30 --source 9 --distance mix:a=0.3,t=0.2 --no-normalize",
+         "distance"),
+        ("distance sphere:res=2 -k 25 --distance wfem-diffusion:t=0.05 --laplacian voronoi-cot",
+         "distance"),
+        ("signature sphere:res=2 -k 30 --kind wks --energies auto:4 --column 2 --scaled", "wks"),
+        ("signature sphere:res=2 -k 30 --times auto:3 --column 1", "hks"),
+        ("segment sphere:res=2 -k 30 --signature wks:e=4,sigma=0.4 --persistence 0.02",
+         "segmentation"),
+        ("segment sphere:res=2 --signature field:f.txt", "segmentation"),
     ];
     for (i, (args, kind)) in cases.iter().enumerate() {
         let dir = format!("c{i}");
@@ -316,7 +153,7 @@ fn save_experiment_on_each_field_command_replays_to_the_same_bytes() {
             format!("{dir}/direct.wrl"),
             format!("{dir}/files/exp.toml"),
         );
-        let mut direct = args.clone();
+        let mut direct: Vec<&str> = args.split_whitespace().collect();
         direct.extend([
             "-o",
             &txt,
@@ -374,9 +211,9 @@ fn run_of_a_saved_field_file_reproduces_it_and_honours_basis_k() {
     let p = d.path();
     // 40 pairs computed, the first 20 used: the field of the first 20 of 40 pairs.
     let file = "experiment = \"field\"\nmesh = \"sphere:res=2\"\nbasis_k = 40\n\n[figure]\nsize = 48\n\n[field]\nkind = \"distance\"\ndistance = \"commute\"\nk = 20\n";
-    std::fs::write(p.join("e.toml"), file).unwrap();
-    ok_in(p, &["run", "e.toml", "-o", "a"]);
-    ok_in(p, &["run", "e.toml", "-o", "b"]);
+    write_in(p, "e.toml", file);
+    ok_in_with(p, "run e.toml -o a", &[]);
+    ok_in_with(p, "run e.toml -o b", &[]);
     for name in [
         "distance.txt",
         "distance.png",

@@ -20,13 +20,8 @@ fn sphere(n: usize, r: f64, c: [f64; 3]) -> Vec<[f64; 3]> {
     (0..n)
         .map(|i| {
             let y = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let s = (1.0 - y * y).sqrt();
-            let th = golden * i as f64;
-            [
-                c[0] + r * s * th.cos(),
-                c[1] + r * y,
-                c[2] + r * s * th.sin(),
-            ]
+            let (rs, th) = (r * (1.0 - y * y).sqrt(), golden * i as f64); // ring radius, angle
+            [c[0] + rs * th.cos(), c[1] + r * y, c[2] + rs * th.sin()]
         })
         .collect()
 }
@@ -194,8 +189,7 @@ fn a_point_cloud_field_picture_has_coloured_discs_where_the_points_are() {
 
 #[test]
 fn what_does_not_apply_to_a_point_cloud_says_so_by_name() {
-    let dir = tempfile::tempdir().unwrap();
-    let xyz = dir.path().join("ball.xyz");
+    let (dir, [xyz]) = temp_paths(["ball.xyz"]);
     write_xyz(&xyz, &sphere(200, 1.0, [0.0; 3]));
     let f = xyz.to_str().unwrap();
     let e = err(&["eigs", f, "-k", "5", "--laplacian", "fem"]);
@@ -211,7 +205,7 @@ fn what_does_not_apply_to_a_point_cloud_says_so_by_name() {
         "{e}"
     );
     // The help lists robust and says what applies to point clouds.
-    let help = ok(&["distance", "--help"]);
+    let help = ok_with("distance --help", &[]);
     assert!(
         help.contains("robust") && help.to_lowercase().contains("point cloud"),
         "{help}"

@@ -59,14 +59,14 @@ fn replay_is_bit_identical(args: &[&str]) {
     ] {
         assert!(text.contains(key), "{key} missing in\n{text}");
     }
-    ok_in(p, &["run", "files/exp.toml", "-o", "replay1"]);
-    ok_in(p, &["run", "files/exp.toml", "-o", "replay2"]);
+    ok_in_with(p, "run files/exp.toml -o replay1", &[]);
+    ok_in_with(p, "run files/exp.toml -o replay2", &[]);
     same_files(&p.join("direct"), &p.join("replay1"));
     same_files(&p.join("replay1"), &p.join("replay2"));
     // Without -o the file's own `out` (relative to the file) is used: the direct folder.
-    let e = err_in(p, &["run", "files/exp.toml"]);
+    let e = err_in_with(p, "run files/exp.toml", &[]);
     assert!(e.contains("already exists"), "{e}");
-    ok_in(p, &["run", "files/exp.toml", "--force"]);
+    ok_in_with(p, "run files/exp.toml --force", &[]);
     same_files(&p.join("direct"), &p.join("replay1"));
 }
 
@@ -131,20 +131,11 @@ fn a_changed_mesh_is_refused_naming_both_hashes() {
     let d = tempfile::tempdir().unwrap();
     let p = d.path();
     let mesh = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
-    std::fs::write(p.join("tet.off"), mesh).unwrap();
-    ok_in(
+    write_in(p, "tet.off", mesh);
+    ok_in_with(
         p,
-        &[
-            "experiment",
-            "harmonic",
-            "tet.off",
-            "--size",
-            "32",
-            "-o",
-            "a",
-            "--save-experiment",
-            "e/tet.toml",
-        ],
+        "experiment harmonic tet.off --size 32 -o a --save-experiment e/tet.toml",
+        &[],
     );
     let text = std::fs::read_to_string(p.join("e/tet.toml")).unwrap();
     assert!(text.contains("mesh = \"../tet.off\""), "{text}");
@@ -155,7 +146,7 @@ fn a_changed_mesh_is_refused_naming_both_hashes() {
         .trim_end_matches('"')
         .to_string();
     std::fs::write(p.join("tet.off"), mesh.replace("0 0 1\n3", "0 0 2\n3")).unwrap();
-    let e = err_in(p, &["run", "e/tet.toml", "-o", "b"]);
+    let e = err_in_with(p, "run e/tet.toml -o b", &[]);
     assert!(e.contains(&old_hash), "{e}");
     assert!(e.contains("--allow-changed-mesh"), "{e}");
     let new_hash = e
@@ -167,7 +158,7 @@ fn a_changed_mesh_is_refused_naming_both_hashes() {
         .unwrap();
     assert_eq!(new_hash.len(), 64);
     assert_ne!(new_hash, old_hash);
-    ok_in(p, &["run", "e/tet.toml", "-o", "b", "--allow-changed-mesh"]);
+    ok_in_with(p, "run e/tet.toml -o b --allow-changed-mesh", &[]);
 }
 
 #[test]
@@ -200,8 +191,8 @@ fn bad_experiment_files_name_the_key() {
             "anchor",
         ),
     ] {
-        std::fs::write(p.join("x.toml"), text).unwrap();
-        let e = err_in(p, &["run", "x.toml", "-o", "o"]);
+        write_in(p, "x.toml", text);
+        let e = err_in_with(p, "run x.toml -o o", &[]);
         assert!(e.contains(key), "{text:?}: {e}");
     }
 }
@@ -237,19 +228,10 @@ fn csv_rows(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
 fn truncation_study_writes_falling_curves() {
     let d = tempfile::tempdir().unwrap();
     let p = d.path();
-    ok_in(
+    ok_in_with(
         p,
-        &[
-            "study",
-            "truncation",
-            "torus:res=1",
-            "--t",
-            "0.01,0.1",
-            "-k",
-            "5,50,all",
-            "-o",
-            "t",
-        ],
+        "study truncation torus:res=1 --t 0.01,0.1 -k 5,50,all -o t",
+        &[],
     );
     let (h, rows) = csv_rows(&p.join("t/truncation.csv"));
     assert_eq!(
@@ -299,7 +281,7 @@ quantities = ["heat"]
 "#,
     )
     .unwrap();
-    let out = ok_in(p, &["study", "robustness", "s.toml", "-o", "r"]);
+    let out = ok_in_with(p, "study robustness s.toml -o r", &[]);
     assert!(out.contains("### rigid"), "{out}");
     let (h, rows) = csv_rows(&p.join("r/robustness.csv"));
     assert_eq!(
@@ -325,19 +307,19 @@ quantities = ["heat"]
     }
     assert!(p.join("r/noise-heat.png").exists());
     // Errors name the key.
-    std::fs::write(
-        p.join("bad.toml"),
+    write_in(
+        p,
+        "bad.toml",
         "[[table]]\nname = \"x\"\nmeshes = [\"sphere:res=1\"]\nperturbations = [\"noise:abc\"]\n",
-    )
-    .unwrap();
-    let e = err_in(p, &["study", "robustness", "bad.toml", "-o", "b"]);
+    );
+    let e = err_in_with(p, "study robustness bad.toml -o b", &[]);
     assert!(e.contains("table[0].perturbations[0]"), "{e}");
-    std::fs::write(
-        p.join("bad.toml"),
+    write_in(
+        p,
+        "bad.toml",
         "[[table]]\nname = \"x\"\nmeshes = [\"${SPECTRAL_MESH_NO_SUCH_VAR}/m.off\"]\nperturbations = [\"noise:0.1\"]\n",
-    )
-    .unwrap();
-    let e = err_in(p, &["study", "robustness", "bad.toml", "-o", "b"]);
+    );
+    let e = err_in_with(p, "study robustness bad.toml -o b", &[]);
     assert!(
         e.contains("table[0].meshes[0]") && e.contains("SPECTRAL_MESH_NO_SUCH_VAR"),
         "{e}"

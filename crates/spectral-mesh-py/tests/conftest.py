@@ -20,28 +20,24 @@ import spectral_mesh as sm
 SHARED = os.environ.get("SPECTRAL_MESH_SHARED_MESHES")
 
 
-@pytest.fixture(scope="session")
-def sphere():
-    """An icosphere (642 vertices, closed, Delaunay)."""
-    return sm.shape("sphere:res=3")
+def _shape_fixture(name, spec, doc):
+    """A session fixture `name` giving the built-in shape `spec`."""
+
+    def build():
+        return sm.shape(spec)
+
+    build.__doc__ = doc
+    return pytest.fixture(scope="session", name=name)(build)
 
 
-@pytest.fixture(scope="session")
-def torus():
-    """An irregularly sampled torus (closed, genus 1, triangle areas vary a lot)."""
-    return sm.shape("irregular-torus:res=3")
-
-
-@pytest.fixture(scope="session")
-def disk():
-    """A disk (bordered)."""
-    return sm.shape("disk:res=1")
-
-
-@pytest.fixture(scope="session")
-def pretzel():
-    """The paper's 3-torus (genus 3)."""
-    return sm.shape("3torus")
+sphere = _shape_fixture("sphere", "sphere:res=3", "An icosphere (642 vertices, closed, Delaunay).")
+torus = _shape_fixture(
+    "torus",
+    "irregular-torus:res=3",
+    "An irregularly sampled torus (closed, genus 1, triangle areas vary a lot).",
+)
+disk = _shape_fixture("disk", "disk:res=1", "A disk (bordered).")
+pretzel = _shape_fixture("pretzel", "3torus", "The paper's 3-torus (genus 3).")
 
 
 def under_ci() -> bool:

@@ -166,14 +166,19 @@ def test_analysis_basis_equals_eigenbasis_and_grows(torus):
 # ------------------------------------------------------------------------ HKS / WKS
 
 
+def _scaled(natural, coefs, scaled):
+    """pyFM's optional scaling of a signature: each column by the sum of its coefficients."""
+    if scaled:
+        return natural / coefs.sum(axis=1)[None, :]
+    return natural
+
+
 def pyfm_hks(evals, evects, times, scaled):
     """pyFM's signatures.HKS, re-derived: sum_k exp(-lambda_k t) phi_k(x)^2 (all pairs),
     scaled by the heat trace sum_k exp(-lambda_k t)."""
     coefs = np.exp(-np.outer(times, evals))  # (T, K)
     natural = np.einsum("tk,nk->nt", coefs, np.square(evects))
-    if scaled:
-        return natural / coefs.sum(axis=1)[None, :]
-    return natural
+    return _scaled(natural, coefs, scaled)
 
 
 def pyfm_auto_times(evals, num_t):
@@ -190,9 +195,7 @@ def pyfm_wks(evals, evects, energy_list, sigma, scaled):
     ev, X = evals[keep], evects[:, keep]
     coefs = np.exp(-np.square(energy_list[:, None] - np.log(np.abs(ev))[None, :]) / (2 * sigma**2))
     natural = np.einsum("tk,nk->nt", coefs, np.square(X))
-    if scaled:
-        return natural / coefs.sum(axis=1)[None, :]
-    return natural
+    return _scaled(natural, coefs, scaled)
 
 
 def pyfm_auto_energies(evals, num_e):

@@ -22,18 +22,25 @@ fn sphere(r: f64, rings: usize, segs: usize) -> Mesh {
     p.push([0.0, 0.0, -r]);
     let south = p.len() - 1;
     let ring = |i: usize, j: usize| 1 + (i - 1) * segs + (j % segs);
-    let mut t = Vec::new();
-    for j in 0..segs {
-        t.push([0, ring(1, j), ring(1, j + 1)]);
-        t.push([south, ring(rings - 1, j + 1), ring(rings - 1, j)]);
-    }
+    // The caps (fans around the poles), then two triangles per quad of the bands.
+    let mut t: Vec<[usize; 3]> = (0..segs)
+        .flat_map(|j| {
+            let (a, b) = (ring(rings - 1, j), ring(rings - 1, j + 1));
+            [[0, ring(1, j), ring(1, j + 1)], [south, b, a]]
+        })
+        .collect();
     for i in 1..rings - 1 {
         for j in 0..segs {
-            t.push([ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)]);
-            t.push([ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)]);
+            let (a, d) = (ring(i, j), ring(i, j + 1)); // on ring i
+            let (b, c) = (ring(i + 1, j), ring(i + 1, j + 1)); // on ring i + 1
+            t.extend([[a, b, c], [a, c, d]]);
         }
     }
     Mesh::new(p, t).unwrap()
+}
+
+fn marker(position: [f64; 3], kind: MarkerKind) -> Marker {
+    Marker { position, kind }
 }
 
 /// Square `[-1, 1]^2` in the plane z = 0, `n × n` cells.
@@ -48,15 +55,20 @@ fn quad(n: usize) -> Mesh {
             ]);
         }
     }
-    let mut t = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let a = j * (n + 1) + i;
-            t.push([a, a + 1, a + n + 2]);
-            t.push([a, a + n + 2, a + n + 1]);
-        }
-    }
+    // Each cell (a = its lower-left corner) split along the diagonal a, a + n + 2.
+    let t: Vec<[usize; 3]> = (0..n)
+        .flat_map(|j| (0..n).map(move |i| j * (n + 1) + i))
+        .flat_map(|a| [[a, a + 1, a + n + 2], [a, a + n + 2, a + n + 1]])
+        .collect();
     Mesh::new(p, t).unwrap()
+}
+
+/// The opaque pixels of `img` with a red channel under 100 (lines drawn dark).
+fn dark_pixels(img: &spectral_mesh_render::Image) -> usize {
+    img.rgba
+        .chunks_exact(4)
+        .filter(|c| c[0] < 100 && c[3] == 255)
+        .count()
 }
 
 fn opts(w: u32, h: u32) -> RenderOptions {
@@ -258,20 +270,12 @@ fn hidden_lines_do_not_leak_past_the_silhouette() {
         ..opts(200, 200)
     };
     let img = render_scene(&scene, &o).unwrap();
-    let dark = img
-        .rgba
-        .chunks_exact(4)
-        .filter(|c| c[0] < 100 && c[3] == 255)
-        .count();
+    let dark = dark_pixels(&img);
     assert_eq!(dark, 0, "hidden ring leaked {dark} dark pixels");
     // The same ring just in front of the silhouette is drawn.
     scene.level_sets = extract_level_sets(&mesh, &field, &[0.06]);
     let img = render_scene(&scene, &o).unwrap();
-    let dark = img
-        .rgba
-        .chunks_exact(4)
-        .filter(|c| c[0] < 100 && c[3] == 255)
-        .count();
+    let dark = dark_pixels(&img);
     assert!(dark > 300, "{dark}");
 }
 
@@ -282,22 +286,10 @@ fn markers_appear_at_projected_positions_when_visible() {
     let s = 0.6f64;
     let front = [s, 0.0, (1.0 - s * s).sqrt()];
     scene.markers = vec![
-        Marker {
-            position: [0.0, 0.0, 1.0],
-            kind: MarkerKind::Maximum,
-        },
-        Marker {
-            position: [0.0, 0.0, -1.0],
-            kind: MarkerKind::Minimum,
-        },
-        Marker {
-            position: front,
-            kind: MarkerKind::Saddle,
-        },
-        Marker {
-            position: [-0.6, 0.0, 0.8],
-            kind: MarkerKind::Source,
-        },
+        marker([0.0, 0.0, 1.0], MarkerKind::Maximum),
+        marker([0.0, 0.0, -1.0], MarkerKind::Minimum),
+        marker(front, MarkerKind::Saddle),
+        marker([-0.6, 0.0, 0.8], MarkerKind::Source),
     ];
     let o = opts(300, 300);
     let img = render_scene(&scene, &o).unwrap();
@@ -441,10 +433,7 @@ fn tiny_and_odd_sizes_do_not_panic() {
     let field: Vec<f64> = mesh.positions().iter().map(|p| p[0]).collect();
     let mut scene = Scene::with_field(&mesh, &field, Colormap::Viridis, None);
     scene.level_sets = extract_level_sets(&mesh, &field, &[0.0, 0.5]);
-    scene.markers = vec![Marker {
-        position: [1.0, 0.0, 0.0],
-        kind: MarkerKind::Maximum,
-    }];
+    scene.markers = vec![marker([1.0, 0.0, 0.0], MarkerKind::Maximum)];
     for (w, h) in [(1, 1), (2, 3), (7, 1), (41, 5), (300, 17)] {
         for ss in [1, 4] {
             let o = RenderOptions {
@@ -488,18 +477,9 @@ fn vrml_round_trip_counts() {
         polylines: vec![],
     });
     scene.markers = vec![
-        Marker {
-            position: [0.0, 0.0, 1.0],
-            kind: MarkerKind::Maximum,
-        },
-        Marker {
-            position: [0.0, 0.0, -1.0],
-            kind: MarkerKind::Minimum,
-        },
-        Marker {
-            position: [1.0, 0.0, 0.0],
-            kind: MarkerKind::Source,
-        },
+        marker([0.0, 0.0, 1.0], MarkerKind::Maximum),
+        marker([0.0, 0.0, -1.0], MarkerKind::Minimum),
+        marker([1.0, 0.0, 0.0], MarkerKind::Source),
     ];
     let mut out = Vec::new();
     write_vrml(&mut out, &scene).unwrap();

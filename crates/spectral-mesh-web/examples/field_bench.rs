@@ -9,8 +9,9 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::io::{Read, Write};
-use std::net::{SocketAddr, TcpStream};
+mod common;
+
+use std::net::SocketAddr;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -51,30 +52,17 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+#[path = "../tests/common/blocking.rs"]
+mod blocking;
+
 fn http(addr: SocketAddr, method: &str, path: &str, body: &Value) -> (u16, Vec<u8>) {
-    let mut s = TcpStream::connect(addr).unwrap();
-    s.set_nodelay(true).unwrap();
-    let text = body.to_string();
-    write!(
-        s,
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{text}",
-        text.len()
-    )
-    .unwrap();
-    let mut buf = Vec::new();
-    s.read_to_end(&mut buf).unwrap();
-    let split = buf.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
-    let status = String::from_utf8_lossy(&buf[9..12]).parse().unwrap();
-    (status, buf[split + 4..].to_vec())
+    let (status, _, body) =
+        blocking::exchange(addr, method, path, Some(body), Duration::from_secs(3600));
+    (status, body)
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let spec = args
-        .first()
-        .cloned()
-        .unwrap_or_else(|| "torus:res=5".into());
-    let k: usize = args.get(1).map_or(200, |s| s.parse().unwrap());
+    let (args, spec, k) = common::spec_and_k("torus:res=5", 200);
     let repeats: usize = args.get(2).map_or(15, |s| s.parse().unwrap());
     // A pool of its own, made first, as the server's field threads (see AppState::fields).
     let pool = rayon::ThreadPoolBuilder::new().build().unwrap();

@@ -9,6 +9,8 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod common;
+
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -30,12 +32,7 @@ fn status(key: &str) -> usize {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let spec = args
-        .first()
-        .cloned()
-        .unwrap_or_else(|| "sphere:res=5".into());
-    let k: usize = args.get(1).map_or(100, |v| v.parse().unwrap());
+    let (args, spec, k) = common::spec_and_k("sphere:res=5", 100);
     let laplacian: Laplacian = args.get(2).map_or(Laplacian::Fem, |v| v.parse().unwrap());
     let mesh = if spectral_mesh::shapes::is_shape_spec(&spec) {
         spectral_mesh::shapes::build_str(&spec).unwrap()

@@ -7,6 +7,8 @@
 
 #![allow(clippy::unwrap_used)]
 
+mod common;
+
 use std::time::Instant;
 
 use spectral_mesh::analysis::{Analysis, AnalysisOptions};
@@ -28,12 +30,7 @@ fn distance_ms(b: &Eigenbasis) -> f64 {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let spec = args
-        .first()
-        .cloned()
-        .unwrap_or_else(|| "torus:res=5".into());
-    let k: usize = args.get(1).map_or(200, |s| s.parse().unwrap());
+    let (_, spec, k) = common::spec_and_k("torus:res=5", 200);
     let pool = || rayon::ThreadPoolBuilder::new().build().unwrap();
     let early = pool();
     let an = Analysis::new(

@@ -3,14 +3,16 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::io::{Read, Write};
-use std::net::{SocketAddr, TcpStream};
+use std::net::SocketAddr;
 use std::time::Duration;
 
 use serde_json::{Value, json};
 use spectral_mesh_web::api::assets_embedded;
 use spectral_mesh_web::field::parse_reply;
 use spectral_mesh_web::{ServeConfig, spawn};
+
+#[path = "common/blocking.rs"]
+mod blocking;
 
 /// (status, headers in lower case, body) of one request.
 fn http(
@@ -19,37 +21,7 @@ fn http(
     path: &str,
     body: Option<&Value>,
 ) -> (u16, String, Vec<u8>) {
-    let mut s = TcpStream::connect(addr).unwrap();
-    s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
-    let payload = body.map(|b| b.to_string()).unwrap_or_default();
-    write!(
-        s,
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{payload}",
-        payload.len()
-    )
-    .unwrap();
-    let mut buf = Vec::new();
-    s.read_to_end(&mut buf).unwrap();
-    let split = buf.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
-    let head = String::from_utf8_lossy(&buf[..split]).to_ascii_lowercase();
-    let status = head[9..12].parse().unwrap();
-    let mut body = buf[split + 4..].to_vec();
-    if head.contains("transfer-encoding: chunked") {
-        let mut out = Vec::new();
-        let mut b = &body[..];
-        loop {
-            let nl = b.windows(2).position(|w| w == b"\r\n").unwrap();
-            let len =
-                usize::from_str_radix(std::str::from_utf8(&b[..nl]).unwrap().trim(), 16).unwrap();
-            if len == 0 {
-                break;
-            }
-            out.extend_from_slice(&b[nl + 2..nl + 2 + len]);
-            b = &b[nl + 4 + len..];
-        }
-        body = out;
-    }
-    (status, head, body)
+    blocking::exchange(addr, method, path, body, Duration::from_secs(60))
 }
 
 fn server() -> spectral_mesh_web::RunningServer {

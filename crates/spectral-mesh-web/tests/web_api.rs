@@ -9,33 +9,25 @@ use std::time::Duration;
 use serde_json::{Value, json};
 use spectral_mesh::analysis::{Analysis, AnalysisOptions, FieldRequest};
 use spectral_mesh::experiments::file::ExperimentFile;
+use spectral_mesh_web::ServeConfig;
 use spectral_mesh_web::field::{ParsedReply, parse_reply};
-use spectral_mesh_web::{ServeConfig, bind};
-use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio::net::TcpStream;
 
-struct Reply {
-    status: u16,
-    headers: String,
-    body: Vec<u8>,
+mod common;
+use common::{Reply, get, post_field, post_json, start_with};
+
+/// The reply of a field request, parsed (asserting status 200).
+trait FieldReply {
+    fn field(&self) -> ParsedReply;
 }
 
-impl Reply {
-    fn json(&self) -> Value {
-        serde_json::from_slice(&self.body).unwrap_or(Value::Null)
-    }
-    fn error(&self) -> String {
-        self.json()["error"].as_str().unwrap_or("").to_string()
-    }
-    fn text(&self) -> String {
-        String::from_utf8_lossy(&self.body).into_owned()
-    }
+impl FieldReply for Reply {
     fn field(&self) -> ParsedReply {
         assert_eq!(self.status, 200, "{}", self.text());
         parse_reply(&self.body).unwrap()
     }
 }
 
+/// A request with this content type (`extra`: more header lines, each ending in CRLF).
 async fn request(
     addr: std::net::SocketAddr,
     method: &str,
@@ -44,68 +36,32 @@ async fn request(
     extra: &str,
     body: &[u8],
 ) -> Reply {
-    let mut s = TcpStream::connect(addr).await.unwrap();
-    let head = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Type: {content_type}\r\nContent-Length: {}\r\n{extra}\r\n",
-        body.len()
-    );
-    s.write_all(head.as_bytes()).await.unwrap();
-    // The server may answer (413) before the whole body is sent; ignore write errors.
-    let _ = s.write_all(body).await;
-    let mut buf = Vec::new();
-    let _ = tokio::time::timeout(Duration::from_secs(60), s.read_to_end(&mut buf)).await;
-    let split = buf
-        .windows(4)
-        .position(|w| w == b"\r\n\r\n")
-        .expect("no header end");
-    let headers = String::from_utf8_lossy(&buf[..split]).to_string();
-    let status: u16 = headers[9..12].parse().unwrap();
-    let mut body = buf[split + 4..].to_vec();
-    if headers
-        .to_ascii_lowercase()
-        .contains("transfer-encoding: chunked")
-    {
-        body = dechunk(&body);
-    }
-    Reply {
-        status,
-        headers,
-        body,
-    }
+    let extra = format!("Content-Type: {content_type}\r\n{extra}");
+    common::request(addr, method, path, &extra, body).await
 }
 
-fn dechunk(mut b: &[u8]) -> Vec<u8> {
-    let mut out = Vec::new();
-    while let Some(eol) = b.windows(2).position(|w| w == b"\r\n") {
-        let size =
-            usize::from_str_radix(std::str::from_utf8(&b[..eol]).unwrap().trim(), 16).unwrap_or(0);
-        if size == 0 {
-            break;
+/// A request of a table of bad requests.
+enum Req {
+    /// A JSON body posted to the path.
+    Json(String, Value),
+    /// A GET of the path.
+    Get(String),
+    /// Method, path, content type, extra header lines, body.
+    Raw(&'static str, String, &'static str, &'static str, Vec<u8>),
+}
+
+async fn send(addr: std::net::SocketAddr, req: Req) -> Reply {
+    match req {
+        Req::Json(path, v) => post_json(addr, &path, v).await,
+        Req::Get(path) => get(addr, &path).await,
+        Req::Raw(method, path, ct, extra, body) => {
+            request(addr, method, &path, ct, extra, &body).await
         }
-        out.extend(&b[eol + 2..eol + 2 + size]);
-        b = &b[eol + 2 + size + 2..];
     }
-    out
-}
-
-async fn get(addr: std::net::SocketAddr, path: &str) -> Reply {
-    request(addr, "GET", path, "text/plain", "", b"").await
-}
-
-async fn post_json(addr: std::net::SocketAddr, path: &str, v: Value) -> Reply {
-    request(
-        addr,
-        "POST",
-        path,
-        "application/json",
-        "",
-        v.to_string().as_bytes(),
-    )
-    .await
 }
 
 async fn start(max_upload: usize) -> std::net::SocketAddr {
-    let cfg = ServeConfig {
+    let addr = start_with(ServeConfig {
         port: 0,
         limits: spectral_mesh_web::Limits {
             max_upload_bytes: max_upload,
@@ -113,11 +69,9 @@ async fn start(max_upload: usize) -> std::net::SocketAddr {
             ..Default::default()
         },
         ..Default::default()
-    };
-    let server = bind(cfg).await.unwrap();
-    let addr = server.addr;
+    })
+    .await;
     assert!(addr.ip().is_loopback());
-    tokio::spawn(server.run());
     addr
 }
 
@@ -132,16 +86,7 @@ async fn load(addr: std::net::SocketAddr, shape: &str) -> (String, usize) {
 }
 
 async fn wait_basis(addr: std::net::SocketAddr, id: &str) -> Value {
-    for _ in 0..2400 {
-        let j = get(addr, &format!("/api/mesh/{id}/basis/status"))
-            .await
-            .json();
-        if j["state"] != "running" && j["state"] != "queued" {
-            return j;
-        }
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    }
-    panic!("basis did not finish");
+    common::wait_job_within(addr, id, Duration::from_secs(120)).await
 }
 
 async fn basis(addr: std::net::SocketAddr, id: &str, body: Value) -> Value {
@@ -413,15 +358,7 @@ async fn happy_paths() {
 
     // Upload an OFF file.
     let off = b"OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
-    let r = request(
-        addr,
-        "POST",
-        "/api/mesh",
-        "application/octet-stream",
-        "X-Filename: tet.off\r\n",
-        off,
-    )
-    .await;
+    let r = common::upload(addr, "tet.off", off).await;
     assert_eq!(r.status, 200, "{}", r.error());
     assert_eq!(r.json()["n"], 4);
     assert_eq!(r.json()["source"], "tet.off");
@@ -429,22 +366,10 @@ async fn happy_paths() {
 
     // Two tetrahedra, constraints on one: the other floats and is left out of the check.
     let two = b"OFF\n8 8 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n5 0 0\n6 0 0\n5 1 0\n5 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 4 6 5\n3 4 5 7\n3 4 7 6\n3 5 6 7\n";
-    let r = request(
-        addr,
-        "POST",
-        "/api/mesh",
-        "application/octet-stream",
-        "X-Filename: two.off\r\n",
-        two,
-    )
-    .await;
+    let r = common::upload(addr, "two.off", two).await;
     assert_eq!(r.status, 200, "{}", r.error());
     let two_id = r.json()["mesh_id"].as_str().unwrap().to_string();
-    let f = post_json(
-        addr,
-        &format!("/api/mesh/{two_id}/field"),
-        json!({"kind": "harmonic", "constraints": [{"vertex": 0, "value": 0.0}, {"vertex": 1, "value": 1.0}]}),
-    )
+    let f = post_field(addr, &two_id, json!({"kind": "harmonic", "constraints": [{"vertex": 0, "value": 0.0}, {"vertex": 1, "value": 1.0}]}))
     .await
     .field();
     assert_eq!(
@@ -487,12 +412,7 @@ async fn basis_jobs_join_and_cancel() {
     assert_eq!(st["k"], 350);
     // Neither solve finished: nothing is held, and a field request says what to do.
     assert_eq!(st["held_k"], 0, "{st}");
-    let r = post_json(
-        addr,
-        &format!("/api/mesh/{id}/field"),
-        json!({"kind": "heat", "k": 50}),
-    )
-    .await;
+    let r = post_field(addr, &id, json!({"kind": "heat", "k": 50})).await;
     assert_eq!(r.status, 409, "{}", r.text());
     // A fresh request computes and then serves fields.
     let r = post_json(addr, &path, json!({"k": 50})).await;
@@ -500,12 +420,7 @@ async fn basis_jobs_join_and_cancel() {
     let st = wait_basis(addr, &id).await;
     assert_eq!(st["state"], "done", "{st}");
     assert_eq!(st["held_k"], 50, "{st}");
-    let r = post_json(
-        addr,
-        &format!("/api/mesh/{id}/field"),
-        json!({"kind": "heat", "k": 50}),
-    )
-    .await;
+    let r = post_field(addr, &id, json!({"kind": "heat", "k": 50})).await;
     assert_eq!(r.status, 200);
 }
 
@@ -584,178 +499,59 @@ async fn bad_input_is_a_4xx_with_a_message_and_the_server_stays_up() {
     let basis_path = format!("/api/mesh/{id}/basis");
     basis(addr, &id, json!({"k": 20})).await;
 
+    use Req::{Get, Json, Raw};
+    // (name, request): a JSON body posted, a GET, or a raw request (method, path, content
+    // type, extra header lines, body).
+    #[rustfmt::skip]
+    let bad = [
+        ("malformed upload",
+            Raw("POST", "/api/mesh".into(), "application/octet-stream",
+                "X-Filename: broken.off\r\n", b"OFF\n3 1 0\n0 0 0\n1 zero 0\n".to_vec())),
+        ("out-of-range face",
+            Raw("POST", "/api/mesh".into(), "application/octet-stream", "",
+                b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n".to_vec())),
+        ("oversized upload",
+            Raw("POST", "/api/mesh".into(), "application/octet-stream", "", vec![b'0'; 100_000])),
+        ("unknown shape", Json("/api/mesh".into(), json!({"shape": "klein-bottle-9"}))),
+        ("bad JSON", Raw("POST", "/api/mesh".into(), "application/json", "", b"{shape:".to_vec())),
+        ("vertex out of range", Json(field.clone(), json!({"kind": "heat", "k": 20, "anchor": n}))),
+        ("constraint vertex out of range",
+            Json(field.clone(),
+                json!({"kind": "harmonic", "constraints": [{"vertex": 0, "value": 0}, {"vertex": 99999, "value": 1}]}))),
+        ("t = NaN",
+            Raw("POST", field.clone(), "application/json", "",
+                br#"{"kind":"heat","k":20,"t":NaN}"#.to_vec())),
+        ("t < 0", Json(field.clone(), json!({"kind": "heat", "k": 20, "t": -1.0}))),
+        ("k > n", Json(basis_path.clone(), json!({"k": n + 1}))),
+        ("k > n in a field", Json(field.clone(), json!({"kind": "heat", "k": n + 5}))),
+        ("unknown laplacian", Json(basis_path.clone(), json!({"laplacian": "nope", "k": 5}))),
+        ("unknown basis key", Json(basis_path.clone(), json!({"pairs": 5}))),
+        ("bad custom expression",
+            Json(field.clone(),
+                json!({"kind": "distance", "k": 20, "distance": "custom-w:exp(-t*;t=1"}))),
+        ("non-positive custom weight",
+            Json(field.clone(),
+                json!({"kind": "distance", "k": 20, "distance": "custom-w:s-1000"}))),
+        ("unknown kind", Json(field.clone(), json!({"kind": "astrology"}))),
+        ("no kind (the old protocol)", Json(field.clone(), json!({"experiment": "heat", "k": 20}))),
+        ("unknown request key",
+            Json(field.clone(), json!({"kind": "heat", "k": 20, "filter": "commute"}))),
+        ("too many levels",
+            Json(field.clone(), json!({"kind": "heat", "k": 20, "levels": 100000}))),
+        ("bad mesh id", Get("/api/mesh/..%2F..%2Fetc/geometry".into())),
+        ("unknown mesh", Get("/api/mesh/0123456789abcdef/geometry".into())),
+        ("bad download format",
+            Json(format!("/api/mesh/{id}/download"),
+                json!({"kind": "heat", "k": 20, "format": "exe"}))),
+        ("download without a body", Get(format!("/api/mesh/{id}/download?format=txt"))),
+        ("picture too large",
+            Json(format!("/api/mesh/{id}/download"),
+                json!({"kind": "heat", "k": 20, "format": "png", "size": 100000}))),
+    ];
     let mut cases: Vec<(&str, Reply)> = Vec::new();
-    cases.push((
-        "malformed upload",
-        request(
-            addr,
-            "POST",
-            "/api/mesh",
-            "application/octet-stream",
-            "X-Filename: broken.off\r\n",
-            b"OFF\n3 1 0\n0 0 0\n1 zero 0\n",
-        )
-        .await,
-    ));
-    cases.push((
-        "out-of-range face",
-        request(
-            addr,
-            "POST",
-            "/api/mesh",
-            "application/octet-stream",
-            "",
-            b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n",
-        )
-        .await,
-    ));
-    cases.push((
-        "oversized upload",
-        request(
-            addr,
-            "POST",
-            "/api/mesh",
-            "application/octet-stream",
-            "",
-            &vec![b'0'; 100_000],
-        )
-        .await,
-    ));
-    cases.push((
-        "unknown shape",
-        post_json(addr, "/api/mesh", json!({"shape": "klein-bottle-9"})).await,
-    ));
-    cases.push((
-        "bad JSON",
-        request(
-            addr,
-            "POST",
-            "/api/mesh",
-            "application/json",
-            "",
-            b"{shape:",
-        )
-        .await,
-    ));
-    cases.push((
-        "vertex out of range",
-        post_json(addr, &field, json!({"kind": "heat", "k": 20, "anchor": n})).await,
-    ));
-    cases.push((
-        "constraint vertex out of range",
-        post_json(
-            addr,
-            &field,
-            json!({"kind": "harmonic", "constraints": [{"vertex": 0, "value": 0}, {"vertex": 99999, "value": 1}]}),
-        )
-        .await,
-    ));
-    cases.push((
-        "t = NaN",
-        request(
-            addr,
-            "POST",
-            &field,
-            "application/json",
-            "",
-            br#"{"kind":"heat","k":20,"t":NaN}"#,
-        )
-        .await,
-    ));
-    cases.push((
-        "t < 0",
-        post_json(addr, &field, json!({"kind": "heat", "k": 20, "t": -1.0})).await,
-    ));
-    cases.push((
-        "k > n",
-        post_json(addr, &basis_path, json!({"k": n + 1})).await,
-    ));
-    cases.push((
-        "k > n in a field",
-        post_json(addr, &field, json!({"kind": "heat", "k": n + 5})).await,
-    ));
-    cases.push((
-        "unknown laplacian",
-        post_json(addr, &basis_path, json!({"laplacian": "nope", "k": 5})).await,
-    ));
-    cases.push((
-        "unknown basis key",
-        post_json(addr, &basis_path, json!({"pairs": 5})).await,
-    ));
-    cases.push((
-        "bad custom expression",
-        post_json(
-            addr,
-            &field,
-            json!({"kind": "distance", "k": 20, "distance": "custom-w:exp(-t*;t=1"}),
-        )
-        .await,
-    ));
-    cases.push((
-        "non-positive custom weight",
-        post_json(
-            addr,
-            &field,
-            json!({"kind": "distance", "k": 20, "distance": "custom-w:s-1000"}),
-        )
-        .await,
-    ));
-    cases.push((
-        "unknown kind",
-        post_json(addr, &field, json!({"kind": "astrology"})).await,
-    ));
-    cases.push((
-        "no kind (the old protocol)",
-        post_json(addr, &field, json!({"experiment": "heat", "k": 20})).await,
-    ));
-    cases.push((
-        "unknown request key",
-        post_json(
-            addr,
-            &field,
-            json!({"kind": "heat", "k": 20, "filter": "commute"}),
-        )
-        .await,
-    ));
-    cases.push((
-        "too many levels",
-        post_json(
-            addr,
-            &field,
-            json!({"kind": "heat", "k": 20, "levels": 100000}),
-        )
-        .await,
-    ));
-    cases.push((
-        "bad mesh id",
-        get(addr, "/api/mesh/..%2F..%2Fetc/geometry").await,
-    ));
-    cases.push((
-        "unknown mesh",
-        get(addr, "/api/mesh/0123456789abcdef/geometry").await,
-    ));
-    cases.push((
-        "bad download format",
-        post_json(
-            addr,
-            &format!("/api/mesh/{id}/download"),
-            json!({"kind": "heat", "k": 20, "format": "exe"}),
-        )
-        .await,
-    ));
-    cases.push((
-        "download without a body",
-        get(addr, &format!("/api/mesh/{id}/download?format=txt")).await,
-    ));
-    cases.push((
-        "picture too large",
-        post_json(
-            addr,
-            &format!("/api/mesh/{id}/download"),
-            json!({"kind": "heat", "k": 20, "format": "png", "size": 100000}),
-        )
-        .await,
-    ));
+    for (name, req) in bad {
+        cases.push((name, send(addr, req).await));
+    }
     for (what, r) in &cases {
         assert!(
             (400..500).contains(&r.status),

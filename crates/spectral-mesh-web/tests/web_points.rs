@@ -127,9 +127,9 @@ async fn cloud_matches_the_library(addr: SocketAddr, name: &str, bytes: &[u8], k
         assert_eq!(f.values[i], lib.values[i] as f32, "{name} point {i}");
     }
     // A field asking for level sets gets the library's, on the triangle union.
-    let r = post_json(
+    let r = post_field(
         addr,
-        &format!("/api/mesh/{id}/field"),
+        &id,
         json!({"kind": "heat", "t": 0.02, "k": k, "levels": 5}),
     )
     .await;
@@ -199,25 +199,14 @@ async fn clouds_obey_the_limits_and_refuse_triangle_laplacians() {
     .await;
     // More points than the vertex limit: 413 naming the figure and the option.
     let r = upload(addr, "big.xyz", &sphere_xyz(800)).await;
-    assert_eq!(r.status, 413, "{}", r.text());
-    assert!(
-        r.error().contains("800 points") && r.error().contains("--max-vertices"),
-        "{}",
-        r.error()
-    );
+    assert_refused(&r, 413, &["800 points", "--max-vertices"]);
     // More bytes than the upload limit.
     let r = upload(addr, "huge.xyz", &sphere_xyz(3000)).await;
-    assert_eq!(r.status, 413, "{}", r.text());
-    assert!(r.error().contains("--max-upload-mib"), "{}", r.error());
+    assert_refused(&r, 413, &["--max-upload-mib"]);
     // Collinear points: no triangle, refused at the upload with the reason.
     let line: String = (0..20).map(|i| format!("{i} 0 0\n")).collect();
     let r = upload(addr, "line.xyz", line.as_bytes()).await;
-    assert_eq!(r.status, 422, "{}", r.text());
-    assert!(
-        r.error().contains("line.xyz") && r.error().contains("collinear"),
-        "{}",
-        r.error()
-    );
+    assert_refused(&r, 422, &["line.xyz", "collinear"]);
 
     let r = upload(addr, "small.xyz", &sphere_xyz(30)).await;
     assert_eq!(r.status, 200, "{}", r.text());
@@ -225,12 +214,7 @@ async fn clouds_obey_the_limits_and_refuse_triangle_laplacians() {
     let basis = format!("/api/mesh/{id}/basis");
     // k beyond the points, beyond --max-k (the same rules as a mesh).
     let r = post_json(addr, &basis, json!({"k": 31})).await;
-    assert_eq!(r.status, 422, "{}", r.text());
-    assert!(
-        r.error().contains("1..=30") && r.error().contains("points"),
-        "{}",
-        r.error()
-    );
+    assert_refused(&r, 422, &["1..=30", "points"]);
     // A discretization that needs triangles: refused, saying why and what applies.
     for lap in ["fem", "cot", "uniform"] {
         let r = post_json(addr, &basis, json!({"k": 5, "laplacian": lap})).await;
@@ -243,32 +227,17 @@ async fn clouds_obey_the_limits_and_refuse_triangle_laplacians() {
                 && e.contains("robust"),
             "{e}"
         );
-        let r = post_json(
-            addr,
-            &format!("/api/mesh/{id}/field"),
-            json!({"kind": "heat", "k": 5, "laplacian": lap}),
-        )
-        .await;
+        let r = post_field(addr, &id, json!({"kind": "heat", "k": 5, "laplacian": lap})).await;
         assert_eq!(r.status, 422, "{lap}: {}", r.text());
     }
     // Robust, given or not, works; k = n is allowed as for a mesh.
     let r = post_json(addr, &basis, json!({"k": 30, "laplacian": "robust"})).await;
     assert!(r.status == 200 || r.status == 202, "{}", r.text());
     assert_eq!(wait_job(addr, &id).await["state"], "done");
-    let r = post_json(
-        addr,
-        &format!("/api/mesh/{id}/field"),
-        json!({"kind": "heat", "k": 30}),
-    )
-    .await;
+    let r = post_field(addr, &id, json!({"kind": "heat", "k": 30})).await;
     assert_eq!(r.status, 200, "{}", r.text());
     // A harmonic map needs no basis: the library's preset constraints on the cloud.
-    let r = post_json(
-        addr,
-        &format!("/api/mesh/{id}/field"),
-        json!({"kind": "harmonic"}),
-    )
-    .await;
+    let r = post_field(addr, &id, json!({"kind": "harmonic"})).await;
     assert_eq!(r.status, 200, "{}", r.text());
     assert_eq!(
         parse_reply(&r.body).unwrap().header["constraints"]

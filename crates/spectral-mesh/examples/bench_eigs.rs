@@ -24,6 +24,9 @@
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
+mod common;
+use common::peak_rss_mib;
+
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -36,19 +39,6 @@ use spectral_mesh::spectral::eigenbasis::{
     EigenMethod, EigenParams, EigenProgress, EigenSolver, compute_eigenbasis,
 };
 use spectral_mesh::spectral::store::{BasisMeta, save_npz};
-
-fn peak_rss_mib() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1))
-                .and_then(|v| v.parse::<f64>().ok())
-        })
-        .map(|kib| kib / 1024.0)
-        .unwrap_or(f64::NAN)
-}
 
 /// `copies` disjoint copies of `mesh` in a row along x (`copies` connected components per
 /// component of `mesh`), copy `c` scaled by `scale^c` (1: identical copies, whose

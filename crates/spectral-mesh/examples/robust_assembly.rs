@@ -15,6 +15,9 @@
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
+mod common;
+use common::peak_rss_mib;
+
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -24,19 +27,6 @@ use spectral_mesh::operators::{
     point_cloud_laplacian, point_cloud_triangles, robust_laplacian,
 };
 use spectral_mesh::spectral::eigenbasis::{EigenParams, compute_eigenbasis};
-
-fn peak_rss_mib() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1))
-                .and_then(|v| v.parse::<f64>().ok())
-        })
-        .map(|kib| kib / 1024.0)
-        .unwrap_or(f64::NAN)
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();

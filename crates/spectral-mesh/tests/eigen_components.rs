@@ -87,6 +87,13 @@ fn union(parts: &[Part], isolated: usize) -> Mesh {
     Mesh::new(pos, tri).unwrap()
 }
 
+/// Spheres `(res, scale, x offset)` as parts.
+fn spheres(list: &[(usize, f64, f64)]) -> Vec<Part> {
+    list.iter()
+        .map(|&(res, scale, x)| part(&sphere(res), scale, [x, 0.0, 0.0]))
+        .collect()
+}
+
 fn sphere(res: usize) -> Mesh {
     spectral_mesh::shapes::build_str(&format!("sphere:res={res}")).unwrap()
 }
@@ -107,11 +114,40 @@ fn spectrum_of_parts(parts: &[Part], lap: Laplacian) -> Vec<f64> {
 }
 
 fn iterative(k: usize) -> EigenParams {
+    with_method(k, EigenMethod::ShiftInvertBlock)
+}
+
+fn dense(k: usize) -> EigenParams {
+    with_method(k, EigenMethod::Dense)
+}
+
+/// `k` pairs, the method chosen by the library.
+fn auto(k: usize) -> EigenParams {
     EigenParams {
         k,
-        method: EigenMethod::ShiftInvertBlock,
         ..Default::default()
     }
+}
+
+fn with_method(k: usize, method: EigenMethod) -> EigenParams {
+    EigenParams { method, ..auto(k) }
+}
+
+/// The sparse solver's `k` pairs of the pencil `(s, b)`, default options.
+fn pencil(
+    s: &spectral_mesh::linalg::SparseMatrix,
+    b: &spectral_mesh::linalg::SparseMatrix,
+    k: usize,
+) -> Result<spectral_mesh::linalg::PartialEigen, SparseEigenError> {
+    spectral_mesh::linalg::sparse_generalized_eigen(
+        s,
+        b,
+        &SparseEigenOptions {
+            k,
+            ..Default::default()
+        },
+        &mut |_| {},
+    )
 }
 
 /// The first `c` pairs are the B-normalized indicators of the components whose vertex
@@ -214,16 +250,7 @@ fn tetrahedra_and_a_small_sphere_against_the_dense_solver() {
     parts.extend(tetrahedra(200, 5));
     let ops = Operators::new(&union(&parts, 0), Laplacian::Fem);
     for k in [20, 250, 400] {
-        let dense = compute_eigenbasis(
-            &ops,
-            &EigenParams {
-                k,
-                method: EigenMethod::Dense,
-                ..Default::default()
-            },
-            &mut |_| {},
-        )
-        .unwrap();
+        let dense = compute_eigenbasis(&ops, &dense(k), &mut |_| {}).unwrap();
         let it = compute_eigenbasis(&ops, &iterative(k), &mut |_| {}).unwrap();
         assert_values_close(&it.values, &dense.values, &format!("k = {k}"));
         let c = k.min(201);
@@ -256,11 +283,7 @@ fn two_disjoint_tori() {
 /// it.
 #[test]
 fn identity_mass_and_isolated_vertices() {
-    let parts = vec![
-        part(&sphere(2), 1.0, [0.0; 3]),
-        part(&sphere(1), 0.5, [3.0, 0.0, 0.0]),
-        part(&sphere(2), 2.0, [8.0, 0.0, 0.0]),
-    ];
+    let parts = spheres(&[(2, 1.0, 0.0), (1, 0.5, 3.0), (2, 2.0, 8.0)]);
     let mesh = union(&parts, 4); // 162 + 42 + 162 + 4 = 370 vertices
     let n = mesh.positions().len();
     let mut r = ranges(&parts);
@@ -271,16 +294,7 @@ fn identity_mass_and_isolated_vertices() {
         let it = compute_eigenbasis(&ops, &iterative(k), &mut |_| {}).unwrap();
         assert_indicators(&it, &ops, &r);
         assert!(it.values[7] > 0.0);
-        let dense = compute_eigenbasis(
-            &ops,
-            &EigenParams {
-                k,
-                method: EigenMethod::Dense,
-                ..Default::default()
-            },
-            &mut |_| {},
-        )
-        .unwrap();
+        let dense = compute_eigenbasis(&ops, &dense(k), &mut |_| {}).unwrap();
         assert_values_close(&it.values, &dense.values, lap.name());
         assert!(it.residuals.iter().all(|&r| r <= 1e-10), "{lap}");
         assert!(it.orthogonality_error() <= 1e-10, "{lap}");
@@ -291,15 +305,7 @@ fn identity_mass_and_isolated_vertices() {
         EigenError::Numerical(m) => assert!(m.contains(&format!("vertex {}", n - 4)), "{m}"),
         other => panic!("{other}"),
     }
-    let raw = spectral_mesh::linalg::sparse_generalized_eigen(
-        &fem.stiffness,
-        &fem.mass,
-        &SparseEigenOptions {
-            k: 10,
-            ..Default::default()
-        },
-        &mut |_| {},
-    );
+    let raw = pencil(&fem.stiffness, &fem.mass, 10);
     assert_eq!(
         raw.unwrap_err(),
         SparseEigenError::ZeroMass { vertex: n - 4 }
@@ -309,11 +315,7 @@ fn identity_mass_and_isolated_vertices() {
 /// Dirichlet vertices: a component that touches one has no zero mode.
 #[test]
 fn components_touching_dirichlet_vertices_have_no_zero_mode() {
-    let parts = vec![
-        part(&sphere(2), 1.0, [0.0; 3]),
-        part(&sphere(2), 1.0, [3.0, 0.0, 0.0]),
-        part(&sphere(2), 1.0, [6.0, 0.0, 0.0]),
-    ];
+    let parts = spheres(&[(2, 1.0, 0.0), (2, 1.0, 3.0), (2, 1.0, 6.0)]);
     let ops = Operators::new(&union(&parts, 0), Laplacian::Fem);
     // One vertex of the second sphere is fixed.
     let params = EigenParams {
@@ -329,15 +331,11 @@ fn components_touching_dirichlet_vertices_have_no_zero_mode() {
     assert!(it.vector(0)[..162].iter().all(|&x| x > 0.0));
     assert!(it.vector(1)[324..].iter().all(|&x| x > 0.0));
     assert_eq!(it.vector(1)[170], 0.0);
-    let dense = compute_eigenbasis(
-        &ops,
-        &EigenParams {
-            method: EigenMethod::Dense,
-            ..params
-        },
-        &mut |_| {},
-    )
-    .unwrap();
+    let dense_params = EigenParams {
+        method: EigenMethod::Dense,
+        ..params
+    };
+    let dense = compute_eigenbasis(&ops, &dense_params, &mut |_| {}).unwrap();
     assert_values_close(&it.values, &dense.values, "dirichlet");
 }
 
@@ -353,16 +351,7 @@ fn blobby_three_components_against_dense() {
     let ops = Operators::new(&mesh, Laplacian::Fem);
     let k = 30;
     let it = compute_eigenbasis(&ops, &iterative(k), &mut |_| {}).unwrap();
-    let dense = compute_eigenbasis(
-        &ops,
-        &EigenParams {
-            k,
-            method: EigenMethod::Dense,
-            ..Default::default()
-        },
-        &mut |_| {},
-    )
-    .unwrap();
+    let dense = compute_eigenbasis(&ops, &dense(k), &mut |_| {}).unwrap();
     assert_eq!(&it.values[..3], &[0.0; 3]);
     assert!(it.values[3] > 0.0);
     assert_values_close(&it.values, &dense.values, "blobby_3cc");
@@ -374,11 +363,7 @@ fn blobby_three_components_against_dense() {
 /// k = n with components: the deflated iteration fills the whole complement.
 #[test]
 fn every_pair_of_a_mesh_with_components() {
-    let parts = vec![
-        part(&sphere(1), 1.0, [0.0; 3]),
-        part(&sphere(0), 1.0, [3.0, 0.0, 0.0]),
-        part(&sphere(1), 0.7, [6.0, 0.0, 0.0]),
-    ];
+    let parts = spheres(&[(1, 1.0, 0.0), (0, 1.0, 3.0), (1, 0.7, 6.0)]);
     let ops = Operators::new(&union(&parts, 0), Laplacian::VoronoiCot);
     let n = ops.n(); // 42 + 12 + 42
     for k in [n - 1, n] {
@@ -393,16 +378,7 @@ fn every_pair_of_a_mesh_with_components() {
 /// The sparse solver on the whole pencil (no split into components): the null space is
 /// deflated, the rest found in its B-orthogonal complement.
 fn whole(ops: &Operators, k: usize) -> spectral_mesh::linalg::PartialEigen {
-    spectral_mesh::linalg::sparse_generalized_eigen(
-        &ops.stiffness,
-        &ops.mass,
-        &SparseEigenOptions {
-            k,
-            ..Default::default()
-        },
-        &mut |_| {},
-    )
-    .unwrap()
+    pencil(&ops.stiffness, &ops.mass, k).unwrap()
 }
 
 /// `compute_eigenbasis` solves components separately; the lower-level solver deflates
@@ -434,11 +410,7 @@ fn whole_pencil_deflation_with_two_hundred_and_one_components() {
 /// isolated vertices, and on two tori.
 #[test]
 fn whole_pencil_deflation_edge_cases() {
-    let parts = vec![
-        part(&sphere(1), 1.0, [0.0; 3]),
-        part(&sphere(0), 1.0, [3.0, 0.0, 0.0]),
-        part(&sphere(1), 0.7, [6.0, 0.0, 0.0]),
-    ];
+    let parts = spheres(&[(1, 1.0, 0.0), (0, 1.0, 3.0), (1, 0.7, 6.0)]);
     let mesh = union(&parts, 3);
     for lap in [Laplacian::VoronoiCot, Laplacian::Cot] {
         let ops = Operators::new(&mesh, lap);
@@ -447,15 +419,7 @@ fn whole_pencil_deflation_edge_cases() {
         if lap == Laplacian::VoronoiCot {
             // Isolated vertices have no mass under a lumped mass.
             assert!(matches!(
-                spectral_mesh::linalg::sparse_generalized_eigen(
-                    &ops.stiffness,
-                    &ops.mass,
-                    &SparseEigenOptions {
-                        k: 5,
-                        ..Default::default()
-                    },
-                    &mut |_| {},
-                ),
+                pencil(&ops.stiffness, &ops.mass, 5),
                 Err(SparseEigenError::ZeroMass { vertex: 96 })
             ));
             continue;
@@ -496,15 +460,7 @@ fn split_components_whose_share_was_underestimated() {
     let ops = Operators::new(&union(&parts, 0), Laplacian::Fem);
     let want = spectrum_of_parts(&parts, Laplacian::Fem);
     for k in [10, 60, 150] {
-        let b = compute_eigenbasis(
-            &ops,
-            &EigenParams {
-                k,
-                ..Default::default()
-            },
-            &mut |_| {},
-        )
-        .unwrap();
+        let b = compute_eigenbasis(&ops, &auto(k), &mut |_| {}).unwrap();
         assert_eq!(&b.values[..3], &[0.0; 3]);
         assert_values_close(&b.values, &want[..k], &format!("k = {k}"));
         assert!(b.residuals.iter().all(|&r| r <= 1e-10), "k = {k}");
@@ -516,11 +472,7 @@ fn split_components_whose_share_was_underestimated() {
 /// larger k gives the bits of a fresh solver.
 #[test]
 fn split_solver_keeps_one_factor_per_component() {
-    let parts = vec![
-        part(&sphere(3), 1.0, [0.0; 3]),
-        part(&sphere(3), 1.5, [5.0, 0.0, 0.0]),
-        part(&sphere(1), 1.0, [9.0, 0.0, 0.0]),
-    ];
+    let parts = spheres(&[(3, 1.0, 0.0), (3, 1.5, 5.0), (1, 1.0, 9.0)]);
     let ops = Arc::new(Operators::new(&union(&parts, 0), Laplacian::Fem));
     let none = CancelToken::new();
     let mut solver = EigenSolver::new(ops.clone(), iterative(0));
@@ -546,10 +498,7 @@ fn split_solver_keeps_one_factor_per_component() {
 /// deflation of the free block.
 #[test]
 fn split_with_dirichlet_vertices_agrees_with_the_whole_pencil() {
-    let parts = vec![
-        part(&sphere(3), 1.0, [0.0; 3]),
-        part(&sphere(3), 1.2, [4.0, 0.0, 0.0]),
-    ];
+    let parts = spheres(&[(3, 1.0, 0.0), (3, 1.2, 4.0)]);
     let ops = Operators::new(&union(&parts, 0), Laplacian::Fem);
     let fixed = vec![700usize, 800];
     let k = 40;
@@ -568,16 +517,7 @@ fn split_with_dirichlet_vertices_agrees_with_the_whole_pencil() {
         ops.stiffness.submatrix(&free, &free),
         ops.mass.submatrix(&free, &free),
     );
-    let r = spectral_mesh::linalg::sparse_generalized_eigen(
-        &s,
-        &b,
-        &SparseEigenOptions {
-            k,
-            ..Default::default()
-        },
-        &mut |_| {},
-    )
-    .unwrap();
+    let r = pencil(&s, &b, k).unwrap();
     assert_eq!(split.values[0], 0.0);
     assert!(split.values[1] > 0.0, "the second sphere has no zero mode");
     assert_values_close(&split.values, &r.values, "dirichlet");

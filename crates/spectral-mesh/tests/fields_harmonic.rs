@@ -19,6 +19,19 @@ fn params(order: u32, laplacian: Laplacian) -> HarmonicParams {
     HarmonicParams { order, laplacian }
 }
 
+/// The constraint `f(vertex) = value`.
+fn fixed(vertex: usize, value: f64) -> Constraint {
+    Constraint { vertex, value }
+}
+
+/// The largest `|a_i - b_i|`.
+fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
 #[test]
 fn maximum_principle_on_a_torus_with_nonnegative_cot_weights() {
     let m = torus(3.0, 1.0, 48, 16);
@@ -74,23 +87,13 @@ fn linear_precision_on_an_irregular_flat_patch() {
     let (m, boundary) = flat_square(12, 0.3, 7);
     let lin = |p: [f64; 3]| 0.7 * p[0] - 1.3 * p[1] + 0.25;
     let exact: Vec<f64> = m.positions().iter().map(|&p| lin(p)).collect();
-    let on_boundary: Vec<Constraint> = boundary
-        .iter()
-        .map(|&v| Constraint {
-            vertex: v,
-            value: exact[v],
-        })
-        .collect();
+    let on_boundary: Vec<Constraint> = boundary.iter().map(|&v| fixed(v, exact[v])).collect();
     for lap in Laplacian::ALL {
         if lap == Laplacian::Uniform {
             continue; // the graph Laplacian has no linear precision on irregular meshes
         }
         let f = harmonic_map(&m, &on_boundary, &params(1, lap)).unwrap();
-        let err = f
-            .iter()
-            .zip(&exact)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let err = max_abs_diff(&f, &exact);
         assert!(err < 1e-10, "{lap}: harmonic error {err}");
     }
     // Bi-harmonic: boundary plus its first ring fixed reproduces linear functions (S f = 0
@@ -102,13 +105,7 @@ fn linear_precision_on_an_irregular_flat_patch() {
     }
     ring.sort_unstable();
     ring.dedup();
-    let two: Vec<Constraint> = ring
-        .iter()
-        .map(|&v| Constraint {
-            vertex: v,
-            value: exact[v],
-        })
-        .collect();
+    let two: Vec<Constraint> = ring.iter().map(|&v| fixed(v, exact[v])).collect();
     for lap in [
         Laplacian::Fem,
         Laplacian::VoronoiCot,
@@ -116,20 +113,12 @@ fn linear_precision_on_an_irregular_flat_patch() {
         Laplacian::Cot,
     ] {
         let f = harmonic_map(&m, &two, &params(2, lap)).unwrap();
-        let err = f
-            .iter()
-            .zip(&exact)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let err = max_abs_diff(&f, &exact);
         assert!(err < 1e-10, "{lap}: bi-harmonic error {err}");
         // With the boundary alone, the natural boundary condition of the bi-harmonic
         // energy is not satisfied by a linear function: no linear precision.
         let g = harmonic_map(&m, &on_boundary, &params(2, lap)).unwrap();
-        let err_b = g
-            .iter()
-            .zip(&exact)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let err_b = max_abs_diff(&g, &exact);
         assert!(
             err_b > 1e-6,
             "{lap}: boundary-only bi-harmonic unexpectedly exact"
@@ -161,11 +150,7 @@ fn solver_reuse_is_linear_and_reproduces_constants() {
             .map(|(&vertex, &value)| Constraint { vertex, value })
             .collect();
         let f1 = harmonic_map(&m, &cs, &p).unwrap();
-        let d = f1
-            .iter()
-            .zip(&fa)
-            .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max);
+        let d = max_abs_diff(&f1, &fa);
         assert!(d < 1e-12);
         // solve_many = columns of solve.
         let mut ab = a.clone();
@@ -189,11 +174,7 @@ fn scale_invariance() {
             for s in [1e-8, 1e8] {
                 let ms = m.map_positions(|p| [p[0] * s, p[1] * s, p[2] * s]).unwrap();
                 let g = harmonic_map(&ms, &cons, &params(order, lap)).unwrap();
-                let d = f
-                    .iter()
-                    .zip(&g)
-                    .map(|(x, y)| (x - y).abs())
-                    .fold(0.0, f64::max);
+                let d = max_abs_diff(&f, &g);
                 assert!(d < 1e-9, "order {order} {lap} scale {s}: {d}");
             }
         }
@@ -214,11 +195,7 @@ fn locality_of_added_constraints() {
     let far = max_change_near(&m, &f2, &f4, &seeds, 100);
     assert!(near > 0.0 && near < far, "near {near}, far {far}");
     // The largest change over everything is the global max |f4 - f2|.
-    let global = f2
-        .iter()
-        .zip(&f4)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
+    let global = max_abs_diff(&f2, &f4);
     assert_eq!(far, global);
 }
 
@@ -229,16 +206,7 @@ fn unconstrained_component_floats_at_the_mean_and_is_named() {
     let m = union(&a, &b, [20.0, 0.0, 0.0]);
     let topo = Topology::new(&m);
     assert_eq!(topo.n_components(), 2);
-    let cons = vec![
-        Constraint {
-            vertex: 0,
-            value: 0.0,
-        },
-        Constraint {
-            vertex: 5,
-            value: 1.0,
-        },
-    ];
+    let cons = vec![fixed(0, 0.0), fixed(5, 1.0)];
     let f = harmonic_map(&m, &cons, &HarmonicParams::default()).unwrap();
     // The constrained torus is solved; the sphere holds the mean of the values, 0.5.
     let na = a.n_vertices();
@@ -271,13 +239,7 @@ fn unreferenced_vertices_get_zero_and_cannot_be_constrained() {
     assert!(cons.iter().all(|c| c.vertex != extra));
     let f = harmonic_map(&m, &cons, &HarmonicParams::default()).unwrap();
     assert_eq!(f[extra], 0.0);
-    let bad = vec![
-        Constraint {
-            vertex: extra,
-            value: 1.0,
-        },
-        cons[0],
-    ];
+    let bad = vec![fixed(extra, 1.0), cons[0]];
     assert!(matches!(
         harmonic_map(&m, &bad, &HarmonicParams::default()),
         Err(HarmonicError::UnreferencedConstraint { .. })
@@ -287,25 +249,14 @@ fn unreferenced_vertices_get_zero_and_cannot_be_constrained() {
 #[test]
 fn degenerate_free_vertex_is_reported() {
     // A square whose centre vertex only has zero-area (collinear) triangles hanging off it.
+    #[rustfmt::skip]
     let p = vec![
-        [0.0, 0.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [1.0, 1.0, 0.0],
-        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0],
         [2.0, 0.0, 0.0], // collinear with 0 and 1
     ];
     let t = vec![[0, 1, 2], [0, 2, 3], [0, 1, 4]];
     let m = Mesh::new(p, t).unwrap();
-    let cons = vec![
-        Constraint {
-            vertex: 0,
-            value: 0.0,
-        },
-        Constraint {
-            vertex: 2,
-            value: 1.0,
-        },
-    ];
+    let cons = vec![fixed(0, 0.0), fixed(2, 1.0)];
     let e = harmonic_map(&m, &cons, &HarmonicParams::default()).unwrap_err();
     assert!(
         matches!(e, HarmonicError::DegenerateVertex { vertex: 4 }),

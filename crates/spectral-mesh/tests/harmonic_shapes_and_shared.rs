@@ -102,22 +102,14 @@ fn negative_cotangent_weights_break_the_maximum_principle() {
     // A flat fan around vertex 0 whose spoke 0-1 sees two nearly straight angles (at 2
     // and 6), so its cotangent weight is strongly negative. With the rim fixed to 0 at
     // vertex 1 and to 1 elsewhere, the harmonic value at the centre leaves [0, 1].
+    #[rustfmt::skip]
     let positions = vec![
-        [0.0, 0.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [0.5, 0.05, 0.0],
-        [0.0, 1.0, 0.0],
-        [-1.0, 0.0, 0.0],
-        [0.0, -1.0, 0.0],
-        [0.5, -0.05, 0.0],
+        [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.05, 0.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0],
+        [0.0, -1.0, 0.0], [0.5, -0.05, 0.0],
     ];
+    #[rustfmt::skip]
     let triangles = vec![
-        [0, 1, 2],
-        [0, 2, 3],
-        [0, 3, 4],
-        [0, 4, 5],
-        [0, 5, 6],
-        [0, 6, 1],
+        [0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5], [0, 5, 6], [0, 6, 1],
     ];
     let mesh = Mesh::new(positions, triangles).unwrap();
     assert!(!weights_non_negative(&mesh));

@@ -2,6 +2,10 @@
 
 #![allow(clippy::unwrap_used)]
 
+mod io_util;
+
+use io_util::{check, check_all};
+
 use spectral_mesh::io::{IoError, read_mesh, read_mesh_from_bytes};
 
 fn err(src: &[u8], name: &str) -> IoError {
@@ -13,13 +17,6 @@ fn err(src: &[u8], name: &str) -> IoError {
         ),
         Err(e) => e,
     }
-}
-
-/// Asserts `path:line: ...problem...`.
-fn check(e: &IoError, prefix: &str, problem: &str) {
-    let s = e.to_string();
-    assert!(s.starts_with(prefix), "{s:?} should start with {prefix:?}");
-    assert!(s.contains(problem), "{s:?} should mention {problem:?}");
 }
 
 const TETRA_HEAD: &str = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n";
@@ -44,88 +41,61 @@ fn off_index_out_of_range_message_is_exact() {
 
 #[test]
 fn off_truncated_and_wrong_counts() {
-    // Truncated inside the vertices.
-    check(
-        &err(b"OFF\n4 4 0\n0 0 0\n1 0 0\n0 1", "t.off"),
-        "t.off:5: ",
-        "ends inside vertex 2 of 4",
-    );
-    // Header promises more faces than there are.
-    let src = format!("{TETRA_HEAD}3 0 2 1\n3 0 1 3\n");
-    check(
-        &err(src.as_bytes(), "t.off"),
-        "t.off:9: ",
-        "after 2 of 4 faces",
-    );
-    // Truncated inside a face.
-    let src = format!("{TETRA_HEAD}3 0 2 1\n3 0 1");
-    check(&err(src.as_bytes(), "t.off"), "t.off:8: ", "inside face 1");
-    // Header promises more vertices: the faces get read as coordinates and run out.
-    let src = "OFF\n5 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-    check(
-        &err(src.as_bytes(), "t.off"),
-        "t.off:7: ",
-        "ends inside vertex 4 of 5",
-    );
-    // Counts that are not numbers.
-    check(
-        &err(b"OFF\nfour 4 0\n", "t.off"),
-        "t.off:2: ",
-        "vertex count 'four'",
-    );
-    check(&err(b"OFF\n", "t.off"), "t.off:", "before the vertex count");
+    #[rustfmt::skip]
+    let cases = [
+        // Truncated inside the vertices.
+        ("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1".into(), "t.off:5: ", "ends inside vertex 2 of 4"),
+        // Header promises more faces than there are.
+        (format!("{TETRA_HEAD}3 0 2 1\n3 0 1 3\n"), "t.off:9: ", "after 2 of 4 faces"),
+        // Truncated inside a face.
+        (format!("{TETRA_HEAD}3 0 2 1\n3 0 1"), "t.off:8: ", "inside face 1"),
+        // Header promises more vertices: the faces get read as coordinates and run out.
+        ("OFF\n5 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n".into(), "t.off:7: ",
+         "ends inside vertex 4 of 5"),
+        // Counts that are not numbers.
+        ("OFF\nfour 4 0\n".into(), "t.off:2: ", "vertex count 'four'"),
+        ("OFF\n".into(), "t.off:", "before the vertex count"),
+    ];
+    check_all::<String>(err, &cases);
 }
 
 #[test]
 fn off_non_finite_and_non_numeric_coordinates() {
-    check(
-        &err(b"OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", "n.off"),
-        "n.off:4: ",
-        "vertex 1 has a non-finite coordinate (y = NaN)",
-    );
-    check(
-        &err(b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 inf\n3 0 1 2\n", "n.off"),
-        "n.off:5: ",
-        "non-finite coordinate (z = inf)",
-    );
-    check(
-        &err(b"OFF\n3 1 0\n0 0 0\n1 0 x0\n0 1 0\n3 0 1 2\n", "n.off"),
-        "n.off:4: ",
-        "coordinate z 'x0' is not a number",
-    );
+    #[rustfmt::skip]
+    let cases: &[(&[u8], &str, &str)] = &[
+        (b"OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n",
+         "n.off:4: ", "vertex 1 has a non-finite coordinate (y = NaN)"),
+        (b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 inf\n3 0 1 2\n",
+         "n.off:5: ", "non-finite coordinate (z = inf)"),
+        (b"OFF\n3 1 0\n0 0 0\n1 0 x0\n0 1 0\n3 0 1 2\n",
+         "n.off:4: ", "coordinate z 'x0' is not a number"),
+    ];
+    check_all(err, cases);
 }
 
 #[test]
 fn off_small_faces_and_repeated_vertices() {
-    let src = format!("{TETRA_HEAD}2 0 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n");
-    check(
-        &err(src.as_bytes(), "f.off"),
-        "f.off:7: ",
-        "face 0 has 2 vertices; a face needs at least 3",
-    );
-    let src = format!("{TETRA_HEAD}3 0 2 1\n3 0 1 3\n4 1 2 3 1\n3 0 3 2\n");
-    check(
-        &err(src.as_bytes(), "f.off"),
-        "f.off:9: ",
-        "face 2 uses vertex 1 more than once",
-    );
+    #[rustfmt::skip]
+    let cases = [
+        (format!("{TETRA_HEAD}2 0 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n"), "f.off:7: ",
+         "face 0 has 2 vertices; a face needs at least 3"),
+        (format!("{TETRA_HEAD}3 0 2 1\n3 0 1 3\n4 1 2 3 1\n3 0 3 2\n"), "f.off:9: ",
+         "face 2 uses vertex 1 more than once"),
+    ];
+    check_all::<String>(err, &cases);
 }
 
 #[test]
 fn empty_meshes_and_empty_files() {
-    check(&err(b"OFF\n0 0 0\n", "e.off"), "e.off: ", "empty");
-    check(
-        &err(b"OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "e.off"),
-        "e.off: ",
-        "no faces",
-    );
-    check(&err(b"", "e.off"), "e.off: ", "empty");
-    check(
-        &err(b"# only a comment\n", "e.off"),
-        "e.off: ",
-        "no content",
-    );
-    check(&err(b"v 0 0 0\n", "e.obj"), "e.obj: ", "no faces");
+    #[rustfmt::skip]
+    let cases: &[(&[u8], &str, &str)] = &[
+        (b"OFF\n0 0 0\n", "e.off: ", "empty"),
+        (b"OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "e.off: ", "no faces"),
+        (b"", "e.off: ", "empty"),
+        (b"# only a comment\n", "e.off: ", "no content"),
+        (b"v 0 0 0\n", "e.obj: ", "no faces"),
+    ];
+    check_all(err, cases);
 }
 
 #[test]
@@ -148,46 +118,21 @@ fn unknown_format_and_unreadable_file() {
 #[test]
 fn obj_errors_name_lines_and_one_based_indices() {
     let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
-    check(
-        &err(format!("{head}f 1 2 4\n").as_bytes(), "m.obj"),
-        "m.obj:4: ",
-        "face 0 refers to vertex 4 but the file has 3 vertices",
-    );
-    check(
-        &err(format!("{head}f 1 2 0\n").as_bytes(), "m.obj"),
-        "m.obj:4: ",
-        "OBJ indices start at 1",
-    );
-    check(
-        &err(format!("{head}\nf -1 -2 -4\n").as_bytes(), "m.obj"),
-        "m.obj:5: ",
-        "refers to vertex -4 (relative) but only 3 vertices",
-    );
-    check(
-        &err(format!("{head}f 1 2\n").as_bytes(), "m.obj"),
-        "m.obj:4: ",
-        "face 0 has 2 vertices",
-    );
-    check(
-        &err(format!("{head}f 1 2 2\n").as_bytes(), "m.obj"),
-        "m.obj:4: ",
-        "uses vertex 2 more than once",
-    );
-    check(
-        &err(b"v 0 0\nf 1 2 3\n", "m.obj"),
-        "m.obj:1: ",
-        "vertex 1 has 2 coordinates",
-    );
-    check(
-        &err(b"v 0 0 0\nv 0 -inf 0\nv 0 1 0\nf 1 2 3\n", "m.obj"),
-        "m.obj:2: ",
-        "vertex 2 has a non-finite coordinate (y = -inf)",
-    );
-    check(
-        &err(format!("{head}f 1/x 2 3\n").as_bytes(), "m.obj"),
-        "m.obj:4: ",
-        "not of the form",
-    );
+    #[rustfmt::skip]
+    let cases = [
+        (format!("{head}f 1 2 4\n"), "m.obj:4: ",
+         "face 0 refers to vertex 4 but the file has 3 vertices"),
+        (format!("{head}f 1 2 0\n"), "m.obj:4: ", "OBJ indices start at 1"),
+        (format!("{head}\nf -1 -2 -4\n"), "m.obj:5: ",
+         "refers to vertex -4 (relative) but only 3 vertices"),
+        (format!("{head}f 1 2\n"), "m.obj:4: ", "face 0 has 2 vertices"),
+        (format!("{head}f 1 2 2\n"), "m.obj:4: ", "uses vertex 2 more than once"),
+        ("v 0 0\nf 1 2 3\n".into(), "m.obj:1: ", "vertex 1 has 2 coordinates"),
+        ("v 0 0 0\nv 0 -inf 0\nv 0 1 0\nf 1 2 3\n".into(),
+         "m.obj:2: ", "vertex 2 has a non-finite coordinate (y = -inf)"),
+        (format!("{head}f 1/x 2 3\n"), "m.obj:4: ", "not of the form"),
+    ];
+    check_all::<String>(err, &cases);
 }
 
 const PLY_HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";

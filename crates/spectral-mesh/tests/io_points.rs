@@ -3,6 +3,10 @@
 
 #![allow(clippy::unwrap_used)]
 
+mod io_util;
+
+use io_util::{check, check_all};
+
 use spectral_mesh::io::{
     Input, IoError, PointFormat, read_input, read_input_from_bytes, read_mesh_from_bytes,
     read_points_from_bytes,
@@ -20,12 +24,6 @@ fn err(src: &[u8], name: &str) -> IoError {
         Ok(i) => panic!("{name}: expected an error, got {} points", i.n_points()),
         Err(e) => e,
     }
-}
-
-fn check(e: &IoError, prefix: &str, problem: &str) {
-    let s = e.to_string();
-    assert!(s.starts_with(prefix), "{s:?} should start with {prefix:?}");
-    assert!(s.contains(problem), "{s:?} should mention {problem:?}");
 }
 
 #[test]
@@ -109,47 +107,19 @@ fn ply_without_faces_is_a_point_cloud_and_with_faces_a_mesh() {
 
 #[test]
 fn every_text_error_names_the_file_the_line_and_the_problem() {
-    check(
-        &err(b"0 0 0\n1 2\n", "a.xyz"),
-        "a.xyz:2: ",
-        "2 values on this line, but line 1 has 3",
-    );
-    check(
-        &err(b"# c\n1 2 3 4\n", "a.xyz"),
-        "a.xyz:2: ",
-        "expected 3 (x y z) or 6",
-    );
-    check(
-        &err(b"0 0 0\n1 zz 3\n", "a.xyz"),
-        "a.xyz:2: ",
-        "y = \"zz\" is not a number",
-    );
-    check(
-        &err(b"0 0 0\n1 nan 3\n", "a.xyz"),
-        "a.xyz:2: ",
-        "non-finite coordinate (y = nan)",
-    );
-    check(
-        &err(b"0 0 0 0 inf 0\n", "a.xyz"),
-        "a.xyz:1: ",
-        "non-finite normal component (ny = inf)",
-    );
-    check(
-        &err(b"3\n0 0 0\n1 1 1\n", "a.pts"),
-        "a.pts:1: ",
-        "says 3 points but the file has 2",
-    );
-    check(
-        &err(b"0 0 0\n\xff\xfe 1 1\n", "a.xyz"),
-        "a.xyz:2: ",
-        "not text",
-    );
-    check(
-        &err(b"# only comments\n\n", "a.xyz"),
-        "a.xyz: ",
-        "no points",
-    );
-    check(&err(b"", "a.xyz"), "a.xyz: ", "empty");
+    #[rustfmt::skip]
+    let cases: &[(&[u8], &str, &str)] = &[
+        (b"0 0 0\n1 2\n", "a.xyz:2: ", "2 values on this line, but line 1 has 3"),
+        (b"# c\n1 2 3 4\n", "a.xyz:2: ", "expected 3 (x y z) or 6"),
+        (b"0 0 0\n1 zz 3\n", "a.xyz:2: ", "y = \"zz\" is not a number"),
+        (b"0 0 0\n1 nan 3\n", "a.xyz:2: ", "non-finite coordinate (y = nan)"),
+        (b"0 0 0 0 inf 0\n", "a.xyz:1: ", "non-finite normal component (ny = inf)"),
+        (b"3\n0 0 0\n1 1 1\n", "a.pts:1: ", "says 3 points but the file has 2"),
+        (b"0 0 0\n\xff\xfe 1 1\n", "a.xyz:2: ", "not text"),
+        (b"# only comments\n\n", "a.xyz: ", "no points"),
+        (b"", "a.xyz: ", "empty"),
+    ];
+    check_all(err, cases);
     let e = err(b"0 0 0\n1 2\n", "dir/x.txt");
     assert_eq!(e.path(), "dir/x.txt");
     assert_eq!(e.line(), Some(2));

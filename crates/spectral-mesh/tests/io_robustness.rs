@@ -82,16 +82,10 @@ fn torture(bytes: &[u8], name: &str, rng: &mut Rng) {
 }
 
 fn tetra() -> Mesh {
-    Mesh::new(
-        vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-        ],
-        vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-    )
-    .unwrap()
+    #[rustfmt::skip]
+    let corners = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let faces = vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
+    Mesh::new(corners, faces).unwrap()
 }
 
 #[test]

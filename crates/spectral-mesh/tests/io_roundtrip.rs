@@ -91,11 +91,9 @@ fn colours_and_scalar_survive_and_scalar_is_in_the_ply() {
 
 #[test]
 fn stl_round_trip_is_exact_for_f32_coordinates() {
+    #[rustfmt::skip]
     let p = vec![
-        [0.0, 0.0, 0.0],
-        [1.5, 0.0, 0.0],
-        [0.0, 0.25, 0.0],
-        [0.0, 0.0, f64::from(0.1f32)],
+        [0.0, 0.0, 0.0], [1.5, 0.0, 0.0], [0.0, 0.25, 0.0], [0.0, 0.0, f64::from(0.1f32)],
     ];
     // Vertices in order of first appearance, as welding numbers them.
     let t = vec![[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]];

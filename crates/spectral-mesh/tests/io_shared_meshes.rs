@@ -29,10 +29,15 @@ enum Expect {
 use Expect::Loads;
 
 const fn ok(counts: (usize, usize, usize, usize, i64)) -> Expect {
-    Loads {
-        counts,
-        problems: &[],
-    }
+    bad(counts, &[])
+}
+
+/// Loads with these counts and these problems.
+const fn bad(
+    counts: (usize, usize, usize, usize, i64),
+    problems: &'static [&'static str],
+) -> Expect {
+    Loads { counts, problems }
 }
 
 fn table() -> Vec<(&'static str, Expect)> {
@@ -46,10 +51,7 @@ fn table() -> Vec<(&'static str, Expect)> {
         ("cylinder_locally_refined.off", ok((8285, 16442, 0, 1, 1))),
         (
             "degtri_sliding.off",
-            Loads {
-                counts: (8, 8, 0, 1, 1),
-                problems: &["4 zero-area (degenerate) triangles"],
-            },
+            bad((8, 8, 0, 1, 1), &["4 zero-area (degenerate) triangles"]),
         ),
         ("double-torus-example.off", ok((231, 466, 220, 1, -2))),
         ("eight.off", ok((315, 634, 0, 1, -2))),
@@ -64,10 +66,7 @@ fn table() -> Vec<(&'static str, Expect)> {
         ("octahedron.off", ok((6, 8, 0, 1, 2))),
         (
             "polygon_mesh.off",
-            Loads {
-                counts: (16344, 32245, 0, 1, -23),
-                problems: &["2 non-manifold vertices"],
-            },
+            bad((16344, 32245, 0, 1, -23), &["2 non-manifold vertices"]),
         ),
         ("sphere966.off", ok((926, 1848, 0, 1, 2))),
         ("tetrahedron.off", ok((4, 4, 0, 1, 2))),

@@ -11,12 +11,12 @@
 use spectral_mesh::SparseMatrix;
 use spectral_mesh::mesh::{Mesh, PointCloud};
 use spectral_mesh::operators::{
-    Laplacian, MassKind, Operators, PointCloudParams, RobustParams, TriangleUnion, cotan_stiffness,
-    mass_matrix, point_cloud_laplacian, robust_laplacian,
+    Laplacian, MassKind, Operators, PointCloudParams, RobustLaplacian, RobustParams, TriangleUnion,
+    cotan_stiffness, mass_matrix, point_cloud_laplacian, robust_laplacian,
 };
 use spectral_mesh::perturb::rng::Rng;
 use spectral_mesh::shapes::build_str;
-use spectral_mesh::spectral::eigenbasis::{EigenParams, compute_eigenbasis};
+use spectral_mesh::spectral::eigenbasis::{EigenParams, Eigenbasis, compute_eigenbasis};
 
 /// Checks S symmetric to the bit, S 1 = 0, off-diagonal <= `offdiag_max * max|S|`, mass
 /// finite, > 0 exactly on the vertices `tris` uses (every vertex when `tris` is `None`).
@@ -106,25 +106,14 @@ fn two_cones() -> Mesh {
 /// A small sheet with a duplicated triangle (twice, once reversed), zero-area triangles
 /// (collinear corners) and an unreferenced vertex.
 fn duplicates_and_slivers() -> Mesh {
+    #[rustfmt::skip]
     let p = vec![
-        [0.0, 0.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [1.0, 1.0, 0.2],
-        [2.0, 0.0, 0.0],
-        [0.5, 0.0, 0.0],
-        [1.5, 0.0, 0.0],
-        [9.0, 9.0, 9.0],
+        [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.2], [2.0, 0.0, 0.0],
+        [0.5, 0.0, 0.0], [1.5, 0.0, 0.0], [9.0, 9.0, 9.0],
     ];
+    #[rustfmt::skip]
     let t = vec![
-        [0, 1, 2],
-        [1, 3, 2],
-        [1, 2, 3],
-        [0, 1, 2],
-        [1, 4, 3],
-        [0, 5, 1],
-        [1, 6, 4],
-        [5, 6, 1],
+        [0, 1, 2], [1, 3, 2], [1, 2, 3], [0, 1, 2], [1, 4, 3], [0, 5, 1], [1, 6, 4], [5, 6, 1],
     ];
     Mesh::new(p, t).unwrap()
 }
@@ -198,18 +187,34 @@ fn non_manifold_inputs_give_the_right_number_of_zero_eigenvalues() {
     // The book and the cones are connected: one zero eigenvalue, then positive ones.
     for mesh in [three_sheets(), two_cones()] {
         let ops = Operators::new(&mesh, Laplacian::Robust);
-        let basis = compute_eigenbasis(
-            &ops,
-            &EigenParams {
-                k: 4,
-                ..Default::default()
-            },
-            &mut |_| {},
-        )
-        .unwrap();
+        let basis = eigenbasis(&ops, 4);
         assert!(basis.values[0].abs() < 1e-9, "{:?}", basis.values);
         assert!(basis.values[1] > 1e-3, "{:?}", basis.values);
     }
+}
+
+/// The robust pair `r` is the cotangent stiffness and barycentric lumped mass of `mesh`, to
+/// `tol` of their largest entries.
+fn assert_cot_and_lumped_mass(r: &RobustLaplacian, mesh: &Mesh, tol: f64) {
+    let s = cotan_stiffness(mesh);
+    let b = mass_matrix(mesh, MassKind::Barycentric);
+    let ds = r.stiffness.add_scaled(1.0, &s, -1.0).max_abs();
+    let db = r.mass.add_scaled(1.0, &b, -1.0).max_abs();
+    assert!(ds <= tol * s.max_abs(), "S differs by {ds:e}");
+    assert!(db <= tol * b.max_abs(), "B differs by {db:e}");
+}
+
+/// `k` pairs, the method chosen by the library.
+fn eigenbasis(ops: &Operators, k: usize) -> Eigenbasis {
+    compute_eigenbasis(
+        ops,
+        &EigenParams {
+            k,
+            ..Default::default()
+        },
+        &mut |_| {},
+    )
+    .unwrap()
 }
 
 #[test]
@@ -221,31 +226,19 @@ fn robust_equals_cot_with_lumped_mass_on_a_delaunay_manifold_mesh() {
     let r = robust_laplacian(&mesh, &RobustParams::default()).unwrap();
     assert_eq!(r.stats.flips, 0);
     assert_eq!(r.stats.mollify_epsilon, 0.0);
-    let s = cotan_stiffness(&mesh);
-    let b = mass_matrix(&mesh, MassKind::Barycentric);
-    let ds = r.stiffness.add_scaled(1.0, &s, -1.0).max_abs();
-    let db = r.mass.add_scaled(1.0, &b, -1.0).max_abs();
-    assert!(ds <= 1e-13 * s.max_abs(), "S differs by {ds:e}");
-    assert!(db <= 1e-13 * b.max_abs(), "B differs by {db:e}");
+    assert_cot_and_lumped_mass(&r, &mesh, 1e-13);
     // A quadrilateral split along its long diagonal, both opposite angles obtuse (negative
     // cotangent weight): the robust pair is the cotangent pair of the other split.
+    #[rustfmt::skip]
     let p = vec![
-        [0.0, 0.0, 0.0],
-        [2.0, 0.0, 0.0],
-        [1.0, 0.2, 0.0],
-        [1.0, -0.2, 0.0],
+        [0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 0.2, 0.0], [1.0, -0.2, 0.0],
     ];
     let bad = Mesh::new(p.clone(), vec![[0, 1, 2], [1, 0, 3]]).unwrap();
     let good = Mesh::new(p, vec![[0, 3, 2], [1, 2, 3]]).unwrap();
     assert!(cotan_stiffness(&bad).get(0, 1) > 0.0);
     let r = robust_laplacian(&bad, &RobustParams::default()).unwrap();
     assert!(r.stats.flips > 0);
-    let s = cotan_stiffness(&good);
-    let b = mass_matrix(&good, MassKind::Barycentric);
-    let ds = r.stiffness.add_scaled(1.0, &s, -1.0).max_abs();
-    let db = r.mass.add_scaled(1.0, &b, -1.0).max_abs();
-    assert!(ds <= 1e-12 * s.max_abs(), "S differs by {ds:e}");
-    assert!(db <= 1e-12 * b.max_abs(), "B differs by {db:e}");
+    assert_cot_and_lumped_mass(&r, &good, 1e-12);
     check("quad", 4, Some(bad.triangles()), &r.stiffness, &r.mass, 0.0);
 }
 
@@ -271,15 +264,7 @@ fn robust_is_scale_covariant() {
 /// Largest relative error of eigenvalues 1..=24 against l(l+1) for each l = 1..=4, after
 /// checking that the zero eigenvalue is alone.
 fn sphere_errors(ops: &Operators) -> [f64; 4] {
-    let basis = compute_eigenbasis(
-        ops,
-        &EigenParams {
-            k: 25,
-            ..Default::default()
-        },
-        &mut |_| {},
-    )
-    .unwrap();
+    let basis = eigenbasis(ops, 25);
     let v = &basis.values;
     assert!(v[0].abs() < 1e-8, "{v:?}");
     let mut out = [0.0; 4];

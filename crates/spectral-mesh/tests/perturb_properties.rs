@@ -29,13 +29,12 @@ fn grid(nx: usize, ny: usize, lx: f64, ly: f64) -> Mesh {
     for j in 0..ny {
         for i in 0..nx {
             let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            if (i + j) % 2 == 0 {
-                f.push([a, b, c]);
-                f.push([a, c, d]);
+            let pair = if (i + j) % 2 == 0 {
+                [[a, b, c], [a, c, d]]
             } else {
-                f.push([a, b, d]);
-                f.push([b, c, d]);
-            }
+                [[a, b, d], [b, c, d]]
+            };
+            f.extend(pair);
         }
     }
     Mesh::new(p, f).unwrap()

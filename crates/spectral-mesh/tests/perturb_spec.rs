@@ -9,88 +9,28 @@ use spectral_mesh::perturb::{
 
 #[test]
 fn parses_the_documented_forms() {
-    assert_eq!(
-        parse_perturbation("noise:0.1").unwrap(),
-        PerturbationSpec::Noise {
-            magnitude: 0.1,
-            seed: 0
-        }
-    );
-    assert_eq!(
-        parse_perturbation(" noise:0.1, seed=3 ").unwrap(),
-        PerturbationSpec::Noise {
-            magnitude: 0.1,
-            seed: 3
-        }
-    );
-    assert_eq!(
-        parse_perturbation("scale:2").unwrap(),
-        PerturbationSpec::Scale { alpha: 2.0 }
-    );
-    assert_eq!(
-        parse_perturbation("rotate:axis=z,angle=30").unwrap(),
-        PerturbationSpec::RigidMotion {
-            axis: [0.0, 0.0, 1.0],
-            angle_deg: 30.0,
-            translation: [0.0; 3]
-        }
-    );
-    assert_eq!(
-        parse_perturbation("rotate:axis=1/1/0,angle=45,t=1/2/3").unwrap(),
-        PerturbationSpec::RigidMotion {
-            axis: [1.0, 1.0, 0.0],
-            angle_deg: 45.0,
-            translation: [1.0, 2.0, 3.0]
-        }
-    );
-    assert_eq!(
-        parse_perturbation("resample:2").unwrap(),
-        PerturbationSpec::Resample {
-            factor: 2.0,
-            seed: 0,
-            mode: ResampleMode::AreaWeighted
-        }
-    );
-    assert_eq!(
-        parse_perturbation("refine:0.5,0,-1,0.25,2").unwrap(),
-        PerturbationSpec::Refine {
-            center: Center::Point([0.5, 0.0, -1.0]),
-            radius: 0.25,
-            levels: 2
-        }
-    );
-    assert_eq!(
-        parse_perturbation("hole:v=12,0.3").unwrap(),
-        PerturbationSpec::Hole {
-            center: Center::Vertex(12),
-            radius: 0.3
-        }
-    );
-    assert_eq!(
-        parse_perturbation("tiny:100").unwrap(),
-        PerturbationSpec::Tiny {
-            count: 100,
-            seed: 0
-        }
-    );
-    assert_eq!(
-        parse_perturbation("missing:20,seed=9").unwrap(),
-        PerturbationSpec::Missing { count: 20, seed: 9 }
-    );
-    assert_eq!(
-        parse_perturbation("bend:90").unwrap(),
-        PerturbationSpec::Bend {
-            angle_deg: 90.0,
-            axis: None
-        }
-    );
-    assert_eq!(
-        parse_perturbation("bend:90,axis=y").unwrap(),
-        PerturbationSpec::Bend {
-            angle_deg: 90.0,
-            axis: Some(1)
-        }
-    );
+    use PerturbationSpec as P;
+    #[rustfmt::skip]
+    let cases = [
+        ("noise:0.1", P::Noise { magnitude: 0.1, seed: 0 }),
+        (" noise:0.1, seed=3 ", P::Noise { magnitude: 0.1, seed: 3 }),
+        ("scale:2", P::Scale { alpha: 2.0 }),
+        ("rotate:axis=z,angle=30",
+         P::RigidMotion { axis: [0.0, 0.0, 1.0], angle_deg: 30.0, translation: [0.0; 3] }),
+        ("rotate:axis=1/1/0,angle=45,t=1/2/3",
+         P::RigidMotion { axis: [1.0, 1.0, 0.0], angle_deg: 45.0, translation: [1.0, 2.0, 3.0] }),
+        ("resample:2", P::Resample { factor: 2.0, seed: 0, mode: ResampleMode::AreaWeighted }),
+        ("refine:0.5,0,-1,0.25,2",
+         P::Refine { center: Center::Point([0.5, 0.0, -1.0]), radius: 0.25, levels: 2 }),
+        ("hole:v=12,0.3", P::Hole { center: Center::Vertex(12), radius: 0.3 }),
+        ("tiny:100", P::Tiny { count: 100, seed: 0 }),
+        ("missing:20,seed=9", P::Missing { count: 20, seed: 9 }),
+        ("bend:90", P::Bend { angle_deg: 90.0, axis: None }),
+        ("bend:90,axis=y", P::Bend { angle_deg: 90.0, axis: Some(1) }),
+    ];
+    for (text, want) in cases {
+        assert_eq!(parse_perturbation(text).unwrap(), want, "{text}");
+    }
 }
 
 #[test]

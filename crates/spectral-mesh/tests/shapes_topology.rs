@@ -149,32 +149,15 @@ fn regular_shapes_have_stated_topology_and_vertex_counts() {
 
 #[test]
 fn vertex_count_formulas_match_documented_values() {
+    #[rustfmt::skip]
     let want = [
-        (
-            ShapeKind::ThreeTorus,
-            [96, 396, 1596, 6396, 25596, 102396, 409596],
-        ),
-        (
-            ShapeKind::DoubleTorus,
-            [72, 294, 1182, 4734, 18942, 75774, 303102],
-        ),
-        (
-            ShapeKind::Torus,
-            [98, 392, 1568, 6272, 25088, 100352, 401408],
-        ),
+        (ShapeKind::ThreeTorus, [96, 396, 1596, 6396, 25596, 102396, 409596]),
+        (ShapeKind::DoubleTorus, [72, 294, 1182, 4734, 18942, 75774, 303102]),
+        (ShapeKind::Torus, [98, 392, 1568, 6272, 25088, 100352, 401408]),
         (ShapeKind::Sphere, [12, 42, 162, 642, 2562, 10242, 40962]),
-        (
-            ShapeKind::UvSphere,
-            [86, 366, 1514, 6162, 24866, 99906, 400514],
-        ),
-        (
-            ShapeKind::Disk,
-            [127, 469, 1801, 7057, 27937, 111169, 443521],
-        ),
-        (
-            ShapeKind::Cylinder,
-            [112, 420, 1624, 6384, 25312, 100800, 402304],
-        ),
+        (ShapeKind::UvSphere, [86, 366, 1514, 6162, 24866, 99906, 400514]),
+        (ShapeKind::Disk, [127, 469, 1801, 7057, 27937, 111169, 443521]),
+        (ShapeKind::Cylinder, [112, 420, 1624, 6384, 25312, 100800, 402304]),
     ];
     for (kind, counts) in want {
         for (res, &c) in counts.iter().enumerate() {

@@ -25,9 +25,8 @@ fn filters() -> Vec<Filter> {
 #[test]
 fn metric_axioms_on_random_triples() {
     let mesh = torus(10, 6, 1.0, 0.4, 0.4, 7);
-    let ops = fem(&mesh);
+    let (ops, basis) = fem_full_basis(&mesh);
     let n = ops.n();
-    let basis = Eigenbasis::dense(&ops, n).unwrap();
     let mut rng = Lcg(42);
     for f in filters() {
         let d = all_pairs(&basis, &f).unwrap();
@@ -61,9 +60,8 @@ fn metric_axioms_on_random_triples() {
 #[test]
 fn commute_and_biharmonic_match_pseudo_inverse_closed_forms() {
     let mesh = planar_patch(9, 5);
-    let ops = fem(&mesh);
+    let (ops, basis) = fem_full_basis(&mesh);
     let n = ops.n();
-    let basis = Eigenbasis::dense(&ops, n).unwrap();
     let s = dense(&ops.stiffness);
     let bm = dense(&ops.mass);
     let b1 = ops.mass.row_sums();
@@ -232,10 +230,8 @@ fn filter_validation_names_the_failing_eigenvalue() {
 
 #[test]
 fn wfem_diffusion_distance_matches_s_t() {
-    let mesh = icosphere(1);
-    let ops = fem(&mesh);
+    let (ops, basis) = fem_full_basis(&icosphere(1));
     let n = ops.n();
-    let basis = Eigenbasis::dense(&ops, n).unwrap();
     let t = 0.03;
     let src = 5;
     let d = wfem_diffusion_distances_from(&basis, src, t).unwrap();

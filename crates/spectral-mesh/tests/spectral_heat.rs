@@ -72,10 +72,8 @@ fn full_spectrum_kernel_properties() {
 
 #[test]
 fn wfem_s_t_is_symmetric_positive_definite() {
-    let mesh = icosphere(1);
-    let ops = fem(&mesh);
+    let (ops, basis) = fem_full_basis(&icosphere(1));
     let n = ops.n();
-    let basis = Eigenbasis::dense(&ops, n).unwrap();
     let t = 0.05;
     // S_t = B K_t (columns B K_t e_j).
     let mut st = vec![vec![0.0; n]; n];
@@ -135,9 +133,8 @@ fn sphere_kernel_converges_with_refinement() {
     let mut hs = Vec::new();
     for level in [1usize, 2, 3] {
         let mesh = icosphere(level);
-        let ops = fem(&mesh);
+        let (ops, basis) = fem_full_basis(&mesh);
         let n = ops.n();
-        let basis = Eigenbasis::dense(&ops, n).unwrap();
         let anchor = 0;
         let k = basis_function(&basis, anchor, t, KernelKind::Wfem).unwrap();
         let area = ops.mass.row_sums()[anchor];

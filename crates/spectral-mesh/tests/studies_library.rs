@@ -57,24 +57,13 @@ fn truncation_time_stepping_reference_agrees_with_dense() {
         ks: vec![10, 40],
         ..TruncationParams::default()
     };
-    let d = truncation_study(
-        &mesh,
-        &TruncationParams {
-            reference: TruncationReference::Dense,
-            ..base.clone()
-        },
-        &mut |_| {},
-    )
-    .unwrap();
-    let s = truncation_study(
-        &mesh,
-        &TruncationParams {
-            reference: TruncationReference::TimeStepping { tol: 1e-10 },
-            ..base
-        },
-        &mut |_| {},
-    )
-    .unwrap();
+    let with = |reference| TruncationParams {
+        reference,
+        ..base.clone()
+    };
+    let study = |p: &TruncationParams| truncation_study(&mesh, p, &mut |_| {}).unwrap();
+    let d = study(&with(TruncationReference::Dense));
+    let s = study(&with(TruncationReference::TimeStepping { tol: 1e-10 }));
     assert!(!s.dense);
     for (a, b) in d.rows.iter().zip(&s.rows) {
         assert_eq!(a.k, b.k);

@@ -2,11 +2,14 @@
 //! current folder or in a given one), asserting success or failure, and reading a field
 //! file written one value per line.
 //!
+//! The `*_with` forms take the command as one line of words with `{}` where a path goes:
+//! `ok_with("heat sphere:res=2 -o {}", &[&out])`.
+//!
 //! Each test file includes it with `mod common;` and uses a part of it.
 
 #![allow(dead_code, clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// The `spectral-mesh` binary built for these tests.
@@ -70,4 +73,71 @@ pub fn values(p: &Path) -> Vec<f64> {
         .filter(|l| !l.starts_with('#'))
         .map(|l| l.trim().parse().unwrap())
         .collect()
+}
+
+/// The words of `line` (split at white space), each `{}` replaced by the next of `paths`
+/// (a path stays one argument, spaces and all).
+pub fn argv(line: &str, paths: &[&Path]) -> Vec<String> {
+    let mut next = paths.iter();
+    let words: Vec<String> = line
+        .split_whitespace()
+        .map(|w| match w {
+            "{}" => next
+                .next()
+                .expect("a path for each {}")
+                .to_str()
+                .expect("a UTF-8 path")
+                .to_owned(),
+            w => w.to_owned(),
+        })
+        .collect();
+    assert!(next.next().is_none(), "more paths than {{}} in {line:?}");
+    words
+}
+
+fn with<T>(line: &str, paths: &[&Path], f: impl FnOnce(&[&str]) -> T) -> T {
+    let words = argv(line, paths);
+    f(&words.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+/// As [`run`], the arguments as in [`argv`].
+pub fn run_with(line: &str, paths: &[&Path]) -> Output {
+    with(line, paths, run)
+}
+
+/// As [`run_in`], the arguments as in [`argv`].
+pub fn run_in_with(dir: &Path, line: &str, paths: &[&Path]) -> Output {
+    with(line, paths, |a| run_in(dir, a))
+}
+
+/// As [`ok`], the arguments as in [`argv`].
+pub fn ok_with(line: &str, paths: &[&Path]) -> String {
+    with(line, paths, ok)
+}
+
+/// As [`ok_in`], the arguments as in [`argv`].
+pub fn ok_in_with(dir: &Path, line: &str, paths: &[&Path]) -> String {
+    with(line, paths, |a| ok_in(dir, a))
+}
+
+/// As [`err`], the arguments as in [`argv`].
+pub fn err_with(line: &str, paths: &[&Path]) -> String {
+    with(line, paths, err)
+}
+
+/// As [`err_in`], the arguments as in [`argv`].
+pub fn err_in_with(dir: &Path, line: &str, paths: &[&Path]) -> String {
+    with(line, paths, |a| err_in(dir, a))
+}
+
+/// A fresh temporary folder (removed when dropped) and the paths of `names` in it.
+pub fn temp_paths<const N: usize>(names: [&str; N]) -> (tempfile::TempDir, [PathBuf; N]) {
+    let dir = tempfile::tempdir().unwrap();
+    let paths = names.map(|n| dir.path().join(n));
+    (dir, paths)
+}
+
+/// Writes `text` to the file `name` in `dir`.
+pub fn write_in(dir: &Path, name: &str, text: impl AsRef<[u8]>) {
+    std::fs::write(dir.join(name), text).unwrap();
 }

@@ -140,8 +140,13 @@ pub async fn load(addr: SocketAddr, shape: &str) -> (String, usize) {
 
 /// Polls the job of mesh `id` until it is neither queued nor running (at most 300 s).
 pub async fn wait_job(addr: SocketAddr, id: &str) -> Value {
+    wait_job_within(addr, id, Duration::from_secs(300)).await
+}
+
+/// As [`wait_job`], at most `limit`.
+pub async fn wait_job_within(addr: SocketAddr, id: &str, limit: Duration) -> Value {
     let t = Instant::now();
-    while t.elapsed() < Duration::from_secs(300) {
+    while t.elapsed() < limit {
         let j = get(addr, &format!("/api/mesh/{id}/basis/status"))
             .await
             .json();
@@ -150,5 +155,17 @@ pub async fn wait_job(addr: SocketAddr, id: &str) -> Value {
         }
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
-    panic!("the job of {id} did not end within 300 s");
+    panic!("the job of {id} did not end within {limit:?}");
+}
+
+/// Asserts the reply has `status` and an error message containing each of `needles`.
+pub fn assert_refused(r: &Reply, status: u16, needles: &[&str]) {
+    assert_eq!(r.status, status, "{}", r.text());
+    let e = r.error();
+    assert!(needles.iter().all(|n| e.contains(n)), "{e}");
+}
+
+/// Posts a field request for mesh `id`.
+pub async fn post_field(addr: SocketAddr, id: &str, body: Value) -> Reply {
+    post_json(addr, &format!("/api/mesh/{id}/field"), body).await
 }

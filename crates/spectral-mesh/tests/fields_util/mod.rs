@@ -27,24 +27,23 @@ pub fn torus(big_r: f64, r: f64, nu: usize, nv: usize) -> Mesh {
         for i in 0..nu {
             let shift = if j % 2 == 1 { 0.5 } else { 0.0 };
             let u = std::f64::consts::TAU * (i as f64 + shift) / nu as f64;
-            p.push([
-                (big_r + r * v.cos()) * u.cos(),
-                (big_r + r * v.cos()) * u.sin(),
-                r * v.sin(),
-            ]);
+            let ring = big_r + r * v.cos(); // distance from the axis
+            p.push([ring * u.cos(), ring * u.sin(), r * v.sin()]);
         }
     }
     let id = |j: usize, i: usize| (j % nv) * nu + (i % nu);
     let mut t = Vec::with_capacity(2 * nu * nv);
     for j in 0..nv {
         for i in 0..nu {
-            if j % 2 == 0 {
-                t.push([id(j, i), id(j, i + 1), id(j + 1, i)]);
-                t.push([id(j + 1, i), id(j, i + 1), id(j + 1, i + 1)]);
+            // The quad (a, b) on row j, (c, d) on row j + 1, split along the diagonal that
+            // follows the stagger of the rows.
+            let (a, b, c, d) = (id(j, i), id(j, i + 1), id(j + 1, i), id(j + 1, i + 1));
+            let pair = if j % 2 == 0 {
+                [[a, b, c], [c, b, d]]
             } else {
-                t.push([id(j, i), id(j, i + 1), id(j + 1, i + 1)]);
-                t.push([id(j + 1, i), id(j, i), id(j + 1, i + 1)]);
-            }
+                [[a, b, d], [c, a, d]]
+            };
+            t.extend(pair);
         }
     }
     Mesh::new(p, t).unwrap()

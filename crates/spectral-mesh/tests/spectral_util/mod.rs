@@ -1,7 +1,7 @@
 //! Shared helpers of the spectral tests: small meshes and dense linear algebra.
 #![allow(dead_code, clippy::unwrap_used, clippy::expect_used)]
 
-use spectral_mesh::{Laplacian, Mesh, Operators, SparseMatrix};
+use spectral_mesh::{Eigenbasis, Laplacian, Mesh, Operators, SparseMatrix};
 
 /// Deterministic pseudo-random numbers in [0, 1).
 pub struct Lcg(pub u64);
@@ -44,8 +44,8 @@ pub fn torus(nu: usize, nv: usize, big: f64, small: f64, jitter: f64, seed: u64)
     let mut tris = Vec::new();
     for i in 0..nu {
         for j in 0..nv {
-            tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            tris.extend([[a, b, c], [a, c, d]]);
         }
     }
     Mesh::new(pos, tris).unwrap()
@@ -91,6 +91,13 @@ pub fn planar_patch(m: usize, seed: u64) -> Mesh {
 
 pub fn fem(mesh: &Mesh) -> Operators {
     Operators::new(mesh, Laplacian::Fem)
+}
+
+/// The FEM operators of `mesh` and their full dense eigenbasis (all `n` pairs).
+pub fn fem_full_basis(mesh: &Mesh) -> (Operators, Eigenbasis) {
+    let ops = fem(mesh);
+    let basis = Eigenbasis::dense(&ops, ops.n()).unwrap();
+    (ops, basis)
 }
 
 /// Dense row-major copy.
