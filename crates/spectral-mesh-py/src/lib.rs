@@ -68,7 +68,7 @@ pub(crate) fn tolerance_of(tol: f64) -> Result<f64, Failure> {
         Ok(tol)
     } else {
         Err(Failure::value(format!(
-            "tol = {tol}: must be a finite number > 0, or 0 for the default ({})",
+            "tol = {tol}: must be a finite number > 0, or 0 for the default ({:e})",
             EigenParams::default().tolerance
         )))
     }
