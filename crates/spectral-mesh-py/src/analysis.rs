@@ -12,8 +12,13 @@ use spectral_mesh::analysis::{AnalysisInput, AnalysisOptions, Signal, SignatureS
 use spectral_mesh::io::read_input;
 use spectral_mesh::operators::{Laplacian, NormalSource, PointCloudParams};
 use spectral_mesh::spectral::BasisView;
-use spectral_mesh::spectral::distances::distances_from_many;
-use spectral_mesh::spectral::embedding::spectral_embedding;
+use spectral_mesh::spectral::distances::{
+    distances_from_many, distances_from_many_weights, green_row_weights, spectral_function_weights,
+    weighted_pairs, weights_of_pairs,
+};
+use spectral_mesh::spectral::embedding::{
+    embedding_component, spectral_embedding, spectral_embedding_weights,
+};
 use spectral_mesh::spectral::filters::Filter;
 use spectral_mesh::spectral::signatures::{hks, hks_auto_times, wks, wks_auto_energies};
 use spectral_mesh::spectral::store::{BasisMeta, load_npz, save_npz};
@@ -28,6 +33,20 @@ use crate::errors::Failure;
 use crate::pyjson;
 use crate::run::{Progress, run};
 use crate::{draw, eigen_params, figure_options, laplacian_of, with_values};
+
+/// The `k` weights of a Python weight function from its values at the eigenvalues of
+/// [`weighted_pairs`] (the library's checks: strictly positive and finite).
+fn pair_weights(b: BasisView<'_>, given: &[f64], name: &str) -> Result<Vec<f64>, Failure> {
+    weights_of_pairs(b.values, given, name).map_err(|e| Failure::value(e.to_string()))
+}
+
+/// A weight function's values as given (not-finite ones included: [`weights_of_pairs`]
+/// refuses them naming the eigenpair).
+fn raw_weights(a: &PyReadonlyArray1<'_, f64>) -> Result<Vec<f64>, Failure> {
+    Ok(a.as_slice()
+        .map_err(|e| Failure::value(format!("weights: {e}")))?
+        .to_vec())
+}
 
 /// A `ValueError` from a serde message.
 fn request_error(e: serde_json::Error) -> Failure {
@@ -518,6 +537,112 @@ impl PyAnalysis {
             Ok((rows.len(), d, rows.concat()))
         })?;
         to_rows(py, n, d, data)
+    }
+
+    /// The eigenvalues of the first `k` pairs that a filter weighs (the library's
+    /// zero-eigenvalue rule): `(pair indices, eigenvalues)`. A Python weight function is
+    /// evaluated at these values and its values passed to the `*_weighted` methods.
+    fn filter_eigenvalues<'py>(
+        &self,
+        py: Python<'py>,
+        k: usize,
+    ) -> PyResult<(Vec<usize>, Bound<'py, PyArray1<f64>>)> {
+        let (used, values) = self.with_basis(py, k, move |b| {
+            weighted_pairs(b.values).map_err(|e| Failure::value(e.to_string()))
+        })?;
+        Ok((used, to_vector(py, values)))
+    }
+
+    /// Filtered spectral distances from several sources with the weights of a function
+    /// evaluated at [`PyAnalysis::filter_eigenvalues`]: `(n, len(sources))`.
+    fn distances_weighted<'py>(
+        &self,
+        py: Python<'py>,
+        sources: Vec<usize>,
+        weights: PyReadonlyArray1<'_, f64>,
+        name: String,
+        k: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
+        let (n, cols) = (self.inner.n(), sources.len());
+        let data = self.with_basis(py, k, move |b| {
+            let w = pair_weights(b, &given, &name)?;
+            Ok(distances_from_many_weights(b, &sources, &w)
+                .map_err(|e| Failure::value(e.to_string()))?
+                .concat())
+        })?;
+        to_columns(py, n, cols, data)
+    }
+
+    /// A row `G(source, .)` of the Green kernel with the weights of a function: `(n,)`.
+    fn green_weighted<'py>(
+        &self,
+        py: Python<'py>,
+        source: usize,
+        weights: PyReadonlyArray1<'_, f64>,
+        name: String,
+        k: usize,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
+        let data = self.with_basis(py, k, move |b| {
+            let w = pair_weights(b, &given, &name)?;
+            green_row_weights(b, source, &w).map_err(|e| Failure::value(e.to_string()))
+        })?;
+        Ok(to_vector(py, data))
+    }
+
+    /// The generalized spectral function `G(p, p)` with the weights of a function: `(n,)`.
+    fn spectral_function_weighted<'py>(
+        &self,
+        py: Python<'py>,
+        weights: PyReadonlyArray1<'_, f64>,
+        name: String,
+        k: usize,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
+        let data = self.with_basis(py, k, move |b| {
+            let w = pair_weights(b, &given, &name)?;
+            spectral_function_weights(b, &w).map_err(|e| Failure::value(e.to_string()))
+        })?;
+        Ok(to_vector(py, data))
+    }
+
+    /// The spectral embedding with the weights of a function: `(n, d)`, `d` = pairs with
+    /// non-zero weight.
+    fn embedding_weighted<'py>(
+        &self,
+        py: Python<'py>,
+        weights: PyReadonlyArray1<'_, f64>,
+        name: String,
+        k: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
+        let (n, d, data) = self.with_basis(py, k, move |b| {
+            let w = pair_weights(b, &given, &name)?;
+            let rows = spectral_embedding_weights(b, &w, usize::MAX)
+                .map_err(|e| Failure::value(e.to_string()))?;
+            let d = rows.first().map_or(0, Vec::len);
+            Ok((rows.len(), d, rows.concat()))
+        })?;
+        to_rows(py, n, d, data)
+    }
+
+    /// One coordinate `sqrt(w_c) x_c` of the embedding with the weights of a function
+    /// (`c` 0-based in the basis; zeros for a pair of weight 0): `(n,)`.
+    fn embedding_component_weighted<'py>(
+        &self,
+        py: Python<'py>,
+        weights: PyReadonlyArray1<'_, f64>,
+        name: String,
+        component: usize,
+        k: usize,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
+        let data = self.with_basis(py, k, move |b| {
+            let w = pair_weights(b, &given, &name)?;
+            embedding_component(b, &w, component).map_err(|e| Failure::value(e.to_string()))
+        })?;
+        Ok(to_vector(py, data))
     }
 
     /// Filtered spectral distances from several sources: `(n, len(sources))`.

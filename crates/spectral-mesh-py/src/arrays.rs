@@ -57,7 +57,8 @@ pub fn mesh_from(
         for (slot, &i) in tri.iter_mut().zip(c) {
             *slot = usize::try_from(i).ok().filter(|&i| i < n).ok_or_else(|| {
                 Failure::value(format!(
-                    "F[{t}] refers to vertex {i}, but V has {n} vertices (valid: 0..{n})"
+                    "F[{t}] refers to vertex {i}, but V has {n} vertices (valid: 0 to {})",
+                    n.saturating_sub(1)
                 ))
             })?;
         }

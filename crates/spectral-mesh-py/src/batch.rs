@@ -53,6 +53,12 @@ fn parse_params(json: &str) -> Result<(String, String), Failure> {
     let mut value: serde_json::Value =
         serde_json::from_str(json).map_err(|e| Failure::value(format!("parameters: {e}")))?;
     if let Some(map) = value.as_object_mut() {
+        if let Some(t) = map.get("tolerance").and_then(serde_json::Value::as_f64) {
+            map.insert(
+                "tolerance".to_string(),
+                serde_json::json!(crate::tolerance_of(t)?),
+            );
+        }
         for key in ["hks", "wks", "adf"] {
             if let Some(serde_json::Value::String(s)) = map.get(key) {
                 let schedule: Schedule = s

@@ -58,6 +58,22 @@ pub(crate) fn laplacian_of(kind: &str) -> Result<Laplacian, Failure> {
     kind.parse::<Laplacian>().map_err(Failure::Value)
 }
 
+/// The keyword `tol` of every function (`eigenbasis`, `eigsh`, `Analysis`, `batch`), with
+/// one meaning (as in SciPy's `eigsh`): a target relative residual `> 0`, or `0` for the
+/// library's default.
+pub(crate) fn tolerance_of(tol: f64) -> Result<f64, Failure> {
+    if tol == 0.0 {
+        Ok(EigenParams::default().tolerance)
+    } else if tol.is_finite() && tol > 0.0 {
+        Ok(tol)
+    } else {
+        Err(Failure::value(format!(
+            "tol = {tol}: must be a finite number > 0, or 0 for the default ({:e})",
+            EigenParams::default().tolerance
+        )))
+    }
+}
+
 /// Eigensolver parameters from the Python keywords.
 pub(crate) fn eigen_params(
     tol: f64,
@@ -65,11 +81,7 @@ pub(crate) fn eigen_params(
     dirichlet: Option<Vec<usize>>,
     method: &str,
 ) -> Result<EigenParams, Failure> {
-    if !(tol.is_finite() && tol > 0.0) {
-        return Err(Failure::value(format!(
-            "tol = {tol}: must be a finite number > 0"
-        )));
-    }
+    let tol = tolerance_of(tol)?;
     let method = match method
         .trim()
         .to_ascii_lowercase()
@@ -582,6 +594,7 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
     let a = AnalysisOptions::default();
     let fig = FigureOptions::default();
     let pc = PointCloudParams::default();
+    let bp = spectral_mesh::batch::BatchParams::default();
     let all = json!({
         "requests": kinds,
         "analysis": {
@@ -608,6 +621,22 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
             "normals": pc.normals,
             "union": pc.union,
         },
+        // `spectral_mesh.batch`'s keywords (Python names) from the library's batch
+        // parameters.
+        "batch": {
+            "k": bp.k,
+            "laplacian": bp.laplacian.name(),
+            "tol": bp.tolerance,
+            "normalize": bp.normalize,
+            "eigenvectors": bp.basis,
+            "hks": bp.hks.as_ref().map(ToString::to_string),
+            "wks": bp.wks.as_ref().map(ToString::to_string),
+            "wks_sigma": bp.wks_sigma,
+            "adf": bp.adf.as_ref().map(ToString::to_string),
+            "scaled": bp.scaled,
+            "thumbnail": bp.thumbnail,
+        },
+        "zero_eigenvalue_eps": spectral_mesh::spectral::filters::ZERO_EIGENVALUE_EPS,
         "shape": spectral_mesh::shapes::DEFAULT_SHAPE,
         "laplacians": Laplacian::ALL.iter().map(|l| l.name()).collect::<Vec<_>>(),
         "colormaps": Colormap::ALL.iter().map(|c| c.name()).collect::<Vec<_>>(),

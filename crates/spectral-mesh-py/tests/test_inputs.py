@@ -258,7 +258,10 @@ def test_eigsh_input_errors():
         (lambda: sm.eigsh(A, 2, sigma=-1, OPinv=object()), "OPinv"),
         (lambda: sm.eigsh(sp.linalg.aslinearoperator(A), 2, sigma=-1), "LinearOperator"),
         (lambda: sm.eigsh(A.multiply(np.nan), 2, sigma=-1), "A has non-finite entries"),
-        (lambda: sm.eigsh(A, 2, sigma=-1, tol=-1.0), "tol = -1.0: must be >= 0"),
+        (
+            lambda: sm.eigsh(A, 2, sigma=-1, tol=-1.0),
+            "tol = -1: must be a finite number > 0, or 0 for the default (1e-10)",
+        ),
     ]
     for call, message in cases:
         with pytest.raises(ValueError) as e:

@@ -5,12 +5,18 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Literal, Sequence, overload
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _arrays, _native
+from ._arrays import FloatArray, IntArray
+from ._errors import InternalError
 from ._api import _labels, _marks, _view_text
+if TYPE_CHECKING:
+    from ._arrays import CsrMatrix
+
 from ._defaults import ANALYSIS, FIGURE, K, POINT_CLOUD, REQUESTS, SEED, TOL
 
 _R = REQUESTS
@@ -29,12 +35,12 @@ class CriticalPoints:
     bordered form).
     """
 
-    minima: np.ndarray
-    maxima: np.ndarray
-    saddles: np.ndarray
-    multiplicities: np.ndarray
-    on_boundary: np.ndarray
-    non_manifold: np.ndarray
+    minima: IntArray
+    maxima: IntArray
+    saddles: IntArray
+    multiplicities: IntArray
+    on_boundary: IntArray
+    non_manifold: IntArray
     chi: int
     lhs: int
     rhs: int
@@ -53,10 +59,10 @@ class LevelSet:
     of its ``s`` straight pieces (one per triangle it crosses)."""
 
     value: float
-    segments: np.ndarray = field(repr=False)
+    segments: FloatArray = field(repr=False)
 
 
-def _signal(signal: Any, n: int) -> tuple[dict, np.ndarray | None]:
+def _signal(signal: Any, n: int) -> tuple[dict[str, Any], FloatArray | None]:
     """A diffusion signal as (its serde form, per-vertex values or None)."""
     if isinstance(signal, (int, np.integer)) and not isinstance(signal, bool):
         return {"impulse": _arrays.count(signal, "signal vertex")}, None
@@ -111,30 +117,15 @@ def _constraints(c: Any) -> Any:
     return out
 
 
-#: Eigenvalues with ``|lambda| <= ZERO_EIGENVALUE_EPS * lambda_max`` count as zero and are
-#: skipped by the filters (the library's rule, also pyFM's WKS cut-off).
-ZERO_EIGENVALUE_EPS = 1e-8
+#: A weight function of the eigenvalues given as a Python function (``lambda s: 1 / s**3``):
+#: called with the NumPy array of the eigenvalues a filter weighs, it returns their weights.
+WeightFunction = Callable[[FloatArray], npt.ArrayLike]
 
 
-def _callable_weights(w: Any, evals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(indices of the pairs used, their weights) of a Python weight function ``w(s)``,
-    applied to the non-zero eigenvalues; refused unless strictly positive and finite."""
-    lmax = float(np.abs(evals).max()) if evals.size else 0.0
-    used = np.flatnonzero(np.abs(evals) > ZERO_EIGENVALUE_EPS * lmax)
-    if used.size == 0:
-        raise ValueError("the spectrum has no non-zero eigenvalue to filter")
-    s = evals[used]
-    weights = np.asarray(w(s.copy()), dtype=np.float64)
-    if weights.shape != s.shape:
-        weights = np.broadcast_to(weights, s.shape).astype(np.float64)
-    bad = np.flatnonzero(~(np.isfinite(weights) & (weights > 0)))
-    if bad.size:
-        j = int(bad[0])
-        raise ValueError(
-            f"the filter is not strictly positive and finite on the spectrum: w({s[j]}) = "
-            f"{weights[j]} at eigenpair index {int(used[j])}"
-        )
-    return used, weights
+def _function_name(w: Callable[..., Any]) -> str:
+    """How an error message names a Python weight function."""
+    name = getattr(w, "__qualname__", None) or getattr(w, "__name__", None) or repr(w)
+    return f"{name} (a Python function)"
 
 
 def _solver_options(
@@ -183,8 +174,8 @@ class Analysis:
 
     def __init__(
         self,
-        V: Any,
-        F: Any,
+        V: npt.ArrayLike,
+        F: npt.ArrayLike,
         kind: str = ANALYSIS["kind"],
         *,
         normalize: bool = ANALYSIS["normalize"],
@@ -204,7 +195,7 @@ class Analysis:
         # Own read-only copies: the analysis does not change when the caller's arrays do.
         self._setup(native, V.copy(), F.copy())
 
-    def _setup(self, native: _native.Analysis, V: np.ndarray, F: np.ndarray) -> None:
+    def _setup(self, native: _native.Analysis, V: FloatArray, F: IntArray) -> None:
         self._a = native
         self._V = V
         self._F = F
@@ -214,7 +205,7 @@ class Analysis:
         self._last: Any = None
 
     @classmethod
-    def _of_native(cls, native: _native.Analysis, V: np.ndarray | None = None) -> Analysis:
+    def _of_native(cls, native: _native.Analysis, V: FloatArray | None = None) -> Analysis:
         """An analysis around a native one; ``V`` defaults to its vertices (or points)."""
         an = cls.__new__(cls)
         v, f = native.mesh()
@@ -224,8 +215,8 @@ class Analysis:
     @classmethod
     def from_points(
         cls,
-        P: Any,
-        normals: Any = None,
+        P: npt.ArrayLike,
+        normals: npt.ArrayLike | None = None,
         *,
         n_neighbors: int = POINT_CLOUD["n_neighbors"],
         mollify_factor: float = POINT_CLOUD["mollify_factor"],
@@ -319,13 +310,13 @@ class Analysis:
     # ------------------------------------------------------------------ properties
 
     @property
-    def V(self) -> np.ndarray:
+    def V(self) -> FloatArray:
         """``(n, 3)`` float64 vertex positions (the points of a point cloud) as given (not
         scaled; a read-only copy)."""
         return self._V
 
     @property
-    def F(self) -> np.ndarray:
+    def F(self) -> IntArray:
         """``(m, 3)`` int64 triangles (a read-only copy); for a point cloud the triangle
         union its Laplacian was built on (the connectivity of critical points, level sets,
         segmentations and harmonic maps)."""
@@ -387,7 +378,7 @@ class Analysis:
         return self._a.default_source
 
     @property
-    def last_info(self) -> dict:
+    def last_info(self) -> dict[str, Any]:
         """What the last field request resolved: the request with every default filled in
         (source, anchor, constraints), the marked vertices, ``k`` used and held."""
         return self._info
@@ -397,7 +388,7 @@ class Analysis:
 
     # ------------------------------------------------------------------ operators, basis
 
-    def operators(self):
+    def operators(self) -> tuple[CsrMatrix, CsrMatrix]:
         """``(S, B)`` in use, ``scipy.sparse.csr_matrix`` (``B / area`` when normalized);
         conventions as :func:`spectral_mesh.laplacian`."""
         s, b = self._a.operators()
@@ -405,22 +396,22 @@ class Analysis:
 
     def basis(
         self, k: int = K, *, progress: Callable[[dict], Any] | None = None
-    ) -> tuple[np.ndarray, np.ndarray]:
+    ) -> tuple[FloatArray, FloatArray]:
         """The first ``k`` eigenpairs ``(evals (k,), evecs (n, k))`` of the operators in
         use (copies): ascending, B-orthonormal, signs as :func:`spectral_mesh.eigenbasis`.
         Computed, or grown, when fewer than ``k`` are held; ``progress`` as in
         :func:`spectral_mesh.eigenbasis`."""
         return self._a.basis(self._k(k), progress)
 
-    def eigenvalues(self, k: int = K) -> np.ndarray:
+    def eigenvalues(self, k: int = K) -> FloatArray:
         """The first ``k`` eigenvalues ``(k,)``."""
         return self.basis(k)[0]
 
-    def residuals(self) -> np.ndarray:
+    def residuals(self) -> FloatArray:
         """Relative residuals of the held pairs (``(held_k,)``)."""
         return self._a.residuals()
 
-    def set_basis(self, evals: Any, evecs: Any) -> None:
+    def set_basis(self, evals: npt.ArrayLike, evecs: npt.ArrayLike) -> None:
         """Hold a basis computed elsewhere (LaPy, SciPy, a file): ``evals`` ``(k,)``
         ascending and ``evecs`` ``(n, k)`` orthonormal for this analysis' mass (remember
         ``normalize``: eigenvalues of the raw mesh times the area, vectors times
@@ -447,7 +438,19 @@ class Analysis:
             )
         return k
 
-    def field(self, kind: str, *, return_info: bool = False, **params: Any):
+    @overload
+    def field(
+        self, kind: str, *, return_info: Literal[False] = False, **params: Any
+    ) -> FloatArray | IntArray: ...
+
+    @overload
+    def field(
+        self, kind: str, *, return_info: Literal[True], **params: Any
+    ) -> tuple[FloatArray | IntArray, dict[str, Any]]: ...
+
+    def field(
+        self, kind: str, *, return_info: bool = False, **params: Any
+    ) -> FloatArray | IntArray | tuple[FloatArray | IntArray, dict[str, Any]]:
         """Any field by its request kind and parameters, exactly as in experiment files
         and the web app (``kind`` is one of ``harmonic``, ``heat``, ``diffusion``,
         ``distance``, ``spectral-function``, ``hks``, ``wks``, ``adf``, ``segmentation``,
@@ -455,8 +458,15 @@ class Analysis:
         name). Returns the ``(n,)`` values, or ``(values, info)`` with
         ``return_info=True`` (``info``: see :attr:`last_info`). A segmentation returns its
         int64 labels."""
-        values = params.pop("_values", None)
-        req = {"kind": str(kind)}
+        values, labels = self._request(kind, params.pop("_values", None), params)
+        out = labels if labels is not None else values
+        return (out, self._info) if return_info else out
+
+    def _request(
+        self, kind: str, values: FloatArray | None, params: dict[str, Any]
+    ) -> tuple[FloatArray, IntArray | None]:
+        """The library's field of a request (its values, and a segmentation's labels)."""
+        req: dict[str, Any] = {"kind": str(kind)}
         for key, v in params.items():
             if v is not None:
                 req[key] = _arrays.plain(v, key)
@@ -464,16 +474,29 @@ class Analysis:
         info.pop("values", None)
         info.pop("labels", None)
         self._info = info
-        out = labels if labels is not None else vals
-        self._last = out
-        return (out, info) if return_info else out
+        self._last = labels if labels is not None else vals
+        return vals, labels
 
-    def _weights(self, w: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
-        return _callable_weights(w, self.eigenvalues(k))
+    def _values(self, kind: str, values: FloatArray | None = None, **params: Any) -> FloatArray:
+        """The values of a request's field."""
+        return self._request(kind, values, params)[0]
 
-    def _embedding_of(self, used: np.ndarray, weights: np.ndarray, k: int) -> np.ndarray:
-        _, X = self.basis(k)
-        return X[:, used] * np.sqrt(weights)
+    def _function_weights(self, w: WeightFunction, k: int) -> tuple[FloatArray, str]:
+        """A Python weight function's values at the eigenvalues the library's filters
+        weigh (the zero ones left out by the library's rule), and its name. Which pairs,
+        the checks (strictly positive, finite) and every use of the weights are the
+        library's: only the function itself runs in Python."""
+        _used, s = self._a.filter_eigenvalues(k)
+        values = np.asarray(w(s.copy()), dtype=np.float64)
+        if values.shape != s.shape:
+            try:
+                values = np.broadcast_to(values, s.shape)
+            except ValueError:
+                raise ValueError(
+                    f"the weight function {_function_name(w)} returned shape {values.shape} "
+                    f"for {s.shape[0]} eigenvalues: it must return one weight per eigenvalue"
+                ) from None
+        return np.ascontiguousarray(values, dtype=np.float64), _function_name(w)
 
     def heat(
         self,
@@ -482,38 +505,38 @@ class Analysis:
         t: float = _R["heat"]["t"],
         kernel: str = _R["heat"]["kernel"],
         k: int = _R["heat"]["k"],
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """The heat kernel basis function ``K_t e_anchor`` (the paper's diffusion basis,
         eq. 8): ``(n,)``. ``kernel``: ``"wfem"`` (default, ``X D_t X^T B``, conserves the
         B-mass), ``"voronoi-cot"`` (``X D_t X^T D``, D lumped) or ``"standard"``
         (``X D_t X^T``, LaPy's and pyFM's ``heat kernel`` columns). ``D_t =
         diag(exp(-lambda t))`` over the first ``k`` pairs. ``anchor`` defaults to the
         vertex of largest x."""
-        return self.field("heat", anchor=anchor, t=t, kernel=kernel, k=self._k(k))
+        return self._values("heat", anchor=anchor, t=t, kernel=kernel, k=self._k(k))
 
     def diffuse(
         self,
-        signal: Any,
+        signal: npt.ArrayLike | int | dict[str, float],
         *,
         t: float = _R["diffusion"]["t"],
         kernel: str = _R["diffusion"]["kernel"],
         k: int = _R["diffusion"]["k"],
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """The diffusion ``K_t f`` of a signal (the solution at time ``t`` of
         ``B F' + S F = 0``, ``F(0) = f``, truncated to ``k`` pairs): ``(n,)``.
         ``signal``: ``(n,)`` values, a vertex index (the unit impulse there), or
         ``{"vertex": v, "radius": r}`` (the indicator of the Euclidean ball of radius
         ``r``, in mesh units, around ``v``). ``kernel`` as in :meth:`heat`."""
         sig, values = _signal(signal, self.n)
-        return self.field("diffusion", signal=sig, t=t, kernel=kernel, k=self._k(k), _values=values)
+        return self._values("diffusion", values, signal=sig, t=t, kernel=kernel, k=self._k(k))
 
     def distance(
         self,
         source: int | Sequence[int] | None = None,
         *,
-        distance: str = _R["distance"]["distance"],
+        distance: str | WeightFunction = _R["distance"]["distance"],
         k: int = _R["distance"]["k"],
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """Filtered spectral distances from ``source`` (eq. 13), ``(n,)``; from several
         sources ``(n, len(source))``.
 
@@ -537,8 +560,6 @@ class Analysis:
         """
         k = self._k(k)
         if callable(distance):
-            used, weights = self._weights(distance, k)
-            E = self._embedding_of(used, weights, k)
             one = source is None or isinstance(source, (int, np.integer))
             if source is None:
                 srcs = [self.default_source]
@@ -546,59 +567,52 @@ class Analysis:
                 srcs = [_arrays.count(source, "source")]
             else:
                 srcs = [_arrays.count(x, "source") for x in source]
-            for x in srcs:
-                if x >= self.n:
-                    raise ValueError(f"source {x} is out of range: the mesh has {self.n} vertices")
-            d = (
-                np.column_stack([np.linalg.norm(E - E[x], axis=1) for x in srcs])
-                if srcs
-                else np.zeros((self.n, 0))
-            )
+            ws, name = self._function_weights(distance, k)
+            d = self._a.distances_weighted(srcs, ws, name, k)
             return d[:, 0] if one else d
         if source is not None and not isinstance(source, (int, np.integer)):
             sources = [_arrays.count(s, "source") for s in source]
             if str(distance).strip().startswith("wfem-diffusion"):
                 return (
                     np.column_stack(
-                        [self.field("distance", source=s, distance=distance, k=k) for s in sources]
+                        [self._values("distance", source=s, distance=distance, k=k) for s in sources]
                     )
                     if sources
                     else np.zeros((self.n, 0))
                 )
             return self._a.distances_many(sources, str(distance), k)
-        return self.field("distance", source=source, distance=distance, k=k)
+        return self._values("distance", source=source, distance=distance, k=k)
 
     def spectral_function(
         self,
-        filter: str = _R["spectral-function"]["filter"],
+        filter: str | WeightFunction = _R["spectral-function"]["filter"],
         *,
         k: int = _R["spectral-function"]["k"],
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """The generalized spectral function ``G(p, p) = sum_{lambda > 0} w(lambda) x(p)^2``
         of a filter (see :meth:`distance` for filters, text or a Python function): ``(n,)``."""
+        k = self._k(k)
         if callable(filter):
-            used, weights = self._weights(filter, self._k(k))
-            return np.sum(self._embedding_of(used, weights, self._k(k)) ** 2, axis=1)
-        return self.field("spectral-function", filter=filter, k=self._k(k))
+            ws, name = self._function_weights(filter, k)
+            return self._a.spectral_function_weighted(ws, name, k)
+        return self._values("spectral-function", filter=filter, k=k)
 
     def green(
         self,
         source: int | None = None,
         *,
-        filter: str = _R["green"]["filter"],
+        filter: str | WeightFunction = _R["green"]["filter"],
         k: int = _R["green"]["k"],
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """A row ``G(source, .)`` of the generalized Green kernel ``X diag(w) X^T``
         (zero eigenvalues skipped): ``(n,)``. ``filter``: text or a Python function
         (see :meth:`distance`)."""
+        k = self._k(k)
         if callable(filter):
-            used, weights = self._weights(filter, self._k(k))
-            E = self._embedding_of(used, weights, self._k(k))
             s = self.default_source if source is None else _arrays.count(source, "source")
-            if s >= self.n:
-                raise ValueError(f"source {s} is out of range: the mesh has {self.n} vertices")
-            return E @ E[s]
-        return self.field("green", source=source, filter=filter, k=self._k(k))
+            ws, name = self._function_weights(filter, k)
+            return self._a.green_weighted(s, ws, name, k)
+        return self._values("green", source=source, filter=filter, k=k)
 
     def hks(
         self,
@@ -606,25 +620,29 @@ class Analysis:
         *,
         scaled: bool = _R["hks"]["scaled"],
         k: int = _R["hks"]["k"],
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """The heat kernel signature ``hks_t(p) = sum_j exp(-lambda_j t) x_j(p)^2`` over
         all ``k`` pairs (the zero eigenvalue included, pyFM's ``HKS``); ``scaled`` divides
         by the heat trace ``sum_j exp(-lambda_j t)``. A number ``t`` gives ``(n,)``, a
         sequence of times ``(n, len(t))``."""
         k = self._k(k)
         if np.ndim(t) == 0:
-            return self.field("hks", t=t, scaled=bool(scaled), k=k)
+            return self._values("hks", t=t, scaled=bool(scaled), k=k)
         times = [_arrays.real(x, "t") for x in np.asarray(t).ravel()]
         return self._a.hks_many(times, bool(scaled), k)
 
-    def hks_times(self, n_times: int, *, k: int = _R["hks"]["k"]) -> np.ndarray:
+    def hks_times(self, n_times: int, *, k: int = _R["hks"]["k"]) -> FloatArray:
         """pyFM's automatic HKS times: ``n_times`` values geometrically spaced from
         ``4 ln 10 / lambda_max`` to ``4 ln 10 / lambda_1`` (the first non-zero)."""
         return np.asarray(self._a.hks_auto_times(_arrays.count(n_times, "n_times", 1), self._k(k)))
 
-    def auto_hks(self, n_times: int, *, scaled: bool = True, k: int = _R["hks"]["k"]) -> np.ndarray:
-        """pyFM's ``auto_HKS``: the HKS at :meth:`hks_times`, ``(n, n_times)``
-        (scaled by default, as pyFM)."""
+    def auto_hks(
+        self, n_times: int, *, scaled: bool = _R["hks"]["scaled"], k: int = _R["hks"]["k"]
+    ) -> FloatArray:
+        """pyFM's ``auto_HKS``: the HKS at :meth:`hks_times`, ``(n, n_times)``.
+        ``scaled`` has one default in every function (the library's, ``False``, as
+        :meth:`hks` and the command line); pyFM's ``auto_HKS`` scales by default: pass
+        ``scaled=True`` for its numbers."""
         times = self.hks_times(n_times, k=k)
         return self._a.hks_many([float(x) for x in times], bool(scaled), self._k(k))
 
@@ -635,18 +653,18 @@ class Analysis:
         sigma: float = _R["wks"]["sigma"],
         scaled: bool = _R["wks"]["scaled"],
         k: int = _R["wks"]["k"],
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """The wave kernel signature at energy ``e`` (a log-eigenvalue):
         ``wks_e(p) = sum_j c_j(e) x_j(p)^2``, ``c_j(e) = exp(-(e - ln lambda_j)^2 / (2 sigma^2))``,
         pairs with ``lambda <= 1e-8 lambda_max`` dropped (pyFM's ``WKS``); ``scaled``
         divides by ``sum_j c_j(e)``. A number gives ``(n,)``, a sequence ``(n, len)``."""
         k = self._k(k)
         if np.ndim(energy) == 0:
-            return self.field("wks", energy=energy, sigma=sigma, scaled=bool(scaled), k=k)
+            return self._values("wks", energy=energy, sigma=sigma, scaled=bool(scaled), k=k)
         es = [_arrays.real(x, "energy") for x in np.asarray(energy).ravel()]
         return self._a.wks_many(es, _arrays.real(sigma, "sigma"), bool(scaled), k)
 
-    def wks_energies(self, n_energies: int, *, k: int = _R["wks"]["k"]) -> tuple[np.ndarray, float]:
+    def wks_energies(self, n_energies: int, *, k: int = _R["wks"]["k"]) -> tuple[FloatArray, float]:
         """pyFM's automatic WKS energies and bandwidth: ``sigma = 7 (e_max - e_min) / n``,
         ``n`` energies evenly spaced from ``ln lambda_1 + 2 sigma`` to
         ``ln lambda_max - 2 sigma``. Returns ``(energies, sigma)``."""
@@ -654,32 +672,33 @@ class Analysis:
         return np.asarray(e), s
 
     def auto_wks(
-        self, n_energies: int, *, scaled: bool = True, k: int = _R["wks"]["k"]
-    ) -> np.ndarray:
-        """pyFM's ``auto_WKS``: the WKS at :meth:`wks_energies`, ``(n, n_energies)``
-        (scaled by default, as pyFM)."""
+        self, n_energies: int, *, scaled: bool = _R["wks"]["scaled"], k: int = _R["wks"]["k"]
+    ) -> FloatArray:
+        """pyFM's ``auto_WKS``: the WKS at :meth:`wks_energies`, ``(n, n_energies)``.
+        ``scaled`` defaults to the library's ``False`` as in :meth:`wks`; pass
+        ``scaled=True`` for pyFM's default."""
         e, s = self.wks_energies(n_energies, k=k)
         return self._a.wks_many([float(x) for x in e], float(s), bool(scaled), self._k(k))
 
-    def adf(self, t: float = _R["adf"]["t"], *, k: int = _R["adf"]["k"]) -> np.ndarray:
+    def adf(self, t: float = _R["adf"]["t"], *, k: int = _R["adf"]["k"]) -> FloatArray:
         """The auto-diffusion function ``G(p, p)`` with the weight ``exp(-t s)``, zero
         eigenvalues skipped: ``(n,)``."""
-        return self.field("adf", t=t, k=self._k(k))
+        return self._values("adf", t=t, k=self._k(k))
 
     def eigenfunction(
         self, index: int = _R["eigenfunction"]["index"], *, k: int = _R["eigenfunction"]["k"]
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """Eigenfunction ``x_index`` (0-based; default 1, the first after the constant):
         ``(n,)``."""
-        return self.field("eigenfunction", index=index, k=self._k(k))
+        return self._values("eigenfunction", index=index, k=self._k(k))
 
     def embedding(
         self,
-        filter: str = _R["embedding"]["filter"],
+        filter: str | WeightFunction = _R["embedding"]["filter"],
         *,
         component: int | None = None,
         k: int = _R["embedding"]["k"],
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """The filtered spectral embedding ``p -> (sqrt(w(lambda_j)) x_j(p))_j``, whose
         Euclidean distances are the filtered distances of :meth:`distance`: ``(n, d)``
         with one column per pair of non-zero weight (zero eigenvalues skipped). With
@@ -687,46 +706,44 @@ class Analysis:
         ``(n,)``. ``filter``: text or a Python function (see :meth:`distance`)."""
         k = self._k(k)
         if callable(filter):
-            used, weights = self._weights(filter, k)
-            E = self._embedding_of(used, weights, k)
+            ws, name = self._function_weights(filter, k)
             if component is None:
-                return E
+                return self._a.embedding_weighted(ws, name, k)
             c = _arrays.count(component, "component")
-            if c >= k:
-                raise ValueError(f"component: {c}: out of range for k = {k} pairs (0-based)")
-            hit = np.flatnonzero(used == c)
-            return E[:, hit[0]] if hit.size else np.zeros(self.n)
+            return self._a.embedding_component_weighted(ws, name, c, k)
         if component is None:
             return self._a.embedding_matrix(str(filter), k)
-        return self.field("embedding", filter=filter, component=component, k=k)
+        return self._values("embedding", filter=filter, component=component, k=k)
 
     def segmentation(
         self,
-        signature: Any = _R["segmentation"]["signature"],
+        signature: str | npt.ArrayLike = _R["segmentation"]["signature"],
         *,
         persistence: float = _R["segmentation"]["persistence"],
         k: int = _R["segmentation"]["k"],
-    ) -> np.ndarray:
+    ) -> IntArray:
         """Segmentation into the watershed basins of a signature's maxima, merged by
         persistence (relative to the field's range): ``(n,)`` int64 patch labels.
         ``signature``: ``"hks:t=0.1"`` (default), ``"adf:t=0.1"``,
         ``"wks:e=E,sigma=0.5"``, ``"biharmonic-function"``, ``"commute-function"``,
         ``"spectral-function:FILTER"``, or ``(n,)`` values of any field."""
         if isinstance(signature, str):
-            return self.field(
-                "segmentation", signature=signature, persistence=persistence, k=self._k(k)
-            )
-        values = _arrays.per_vertex(signature, self.n, "signature")
-        return self.field(
-            "segmentation", signature=[], persistence=persistence, k=self._k(k), _values=values
-        )
+            req = {"signature": signature, "persistence": persistence, "k": self._k(k)}
+            _, labels = self._request("segmentation", None, req)
+        else:
+            values = _arrays.per_vertex(signature, self.n, "signature")
+            req = {"signature": [], "persistence": persistence, "k": self._k(k)}
+            _, labels = self._request("segmentation", values, req)
+        if labels is None:
+            raise InternalError("a segmentation came back without labels")
+        return labels
 
     def harmonic(
         self,
-        constraints: Any = _R["harmonic"]["constraints"],
+        constraints: int | dict[int, float] | Sequence[Any] = _R["harmonic"]["constraints"],
         *,
         order: int = _R["harmonic"]["order"],
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """The harmonic (``order=1``: ``S f = 0``) or bi-harmonic (``order=2``:
         ``S B^-1 S f = 0``, lumped B) map with Dirichlet constraints: ``(n,)``. No
         eigenbasis is needed; the factorization is kept for the same constrained vertices.
@@ -735,9 +752,9 @@ class Analysis:
         x -> 1), ``4`` (adds min/max y), ``6`` (adds z); or explicit ``{vertex: value}``,
         ``[(vertex, value), ...]`` or ``(vertices, values)``. Every connected component
         needs a constraint."""
-        return self.field("harmonic", constraints=_constraints(constraints), order=order)
+        return self._values("harmonic", constraints=_constraints(constraints), order=order)
 
-    def critical_points(self, values: Any) -> CriticalPoints:
+    def critical_points(self, values: npt.ArrayLike) -> CriticalPoints:
         """The minima, maxima and saddles of a field ``(n,)``, with the Euler check."""
         r = self._a.critical_points(_arrays.per_vertex(values, self.n))
         p = r["points"]
@@ -758,7 +775,7 @@ class Analysis:
         )
 
     def level_sets(
-        self, values: Any, levels: int | Sequence[float] = FIGURE["levels"]
+        self, values: npt.ArrayLike, levels: int | Sequence[float] = FIGURE["levels"]
     ) -> list[LevelSet]:
         """Level sets of a field ``(n,)``: at ``levels`` evenly spaced values inside its
         range (the centres of ``levels`` equal bins, as the figures draw them), or at the
@@ -777,11 +794,11 @@ class Analysis:
 
     def render(
         self,
-        values: Any,
+        values: npt.ArrayLike,
         path: str | os.PathLike[str] | None = None,
         *,
-        marks: Any = None,
-        labels: Any = None,
+        marks: int | Sequence[int] | None = None,
+        labels: npt.ArrayLike | None = None,
         levels: int = FIGURE["levels"],
         colormap: str = FIGURE["colormap"],
         view: str | tuple[float, float] = FIGURE["view"],
@@ -789,7 +806,7 @@ class Analysis:
         transparent: bool = FIGURE["transparent"],
         critical_points: bool = FIGURE["critical_points"],
         colorbar: bool = FIGURE["colorbar"],
-    ):
+    ) -> npt.NDArray[np.uint8] | None:
         """Draw a field on this mesh; see :func:`spectral_mesh.render`. ``marks=None``
         marks the vertices of the last field request (its source, anchor or constraints)
         when ``values`` is the array that request returned."""

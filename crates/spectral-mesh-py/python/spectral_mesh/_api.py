@@ -3,18 +3,23 @@
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Literal, Sequence, overload
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _arrays, _native
-from ._defaults import FIGURE, K, KIND, POINT_CLOUD, SEED, SHAPE, TOL
+from ._arrays import FloatArray, IntArray
+
+if TYPE_CHECKING:
+    from ._arrays import CsrMatrix
+from ._defaults import FIGURE, K, KIND, METHOD, POINT_CLOUD, SEED, SHAPE, TOL
 
 
 # ----------------------------------------------------------------------------- meshes
 
 
-def read_mesh(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
+def read_mesh(path: str | os.PathLike[str]) -> tuple[FloatArray, IntArray]:
     """Read a triangle mesh file: OFF, OBJ, PLY (ASCII or binary) or STL.
 
     Returns ``(V, F)``: ``V`` is ``(n, 3)`` float64 vertex positions, ``F`` is ``(m, 3)``
@@ -29,7 +34,7 @@ def read_mesh(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
     return V, F
 
 
-def write_mesh(path: str | os.PathLike[str], V: Any, F: Any) -> None:
+def write_mesh(path: str | os.PathLike[str], V: npt.ArrayLike, F: npt.ArrayLike) -> None:
     """Write ``(V, F)`` to a mesh file; the format comes from the extension (``.off``,
     ``.obj``, ``.ply``, ``.stl``). The file is written to a temporary name and renamed,
     so a failed write never leaves half a file."""
@@ -37,7 +42,7 @@ def write_mesh(path: str | os.PathLike[str], V: Any, F: Any) -> None:
     _native.write_mesh(os.fspath(path), V, F)
 
 
-def shape(spec: str = SHAPE) -> tuple[np.ndarray, np.ndarray]:
+def shape(spec: str = SHAPE) -> tuple[FloatArray, IntArray]:
     """A built-in shape ``(V, F)`` from its spec, e.g. ``"3torus"`` (the paper's default
     shape), ``"sphere:res=5"`` (an icosphere, 10 * 4^res + 2 vertices), ``"torus:res=4,R=1,r=0.3"``,
     ``"irregular-double-torus:res=5"``. :func:`shape_names` lists every name and
@@ -47,7 +52,7 @@ def shape(spec: str = SHAPE) -> tuple[np.ndarray, np.ndarray]:
     return _native.shape(spec)
 
 
-def shape_names() -> list[dict]:
+def shape_names() -> list[dict[str, Any]]:
     """The built-in shapes: a list of ``{"name", "description", "params",
     "default_vertices", "vertex_formula"}``."""
     return _native.shape_names()
@@ -56,7 +61,9 @@ def shape_names() -> list[dict]:
 # -------------------------------------------------------------------------- operators
 
 
-def laplacian(V: Any, F: Any, kind: str = KIND, *, normalize: bool = False):
+def laplacian(
+    V: npt.ArrayLike, F: npt.ArrayLike, kind: str = KIND, *, normalize: bool = False
+) -> tuple[CsrMatrix, CsrMatrix]:
     """The discrete Laplace-Beltrami operator as the pair ``(S, B)``.
 
     Both are ``n x n`` ``scipy.sparse.csr_matrix`` of float64 and exactly symmetric.
@@ -103,7 +110,7 @@ def laplacian(V: Any, F: Any, kind: str = KIND, *, normalize: bool = False):
 # ------------------------------------------------------------------------ point clouds
 
 
-def read_points(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray | None]:
+def read_points(path: str | os.PathLike[str]) -> tuple[FloatArray, FloatArray | None]:
     """Read a point-cloud file: text points (``.xyz``, ``.pts``, ``.txt``: ``x y z`` or
     ``x y z nx ny nz`` per line) or a PLY file's vertices (its faces, if any, are ignored).
 
@@ -118,13 +125,13 @@ def read_points(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray | 
 
 
 def point_cloud_laplacian(
-    P: Any,
+    P: npt.ArrayLike,
     n_neighbors: int = POINT_CLOUD["n_neighbors"],
     *,
-    normals: Any = None,
+    normals: npt.ArrayLike | None = None,
     mollify_factor: float = POINT_CLOUD["mollify_factor"],
     normalize: bool = False,
-):
+) -> tuple[CsrMatrix, CsrMatrix]:
     """The Laplacian ``(S, B)`` of a point cloud ``P`` (``(n, 3)``, any real dtype).
 
     Both are ``n x n`` ``scipy.sparse.csr_matrix`` of float64: ``S`` positive
@@ -163,8 +170,8 @@ def point_cloud_laplacian(
 
 
 def eigenbasis(
-    V: Any,
-    F: Any,
+    V: npt.ArrayLike,
+    F: npt.ArrayLike,
     k: int = K,
     kind: str = KIND,
     *,
@@ -172,9 +179,9 @@ def eigenbasis(
     tol: float = TOL,
     seed: int = SEED,
     dirichlet: Sequence[int] | None = None,
-    method: str = "auto",
-    progress: Callable[[dict], Any] | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
+    method: str = METHOD,
+    progress: Callable[[dict[str, Any]], Any] | None = None,
+) -> tuple[FloatArray, FloatArray]:
     """The ``k`` smallest eigenpairs of ``S x = lambda B x`` for the mesh ``(V, F)``.
 
     Returns ``(evals, evecs)``: ``evals`` is ``(k,)`` float64, ascending, ``>= 0`` up to
@@ -197,7 +204,8 @@ def eigenbasis(
         ``True``: the shape scaled to unit total area (eigenvalues multiplied by the area
         ``A``, eigenvectors by ``sqrt(A)``), the :class:`Analysis` default.
     tol : target relative residual ``||S x - lambda B x|| / ((||S||_1 + |lambda| ||B||_1) ||x||)``
-        of every pair (default 1e-10).
+        of every pair (default 1e-10); ``0`` means the default, as in :func:`eigsh` and
+        SciPy's ``eigsh`` (one meaning of ``tol`` in every function of the package).
     seed : seed of the start block (results are deterministic for a given seed).
     dirichlet : vertex indices held at zero (Dirichlet boundary conditions); the vectors
         are zero there. Default: natural (Neumann) boundary conditions.
@@ -239,25 +247,74 @@ def eigenbasis(
     )
 
 
+#: A matrix :func:`eigsh` takes: a SciPy sparse matrix or array (any format) or a dense 2-d
+#: array.
+Matrix = Any  # scipy.sparse.sparray | scipy.sparse.spmatrix | npt.ArrayLike
+
+
+@overload
 def eigsh(
-    A: Any,
+    A: Matrix,
+    k: int = ...,
+    M: Matrix | None = ...,
+    sigma: float | None = ...,
+    which: str = ...,
+    v0: npt.ArrayLike | None = ...,
+    ncv: int | None = ...,
+    maxiter: int | None = ...,
+    tol: float = ...,
+    return_eigenvectors: Literal[True] = ...,
+    Minv: object = ...,
+    OPinv: object = ...,
+    mode: str = ...,
+    *,
+    seed: int = ...,
+    method: str = ...,
+    progress: Callable[[dict[str, Any]], Any] | None = ...,
+) -> tuple[FloatArray, FloatArray]: ...
+
+
+@overload
+def eigsh(
+    A: Matrix,
+    k: int = ...,
+    M: Matrix | None = ...,
+    sigma: float | None = ...,
+    which: str = ...,
+    v0: npt.ArrayLike | None = ...,
+    ncv: int | None = ...,
+    maxiter: int | None = ...,
+    tol: float = ...,
+    *,
+    return_eigenvectors: Literal[False],
+    Minv: object = ...,
+    OPinv: object = ...,
+    mode: str = ...,
+    seed: int = ...,
+    method: str = ...,
+    progress: Callable[[dict[str, Any]], Any] | None = ...,
+) -> FloatArray: ...
+
+
+def eigsh(
+    A: Matrix,
     k: int = 6,
-    M: Any = None,
+    M: Matrix | None = None,
     sigma: float | None = None,
     which: str = "LM",
-    v0: Any = None,
+    v0: npt.ArrayLike | None = None,
     ncv: int | None = None,
     maxiter: int | None = None,
     tol: float = 0,
     return_eigenvectors: bool = True,
-    Minv: Any = None,
-    OPinv: Any = None,
+    Minv: object = None,
+    OPinv: object = None,
     mode: str = "normal",
     *,
     seed: int = SEED,
-    method: str = "auto",
-    progress: Callable[[dict], Any] | None = None,
-):
+    method: str = METHOD,
+    progress: Callable[[dict[str, Any]], Any] | None = None,
+) -> tuple[FloatArray, FloatArray] | FloatArray:
     """The ``k`` smallest eigenpairs of ``A x = lambda M x``, a drop-in for
     ``scipy.sparse.linalg.eigsh`` in the case it is most used for.
 
@@ -327,15 +384,12 @@ def eigsh(
     k = _arrays.count(k, "k", 1)
     if k > n:
         raise ValueError(f"k = {k}: must be between 1 and n = {n}")
-    t = _arrays.real(tol, "tol")
-    if t < 0:
-        raise ValueError(f"tol = {t}: must be >= 0")
     w, v = _native.eigsh(
         n,
         a_parts,
         m_parts,
         k,
-        t if t > 0 else TOL,
+        _arrays.real(tol, "tol"),
         _arrays.count(seed, "seed"),
         str(method),
         progress,
@@ -348,12 +402,12 @@ def eigsh(
 
 def save_basis(
     path: str | os.PathLike[str],
-    evals: Any,
-    evecs: Any,
+    evals: npt.ArrayLike,
+    evecs: npt.ArrayLike,
     B: Any,
     kind: str = KIND,
-    V: Any = None,
-    F: Any = None,
+    V: npt.ArrayLike | None = None,
+    F: npt.ArrayLike | None = None,
 ) -> None:
     """Save an eigenbasis as the project's ``.npz`` archive (the CLI's ``eigs -o``
     format, readable by plain ``numpy.load``): ``eigenvalues`` ``(k,)``, ``eigenvectors``
@@ -376,7 +430,24 @@ def save_basis(
     _native.save_basis(os.fspath(path), evals, evecs_t, b_parts, str(kind), v, f)
 
 
-def load_basis(path: str | os.PathLike[str], *, with_mass: bool = False):
+@overload
+def load_basis(
+    path: str | os.PathLike[str], *, with_mass: Literal[False] = False
+) -> tuple[FloatArray, FloatArray]: ...
+
+
+@overload
+def load_basis(
+    path: str | os.PathLike[str], *, with_mass: Literal[True]
+) -> tuple[FloatArray, FloatArray, CsrMatrix, dict[str, Any]]: ...
+
+
+def load_basis(
+    path: str | os.PathLike[str], *, with_mass: bool = False
+) -> (
+    tuple[FloatArray, FloatArray]
+    | tuple[FloatArray, FloatArray, CsrMatrix, dict[str, Any]]
+):
     """Load a ``.npz`` eigenbasis archive (written by :func:`save_basis`,
     :meth:`Analysis.save_basis` or ``spectral-mesh eigs -o``).
 
@@ -409,7 +480,7 @@ def _view_text(view: Any) -> str:
     return f"{_arrays.real(az, 'azimuth')!r},{_arrays.real(el, 'elevation')!r}"
 
 
-def _labels(labels: Any, n: int) -> list[int] | None:
+def _labels(labels: npt.ArrayLike | None, n: int) -> list[int] | None:
     if labels is None:
         return None
     a = np.asarray(labels)
@@ -420,7 +491,7 @@ def _labels(labels: Any, n: int) -> list[int] | None:
     return a.astype(np.int64).tolist()
 
 
-def _marks(marks: Any) -> list[int]:
+def _marks(marks: int | Sequence[int] | None) -> list[int]:
     if marks is None:
         return []
     if isinstance(marks, (int, np.integer)):
@@ -429,8 +500,8 @@ def _marks(marks: Any) -> list[int]:
 
 
 def render(
-    V: Any,
-    F: Any,
+    V: npt.ArrayLike,
+    F: npt.ArrayLike,
     values: Any,
     path: str | os.PathLike[str] | None = None,
     *,

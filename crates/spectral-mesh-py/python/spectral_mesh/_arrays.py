@@ -11,12 +11,26 @@ from __future__ import annotations
 
 import math
 import numbers
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    import scipy.sparse
+
+    #: The sparse matrices the package returns (``S``, ``B``): SciPy CSR of float64.
+    CsrMatrix: TypeAlias = scipy.sparse.csr_matrix[np.float64]
+
+#: A float64 NumPy array (per-vertex values ``(n,)``, positions ``(n, 3)``, bases ``(n, k)``).
+FloatArray: TypeAlias = npt.NDArray[np.float64]
+#: An int64 NumPy array (triangles ``(m, 3)``, vertex indices, labels).
+IntArray: TypeAlias = npt.NDArray[np.int64]
+#: A square sparse matrix as its CSC (equally, for a symmetric one, CSR) arrays.
+CscParts: TypeAlias = tuple[FloatArray, IntArray, IntArray]
 
 
-def vertices(V: Any, name: str = "V") -> np.ndarray:
+def vertices(V: npt.ArrayLike, name: str = "V") -> FloatArray:
     a = np.asarray(V)
     if a.dtype.kind not in "fiu":
         raise ValueError(f"{name} must hold real numbers (float32 or float64), got dtype {a.dtype}")
@@ -27,7 +41,7 @@ def vertices(V: Any, name: str = "V") -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.float64)
 
 
-def faces(F: Any, name: str = "F") -> np.ndarray:
+def faces(F: npt.ArrayLike, name: str = "F") -> IntArray:
     a = np.asarray(F)
     if a.dtype.kind not in "iu":
         hint = ""
@@ -48,11 +62,11 @@ def faces(F: Any, name: str = "F") -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.int64)
 
 
-def mesh(V: Any, F: Any) -> tuple[np.ndarray, np.ndarray]:
+def mesh(V: npt.ArrayLike, F: npt.ArrayLike) -> tuple[FloatArray, IntArray]:
     return vertices(V), faces(F)
 
 
-def per_vertex(values: Any, n: int | None, name: str = "values") -> np.ndarray:
+def per_vertex(values: npt.ArrayLike, n: int | None, name: str = "values") -> FloatArray:
     a = np.asarray(values)
     if a.dtype.kind not in "fiub":
         raise ValueError(f"{name} must hold real numbers, got dtype {a.dtype}")
@@ -67,7 +81,7 @@ def per_vertex(values: Any, n: int | None, name: str = "values") -> np.ndarray:
     return a
 
 
-def columns_t(X: Any, name: str = "evecs") -> np.ndarray:
+def columns_t(X: npt.ArrayLike, name: str = "evecs") -> FloatArray:
     """The C-contiguous (k, n) transpose of an (n, k) matrix (free for Fortran order)."""
     a = np.asarray(X)
     if a.dtype.kind not in "fiu":
@@ -79,7 +93,7 @@ def columns_t(X: Any, name: str = "evecs") -> np.ndarray:
     return np.ascontiguousarray(a.T, dtype=np.float64)
 
 
-def vector(values: Any, name: str) -> np.ndarray:
+def vector(values: npt.ArrayLike, name: str) -> FloatArray:
     a = np.asarray(values)
     if a.dtype.kind not in "fiu" or a.ndim != 1:
         raise ValueError(f"{name} must be a 1-d array of real numbers, got {a.dtype} {a.shape}")
@@ -134,7 +148,9 @@ def plain(value: Any, name: str) -> Any:
     return value
 
 
-def sparse_csc(A: Any, name: str, diagonal: str | None = None):
+def sparse_csc(
+    A: Any, name: str, diagonal: str | None = None
+) -> tuple[scipy.sparse.csc_matrix, CscParts]:
     """A square float64 SciPy CSC matrix in canonical form (sorted, no duplicates) and its
     arrays with int64 indices. ``diagonal="nonnegative"`` or ``"positive"`` checks the
     diagonal (a necessary condition of semi-definiteness or definiteness)."""
@@ -150,11 +166,12 @@ def sparse_csc(A: Any, name: str, diagonal: str | None = None):
             f"{name} must be a SciPy sparse matrix or a 2-d array, got {type(A).__name__} "
             "(a LinearOperator cannot be used: the solver factors the matrices)"
         )
-    if A.dtype.kind not in "fiub":
-        raise ValueError(f"{name} must hold real numbers, got dtype {A.dtype}")
-    if A.ndim != 2 or A.shape[0] != A.shape[1]:
-        raise ValueError(f"{name} must be square, got shape {A.shape}")
-    A = sp.csc_matrix(A, dtype=np.float64)
+    given: Any = A  # any SciPy sparse matrix or array
+    if given.dtype.kind not in "fiub":
+        raise ValueError(f"{name} must hold real numbers, got dtype {given.dtype}")
+    if given.ndim != 2 or given.shape[0] != given.shape[1]:
+        raise ValueError(f"{name} must be square, got shape {given.shape}")
+    A = sp.csc_matrix(given, dtype=np.float64)
     if not A.has_canonical_format:
         A = A.copy()
         A.sum_duplicates()
@@ -182,7 +199,7 @@ def sparse_csc(A: Any, name: str, diagonal: str | None = None):
     return A, parts
 
 
-def csr_from_parts(parts, n: int):
+def csr_from_parts(parts: CscParts, n: int) -> CsrMatrix:
     """A symmetric matrix's CSC arrays read as CSR (the same matrix)."""
     import scipy.sparse as sp
 

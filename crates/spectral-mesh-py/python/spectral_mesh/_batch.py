@@ -10,7 +10,7 @@ import time
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from . import _native
-from ._defaults import K, KIND, POINT_CLOUD, TOL
+from ._defaults import BATCH, POINT_CLOUD
 
 #: How many times a shape is given to a worker process that then dies (local pool)
 #: before its row says so.
@@ -65,17 +65,17 @@ def batch(
     paths: str | os.PathLike[str] | Iterable[str | os.PathLike[str]],
     out: str | os.PathLike[str],
     *,
-    k: int = K,
-    laplacian: str = KIND,
-    tol: float = TOL,
-    normalize: bool = True,
-    eigenvectors: bool = True,
-    hks: Any = None,
-    wks: Any = None,
-    wks_sigma: float | None = None,
-    adf: Any = None,
-    scaled: bool = False,
-    thumbnail: int | None = None,
+    k: int = BATCH["k"],
+    laplacian: str = BATCH["laplacian"],
+    tol: float = BATCH["tol"],
+    normalize: bool = BATCH["normalize"],
+    eigenvectors: bool = BATCH["eigenvectors"],
+    hks: str | int | Sequence[float] | None = BATCH["hks"],
+    wks: str | int | Sequence[float] | None = BATCH["wks"],
+    wks_sigma: float | None = BATCH["wks_sigma"],
+    adf: str | int | Sequence[float] | None = BATCH["adf"],
+    scaled: bool = BATCH["scaled"],
+    thumbnail: int | None = BATCH["thumbnail"],
     n_neighbors: int = POINT_CLOUD["n_neighbors"],
     mollify_factor: float = POINT_CLOUD["mollify_factor"],
     client: Any = None,
@@ -86,8 +86,8 @@ def batch(
     retry_failed: bool = False,
     force: bool = False,
     timeout: float | None = None,
-    progress: Callable[[int, int, dict], None] | None = None,
-) -> list[dict]:
+    progress: Callable[[int, int, dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
     """Compute the eigenbasis (and descriptors) of every shape and write one result per
     shape under ``out``, with ``summary.csv`` and ``summary.parquet``; returns the records
     (one dict per shape, sorted by name: the summary's columns).

@@ -2,7 +2,7 @@
 
 Every default of the Python API comes from here, and these come from the Rust library's
 own types (``FieldRequest``'s serde defaults, ``AnalysisOptions``, ``EigenParams``,
-``FigureOptions``), so the Python package, the command line, the web app and experiment
+``FigureOptions``, ``BatchParams``), so the Python package, the command line, the web app and experiment
 files use the same numbers.
 """
 
@@ -25,9 +25,16 @@ COLORMAPS: list = DEFAULTS["colormaps"]
 #: The default built-in shape (the paper's 3-torus).
 SHAPE: str = DEFAULTS["shape"]
 
+#: ``spectral_mesh.batch``'s keywords (the library's ``BatchParams`` defaults).
+BATCH: dict = DEFAULTS["batch"]
+#: Eigenvalues with ``|lambda| <= ZERO_EIGENVALUE_EPS * lambda_max`` count as zero (one
+#: per connected component) and are skipped by the filters: the library's constant.
+ZERO_EIGENVALUE_EPS: float = DEFAULTS["zero_eigenvalue_eps"]
+
 K: int = ANALYSIS["k"]
 TOL: float = ANALYSIS["tol"]
 SEED: int = ANALYSIS["seed"]
 KIND: str = ANALYSIS["kind"]
+METHOD: str = ANALYSIS["method"]
 #: The point-cloud Laplacian's defaults (``n_neighbors``, ``mollify_factor``).
 POINT_CLOUD: dict = DEFAULTS["point_cloud"]

@@ -11,7 +11,7 @@ worker thread, raises ``KeyboardInterrupt`` on Ctrl-C and never lets a Rust pani
 """
 
 from os import PathLike
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -99,8 +99,10 @@ def render(
     """Writes ``path`` (format from its extension) and returns None, or returns the
     ``(size, size, 4)`` RGBA picture."""
 
-def defaults() -> dict:
-    """The library's defaults (requests, analysis, figure, names)."""
+def defaults() -> dict[str, Any]:
+    """The library's defaults: ``requests`` (every request kind's keys), ``analysis``,
+    ``figure``, ``point_cloud``, ``batch`` (``spectral_mesh.batch``'s keywords),
+    ``zero_eigenvalue_eps``, ``shape``, ``laplacians``, ``colormaps``."""
 
 def num_threads() -> int: ...
 def _panic_for_tests(message: str) -> None: ...
@@ -187,6 +189,20 @@ class Analysis:
     def wks_auto_energies(self, count: int, k: int) -> tuple[list[float], float]: ...
     def embedding_matrix(self, filter: str, k: int) -> F64: ...
     def distances_many(self, sources: list[int], filter: str, k: int) -> F64: ...
+    def filter_eigenvalues(self, k: int) -> tuple[list[int], F64]:
+        """``(pair indices, eigenvalues)`` of the first ``k`` pairs a filter weighs (the
+        library's zero-eigenvalue rule); a Python weight function is evaluated at these."""
+    def distances_weighted(
+        self, sources: list[int], weights: F64, name: str, k: int
+    ) -> F64:
+        """Distances ``(n, len(sources))`` with a weight function's values at
+        :meth:`filter_eigenvalues` (checked: strictly positive and finite)."""
+    def green_weighted(self, source: int, weights: F64, name: str, k: int) -> F64: ...
+    def spectral_function_weighted(self, weights: F64, name: str, k: int) -> F64: ...
+    def embedding_weighted(self, weights: F64, name: str, k: int) -> F64: ...
+    def embedding_component_weighted(
+        self, weights: F64, name: str, component: int, k: int
+    ) -> F64: ...
     def set_basis(self, evals: F64, evecs_t: F64) -> None: ...
     def save_basis(self, path: str | PathLike[str]) -> None: ...
     def load_basis(self, path: str | PathLike[str]) -> int: ...

@@ -8,6 +8,7 @@ use crate::fields::segmentation::{SegmentParams, segment};
 use crate::spectral::distances::{
     DistanceError, distances_from, green_row, spectral_function, wfem_diffusion_distances_with,
 };
+use crate::spectral::embedding::embedding_component;
 use crate::spectral::heat::{basis_function, diffuse};
 use crate::spectral::signatures::{auto_diffusion, hks, wks};
 use crate::spectral::{BasisView, Eigenbasis};
@@ -209,8 +210,7 @@ pub(super) fn evaluate(
         } => {
             let v = need()?;
             let w = filter.weights(v.values).map_err(DistanceError::from)?;
-            let s = w[*component].sqrt();
-            v.vector(*component).iter().map(|x| s * x).collect()
+            embedding_component(v, &w, *component)?
         }
         FieldRequest::Eigenfunction { index, .. } => need()?.vector(*index).to_vec(),
         FieldRequest::Green {

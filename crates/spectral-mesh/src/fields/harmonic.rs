@@ -59,7 +59,10 @@ pub enum HarmonicError {
     #[error("no constraint given: a harmonic map needs at least one fixed vertex per component")]
     NoConstraints,
     /// A constraint names a vertex that does not exist.
-    #[error("constraint on vertex {vertex}, but the mesh has {n} vertices (valid: 0..{n})")]
+    #[error(
+        "constraint on vertex {vertex}, but the mesh has {n} vertices (valid: 0 to {})",
+        .n.saturating_sub(1)
+    )]
     ConstraintOutOfRange {
         /// The vertex named.
         vertex: usize,

@@ -41,6 +41,17 @@ pub enum DistanceError {
         /// Number of vertices.
         n: usize,
     },
+    /// A pair index (an embedding's component) is not in the basis.
+    #[error(
+        "component {component} is out of range for k = {k} pairs (valid: 0 to {})",
+        .k.saturating_sub(1)
+    )]
+    ComponentOutOfRange {
+        /// The index given.
+        component: usize,
+        /// Pairs in the basis.
+        k: usize,
+    },
     /// The time is not finite and `>= 0`.
     #[error("the diffusion time must be finite and >= 0, got {0}")]
     InvalidTime(f64),
@@ -138,7 +149,20 @@ pub fn distances_from<'a>(
     let basis: BasisView<'a> = basis.into();
     check_vertex(basis, source)?;
     let w = filter.weights(basis.values)?;
-    let mut d = weighted_sq_from(basis.vectors, basis.n, &w, source);
+    distances_from_weights(basis, source, &w)
+}
+
+/// [`distances_from`] with the per-pair weights given (`k` entries, 0 for the pairs left
+/// out; from [`Filter::weights`] or [`weights_of_pairs`]).
+pub fn distances_from_weights<'a>(
+    basis: impl Into<BasisView<'a>>,
+    source: usize,
+    w: &[f64],
+) -> Result<Vec<f64>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
+    check_vertex(basis, source)?;
+    check_weights(basis, w)?;
+    let mut d = weighted_sq_from(basis.vectors, basis.n, w, source);
     d.iter_mut().for_each(|v| *v = v.sqrt());
     Ok(d)
 }
@@ -154,10 +178,24 @@ pub fn distances_from_many<'a>(
         check_vertex(basis, s)?;
     }
     let w = filter.weights(basis.values)?;
+    distances_from_many_weights(basis, sources, &w)
+}
+
+/// [`distances_from_many`] with the per-pair weights given (see [`distances_from_weights`]).
+pub fn distances_from_many_weights<'a>(
+    basis: impl Into<BasisView<'a>>,
+    sources: &[usize],
+    w: &[f64],
+) -> Result<Vec<Vec<f64>>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
+    for &s in sources {
+        check_vertex(basis, s)?;
+    }
+    check_weights(basis, w)?;
     Ok(sources
         .par_iter()
         .map(|&s| {
-            let mut d = weighted_sq_from(basis.vectors, basis.n, &w, s);
+            let mut d = weighted_sq_from(basis.vectors, basis.n, w, s);
             d.iter_mut().for_each(|v| *v = v.sqrt());
             d
         })
@@ -223,6 +261,18 @@ pub fn green_row<'a>(
     let basis: BasisView<'a> = basis.into();
     check_vertex(basis, p)?;
     let w = filter.weights(basis.values)?;
+    green_row_weights(basis, p, &w)
+}
+
+/// [`green_row`] with the per-pair weights given (see [`distances_from_weights`]).
+pub fn green_row_weights<'a>(
+    basis: impl Into<BasisView<'a>>,
+    p: usize,
+    w: &[f64],
+) -> Result<Vec<f64>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
+    check_vertex(basis, p)?;
+    check_weights(basis, w)?;
     let n = basis.n;
     let c: Vec<f64> = w
         .iter()
@@ -240,7 +290,77 @@ pub fn spectral_function<'a>(
 ) -> Result<Vec<f64>, DistanceError> {
     let basis: BasisView<'a> = basis.into();
     let w = filter.weights(basis.values)?;
-    Ok(weighted_squares(basis.vectors, basis.n, &w, None))
+    spectral_function_weights(basis, &w)
+}
+
+/// [`spectral_function`] with the per-pair weights given (see [`distances_from_weights`]).
+pub fn spectral_function_weights<'a>(
+    basis: impl Into<BasisView<'a>>,
+    w: &[f64],
+) -> Result<Vec<f64>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
+    check_weights(basis, w)?;
+    Ok(weighted_squares(basis.vectors, basis.n, w, None))
+}
+
+/// The eigenvalues a filter weighs, with their pair indices: every pair of `eigenvalues`
+/// whose eigenvalue is not zero by the rule of [`Filter::weights`]
+/// (`|lambda| > ZERO_EIGENVALUE_EPS * lambda_max`). A weight function given outside the
+/// filter language (a Python function) is evaluated at these values, and
+/// [`weights_of_pairs`] turns its values into the `k` weights.
+pub fn weighted_pairs(eigenvalues: &[f64]) -> Result<(Vec<usize>, Vec<f64>), FilterError> {
+    // `w = s^0 = 1` on every pair that is not zero, 0 on the zero ones: the filters' rule.
+    let ones = Filter::Polynomial { p: 0.0 }.weights(eigenvalues)?;
+    let used: Vec<usize> = (0..ones.len()).filter(|&j| ones[j] > 0.0).collect();
+    let values = used.iter().map(|&j| eigenvalues[j]).collect();
+    Ok((used, values))
+}
+
+/// The `k` per-pair weights of a weight function evaluated elsewhere: `given[i]` is its
+/// value at the `i`-th eigenvalue of [`weighted_pairs`]; the zero pairs get 0. Every given
+/// weight must be strictly positive and finite, as [`Filter::weights`] requires of its
+/// filters ([`FilterError::NotPositive`] names the first failing pair; `name` says what
+/// the function was).
+pub fn weights_of_pairs(
+    eigenvalues: &[f64],
+    given: &[f64],
+    name: &str,
+) -> Result<Vec<f64>, FilterError> {
+    let (used, values) = weighted_pairs(eigenvalues)?;
+    if given.len() != used.len() {
+        return Err(FilterError::InvalidParameter(format!(
+            "{name} gave {} weights for {} eigenvalues",
+            given.len(),
+            used.len()
+        )));
+    }
+    let mut w = vec![0.0; eigenvalues.len()];
+    for ((&j, &l), &g) in used.iter().zip(&values).zip(given) {
+        if !(g.is_finite() && g > 0.0) {
+            return Err(FilterError::NotPositive {
+                filter: name.to_string(),
+                index: j,
+                value: l,
+                weight: g,
+            });
+        }
+        w[j] = g;
+    }
+    Ok(w)
+}
+
+/// Refuses weights that are not one per pair of the basis.
+fn check_weights(basis: BasisView<'_>, w: &[f64]) -> Result<(), DistanceError> {
+    if w.len() == basis.values.len() {
+        Ok(())
+    } else {
+        Err(FilterError::InvalidParameter(format!(
+            "{} weights for a basis of {} pairs",
+            w.len(),
+            basis.values.len()
+        ))
+        .into())
+    }
 }
 
 /// `B X` (column-major `n x k`) of a basis view: what [`wfem_diffusion_distances_with`]
@@ -319,6 +439,56 @@ pub fn wfem_diffusion_kernel_row<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A weight function evaluated outside the filter language sees the filters' non-zero
+    /// eigenvalues, is checked as the filters are, and gives their distances to the bit.
+    #[test]
+    fn weights_of_a_function_are_the_filters_weights() {
+        let ev = [1e-14, 0.5, 2.0, 4.0];
+        let (used, values) = weighted_pairs(&ev).unwrap();
+        assert_eq!(used, vec![1, 2, 3]);
+        assert_eq!(values, vec![0.5, 2.0, 4.0]);
+        let given: Vec<f64> = values.iter().map(|s| 1.0 / s).collect();
+        let w = weights_of_pairs(&ev, &given, "f").unwrap();
+        assert_eq!(w, Filter::CommuteTime.weights(&ev).unwrap());
+        match weights_of_pairs(&ev, &[1.0, -1.0, 1.0], "f").unwrap_err() {
+            FilterError::NotPositive { index, value, .. } => assert_eq!((index, value), (2, 2.0)),
+            e => panic!("{e}"),
+        }
+        assert!(weights_of_pairs(&ev, &[1.0, f64::NAN, 1.0], "f").is_err());
+        assert!(weights_of_pairs(&ev, &[1.0], "f").is_err());
+        assert_eq!(
+            weighted_pairs(&[0.0, 1e-20]).unwrap_err(),
+            FilterError::EmptySpectrum
+        );
+        // The same weights give the same distances, Green rows and spectral functions.
+        let n = 5;
+        let vectors: Vec<f64> = (0..n * ev.len())
+            .map(|i| ((i * 7) % 11) as f64 - 5.0)
+            .collect();
+        let mass = crate::linalg::SparseMatrix::identity(n);
+        let basis = BasisView {
+            laplacian: crate::operators::Laplacian::Fem,
+            n,
+            values: &ev,
+            vectors: &vectors,
+            mass: &mass,
+        };
+        let f = Filter::CommuteTime;
+        assert_eq!(
+            distances_from(basis, 2, &f).unwrap(),
+            distances_from_weights(basis, 2, &w).unwrap()
+        );
+        assert_eq!(
+            green_row(basis, 1, &f).unwrap(),
+            green_row_weights(basis, 1, &w).unwrap()
+        );
+        assert_eq!(
+            spectral_function(basis, &f).unwrap(),
+            spectral_function_weights(basis, &w).unwrap()
+        );
+        assert!(spectral_function_weights(basis, &w[..3]).is_err());
+    }
 
     /// The four-column kernel gives the bits of one column at a time (zero weights
     /// skipped), with and without a source, serial and parallel sizes.

@@ -3,7 +3,7 @@
 
 use super::BasisView;
 use super::distances::DistanceError;
-use super::filters::Filter;
+use super::filters::{Filter, FilterError};
 use crate::mesh::{Mesh, MeshError};
 
 /// Errors of the embeddings.
@@ -35,6 +35,18 @@ pub fn spectral_embedding<'a>(
 ) -> Result<Vec<Vec<f64>>, EmbeddingError> {
     let basis: BasisView<'a> = basis.into();
     let w = filter.weights(basis.values).map_err(DistanceError::from)?;
+    spectral_embedding_weights(basis, &w, dims)
+}
+
+/// [`spectral_embedding`] with the per-pair weights given (`k` entries, 0 for the pairs
+/// left out; from [`Filter::weights`] or [`super::distances::weights_of_pairs`]).
+pub fn spectral_embedding_weights<'a>(
+    basis: impl Into<BasisView<'a>>,
+    w: &[f64],
+    dims: usize,
+) -> Result<Vec<Vec<f64>>, EmbeddingError> {
+    let basis: BasisView<'a> = basis.into();
+    check_weights(basis, w)?;
     let n = basis.n;
     let used: Vec<usize> = (0..w.len()).filter(|&j| w[j] > 0.0).take(dims).collect();
     Ok((0..n)
@@ -44,6 +56,38 @@ pub fn spectral_embedding<'a>(
                 .collect()
         })
         .collect())
+}
+
+/// One coordinate of the embedding as a field: `sqrt(w_c) x_c(p)` for the pair `c` of the
+/// basis (0-based; a pair of weight 0, such as a zero eigenvalue, gives zeros).
+pub fn embedding_component<'a>(
+    basis: impl Into<BasisView<'a>>,
+    w: &[f64],
+    component: usize,
+) -> Result<Vec<f64>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
+    check_weights(basis, w)?;
+    if component >= w.len() {
+        return Err(DistanceError::ComponentOutOfRange {
+            component,
+            k: w.len(),
+        });
+    }
+    let s = w[component].sqrt();
+    Ok(basis.vector(component).iter().map(|x| s * x).collect())
+}
+
+fn check_weights(basis: BasisView<'_>, w: &[f64]) -> Result<(), DistanceError> {
+    if w.len() == basis.values.len() {
+        Ok(())
+    } else {
+        Err(FilterError::InvalidParameter(format!(
+            "{} weights for a basis of {} pairs",
+            w.len(),
+            basis.values.len()
+        ))
+        .into())
+    }
 }
 
 /// The mesh with the same triangles whose positions are the first three coordinates of
