@@ -170,7 +170,7 @@ fn save_experiment_on_each_field_command_replays_to_the_same_bytes() {
         ]);
         // A multi-column signature writes every column to .txt: the replay has the drawn
         // one, so its .txt is compared through the drawn column's picture and scene.
-        let multi = args.iter().any(|a| a.starts_with("auto:"));
+        let multi = args.split_whitespace().any(|a| a.starts_with("auto:"));
         ok_in(p, &direct);
         let text = std::fs::read_to_string(p.join(&toml)).unwrap();
         assert!(text.contains("experiment = \"field\""), "{text}");

@@ -230,8 +230,7 @@ fn filter_validation_names_the_failing_eigenvalue() {
 
 #[test]
 fn wfem_diffusion_distance_matches_s_t() {
-    let (ops, basis) = fem_full_basis(&icosphere(1));
-    let n = ops.n();
+    let (_, basis) = fem_full_basis(&icosphere(1));
     let t = 0.03;
     let src = 5;
     let d = wfem_diffusion_distances_from(&basis, src, t).unwrap();

@@ -134,7 +134,6 @@ fn sphere_kernel_converges_with_refinement() {
     for level in [1usize, 2, 3] {
         let mesh = icosphere(level);
         let (ops, basis) = fem_full_basis(&mesh);
-        let n = ops.n();
         let anchor = 0;
         let k = basis_function(&basis, anchor, t, KernelKind::Wfem).unwrap();
         let area = ops.mass.row_sums()[anchor];
