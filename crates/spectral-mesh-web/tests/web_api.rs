@@ -474,15 +474,8 @@ async fn every_kind_with_defaults_is_the_librarys_field() {
         let r = post_json(addr, &format!("/api/mesh/{id}/download"), dl).await;
         assert_eq!(r.status, 200, "{body}: {}", r.text());
         let txt = numbers(&r.text());
-        let scale = lib.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for i in 0..n {
-            assert!(
-                (txt[i] - lib.values[i]).abs() <= 1e-12 * scale,
-                "{body} vertex {i}: {} vs {}",
-                txt[i],
-                lib.values[i]
-            );
-        }
+        assert_eq!(lib.values.len(), n);
+        common::assert_close(&txt, &lib.values, 1e-12, &format!("{body} vertex"));
     }
     assert_eq!(
         kinds.len(),

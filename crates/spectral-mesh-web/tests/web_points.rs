@@ -116,14 +116,9 @@ async fn cloud_matches_the_library(addr: SocketAddr, name: &str, bytes: &[u8], k
     assert_eq!(r.status, 200, "{name}: {}", r.text());
     let txt: Vec<f64> = r.text().lines().map(|l| l.parse().unwrap()).collect();
     assert_eq!(txt.len(), n);
-    let scale = lib.values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    assert_eq!(lib.values.len(), n);
+    assert_close(&txt, &lib.values, 1e-12, &format!("{name} point"));
     for i in 0..n {
-        assert!(
-            (txt[i] - lib.values[i]).abs() <= 1e-12 * scale,
-            "{name} point {i}: {} vs {}",
-            txt[i],
-            lib.values[i]
-        );
         assert_eq!(f.values[i], lib.values[i] as f32, "{name} point {i}");
     }
     // A field asking for level sets gets the library's, on the triangle union.

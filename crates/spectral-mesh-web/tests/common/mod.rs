@@ -169,3 +169,16 @@ pub fn assert_refused(r: &Reply, status: u16, needles: &[&str]) {
 pub async fn post_field(addr: SocketAddr, id: &str, body: Value) -> Reply {
     post_json(addr, &format!("/api/mesh/{id}/field"), body).await
 }
+
+/// Asserts `|got[i] - want[i]| <= rel * max |want|` for every `i` of `want` (the message
+/// names `what` and `i`).
+pub fn assert_close(got: &[f64], want: &[f64], rel: f64, what: &str) {
+    let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (i, w) in want.iter().enumerate() {
+        assert!(
+            (got[i] - w).abs() <= rel * scale,
+            "{what} {i}: {} vs {w}",
+            got[i]
+        );
+    }
+}
