@@ -48,6 +48,8 @@ enum Command {
     Heat(commands::heat::Args),
     /// Filtered spectral distances from a vertex (and all pairs for small meshes).
     Distance(commands::distance::Args),
+    /// Geodesic distance from vertices or face points by the heat method.
+    Geodesic(commands::geodesic::Args),
     /// Point signatures: HKS, WKS, auto-diffusion, generalized spectral function.
     Signature(commands::signature::Args),
     /// Segment into patches: basins of the maxima of a signature.
@@ -96,6 +98,7 @@ fn main() -> std::process::ExitCode {
         Command::Eigs(a) => commands::eigs::run(a),
         Command::Heat(a) => commands::heat::run(a),
         Command::Distance(a) => commands::distance::run(a),
+        Command::Geodesic(a) => commands::geodesic::run(a),
         Command::Signature(a) => commands::signature::run(a),
         Command::Segment(a) => commands::segment::run(a),
         Command::Embed(a) => commands::embed::run(a),

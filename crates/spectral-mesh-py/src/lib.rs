@@ -28,6 +28,7 @@ mod analysis;
 mod arrays;
 mod batch;
 mod errors;
+mod geodesic;
 mod pyjson;
 mod run;
 
@@ -715,5 +716,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     m.add_function(wrap_pyfunction!(_work_for_tests, m)?)?;
     m.add_class::<analysis::PyAnalysis>()?;
+    m.add_class::<geodesic::PyGeodesicSolver>()?;
     Ok(())
 }

@@ -13,6 +13,7 @@ pub mod batch;
 pub mod cancel;
 pub mod experiments;
 pub mod fields;
+pub mod geodesic;
 pub mod io;
 pub mod linalg;
 pub mod mesh;

@@ -6,6 +6,7 @@ pub mod distance;
 pub mod eigs;
 pub mod embed;
 pub mod experiment;
+pub mod geodesic;
 pub mod heat;
 pub mod info;
 pub mod operators;

@@ -35,6 +35,7 @@ from __future__ import annotations
 from . import _native
 from ._analysis import Analysis, CriticalPoints, LevelSet
 from ._batch import batch
+from ._geodesic import GeodesicSolver, geodesic_distance
 from ._api import (
     eigenbasis,
     eigsh,
@@ -65,6 +66,7 @@ __all__ = [
     "Analysis",
     "CriticalPoints",
     "DEFAULTS",
+    "GeodesicSolver",
     "InternalError",
     "LevelSet",
     "MeshFileError",
@@ -75,6 +77,7 @@ __all__ = [
     "batch",
     "eigenbasis",
     "eigsh",
+    "geodesic_distance",
     "laplacian",
     "load_basis",
     "num_threads",

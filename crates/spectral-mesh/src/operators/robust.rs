@@ -189,12 +189,63 @@ pub(crate) fn robust_from_soup(
     factor: f64,
     gluing: Gluing,
 ) -> RobustLaplacian {
+    robust_with_faces(
+        positions,
+        triangles,
+        params,
+        factor,
+        gluing,
+        MollifyMean::Distinct,
+        false,
+    )
+    .0
+}
+
+/// Which mean edge length sets the mollification margin `delta`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum MollifyMean {
+    /// The mean over distinct input edges (`robust_laplacian`'s, the default).
+    Distinct,
+    /// The mean over the cover's edges (an input edge with `k` triangles counted `k`
+    /// times): geometry-central's heat-method solver mollifies the cover itself.
+    Cover,
+}
+
+/// The intrinsic Delaunay triangulation of the tufted cover, after mollification and
+/// flips: every face of the cover (both sheets) as three vertices and the intrinsic lengths
+/// of its edges `[|v0 v1|, |v1 v2|, |v2 v0|]`. Its cotangent stiffness and lumped mass,
+/// halved, are the robust pair.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct IntrinsicFaces {
+    /// Vertices of each face.
+    pub vertices: Vec<[usize; 3]>,
+    /// Intrinsic edge lengths of each face.
+    pub lengths: Vec<[f64; 3]>,
+    /// Mean length of the cover's edges (each edge once).
+    pub mean_edge_length: f64,
+}
+
+/// [`robust_from_soup`] with the mollification mean chosen, and the cover's intrinsic
+/// triangulation when `want_faces`.
+pub(crate) fn robust_with_faces(
+    positions: &[[f64; 3]],
+    triangles: &[[usize; 3]],
+    params: &RobustParams,
+    factor: f64,
+    gluing: Gluing,
+    mean: MollifyMean,
+    want_faces: bool,
+) -> (RobustLaplacian, Option<IntrinsicFaces>) {
     // 6 halfedges per triangle in the cover: 32-bit indices whenever they fit.
     if triangles.len().saturating_mul(6) < u32::MAX as usize && positions.len() < u32::MAX as usize
     {
-        run::<u32>(positions, triangles, params, factor, gluing)
+        run::<u32>(
+            positions, triangles, params, factor, gluing, mean, want_faces,
+        )
     } else {
-        run::<usize>(positions, triangles, params, factor, gluing)
+        run::<usize>(
+            positions, triangles, params, factor, gluing, mean, want_faces,
+        )
     }
 }
 
@@ -252,7 +303,9 @@ fn run<I: Ix>(
     params: &RobustParams,
     factor: f64,
     gluing: Gluing,
-) -> RobustLaplacian {
+    mollify_mean: MollifyMean,
+    want_faces: bool,
+) -> (RobustLaplacian, Option<IntrinsicFaces>) {
     let n = positions.len();
     let m = tris.len();
     let mut stats = RobustStats {
@@ -267,11 +320,12 @@ fn run<I: Ix>(
     }
     stats.unreferenced_vertices = used.iter().filter(|&&u| !u).count();
     if m == 0 {
-        return RobustLaplacian {
+        let r = RobustLaplacian {
             stiffness: SparseMatrix::from_triplets(n, n, &[]),
             mass: SparseMatrix::diagonal(&vec![0.0; n]),
             stats,
         };
+        return (r, want_faces.then(IntrinsicFaces::default));
     }
 
     // --- 1. Distinct edges: input halfedges sorted by their undirected key.
@@ -317,7 +371,11 @@ fn run<I: Ix>(
     // --- 2. Mollification.
     let mut eps = 0.0f64;
     if params.mollify_factor > 0.0 {
-        let delta = mean * params.mollify_factor;
+        let base = match mollify_mean {
+            MollifyMean::Distinct => mean,
+            MollifyMean::Cover => he_len.iter().sum::<f64>() / (3 * m) as f64,
+        };
+        let delta = base * params.mollify_factor;
         eps = (0..m)
             .into_par_iter()
             .map(|t| {
@@ -395,11 +453,32 @@ fn run<I: Ix>(
             }
         }
     }
-    RobustLaplacian {
+    let faces = want_faces.then(|| {
+        let mut f = IntrinsicFaces::default();
+        for h in 0..nh {
+            let h1 = cover.next[h].us();
+            let h2 = cover.next[h1].us();
+            if h < h1 && h < h2 {
+                f.vertices
+                    .push([cover.tail[h].us(), cover.tail[h1].us(), cover.tail[h2].us()]);
+                f.lengths.push([cover.len[h], cover.len[h1], cover.len[h2]]);
+            }
+        }
+        let ne = cover.primary.len();
+        f.mean_edge_length = cover
+            .primary
+            .iter()
+            .map(|&h| cover.len[h.us()])
+            .sum::<f64>()
+            / ne as f64;
+        f
+    });
+    let r = RobustLaplacian {
         stiffness: assemble_laplacian(n, &weights),
         mass: SparseMatrix::diagonal(&mass),
         stats,
-    }
+    };
+    (r, faces)
 }
 
 /// Glues the sheets of the cover around every input edge (step 3 of the module docs) and

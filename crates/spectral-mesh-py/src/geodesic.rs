@@ -1,0 +1,142 @@
+//! Geodesic distance by the heat method: a solver object that keeps its factors
+//! ([`spectral_mesh::geodesic::GeodesicSolver`]).
+
+use std::sync::Arc;
+
+use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
+use pyo3::prelude::*;
+use spectral_mesh::geodesic::{
+    Convention, GeodesicError, GeodesicParams, GeodesicSolver, Source, farthest_point_sampling,
+};
+
+use crate::arrays::{mesh_from, to_rows, to_vector};
+use crate::errors::Failure;
+use crate::laplacian_of;
+use crate::run::run;
+
+impl From<GeodesicError> for Failure {
+    fn from(e: GeodesicError) -> Self {
+        match e {
+            GeodesicError::Factorization(_) => Failure::Solver(e.to_string()),
+            _ => Failure::Value(e.to_string()),
+        }
+    }
+}
+
+/// The sources: vertices, then face points `(face, b0, b1, b2)`.
+fn sources(vertices: Vec<usize>, points: Vec<(usize, f64, f64, f64)>) -> Vec<Source> {
+    let mut s: Vec<Source> = vertices.into_iter().map(Source::Vertex).collect();
+    s.extend(points.into_iter().map(|(face, a, b, c)| Source::FacePoint {
+        face,
+        bary: [a, b, c],
+    }));
+    s
+}
+
+/// The heat-method solver of one mesh (factored once).
+#[pyclass(frozen, name = "GeodesicSolver", module = "spectral_mesh._native")]
+pub struct PyGeodesicSolver {
+    solver: Arc<GeodesicSolver>,
+}
+
+#[pymethods]
+impl PyGeodesicSolver {
+    /// Builds and factors the solver; `None` takes the library's default.
+    #[new]
+    #[pyo3(signature = (v, f, kind, time_factor=None, convention=None))]
+    fn new(
+        py: Python<'_>,
+        v: PyReadonlyArray2<'_, f64>,
+        f: PyReadonlyArray2<'_, i64>,
+        kind: &str,
+        time_factor: Option<f64>,
+        convention: Option<&str>,
+    ) -> PyResult<Self> {
+        let mesh = mesh_from(&v, &f).map_err(|e| e.into_pyerr(py))?;
+        let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
+        let d = GeodesicParams::default();
+        let convention: Convention = match convention {
+            Some(c) => c
+                .parse()
+                .map_err(|e: String| Failure::Value(e).into_pyerr(py))?,
+            None => d.convention,
+        };
+        let params = GeodesicParams {
+            time_factor: time_factor.unwrap_or(d.time_factor),
+            convention,
+            ..d
+        };
+        let solver = run(py, move |_| Ok(GeodesicSolver::new(&mesh, lap, &params)?))?;
+        Ok(Self {
+            solver: Arc::new(solver),
+        })
+    }
+
+    /// Distance from the set of vertices and face points.
+    fn distance<'py>(
+        &self,
+        py: Python<'py>,
+        vertices: Vec<usize>,
+        points: Vec<(usize, f64, f64, f64)>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let s = self.solver.clone();
+        let src = sources(vertices, points);
+        let d = run(py, move |_| Ok(s.distance(&src)?))?;
+        Ok(to_vector(py, d))
+    }
+
+    /// Distances from each vertex on its own, `(k, n)`.
+    fn distances<'py>(
+        &self,
+        py: Python<'py>,
+        vertices: Vec<usize>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let s = self.solver.clone();
+        let k = vertices.len();
+        let n = s.n();
+        let d = run(py, move |_| Ok(s.distances_from_vertices(&vertices)?))?;
+        to_rows(py, k, n, d.concat())
+    }
+
+    /// The `k x k` distance matrix between sample vertices.
+    fn distance_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        samples: Vec<usize>,
+        symmetric: bool,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let s = self.solver.clone();
+        let k = samples.len();
+        let d = run(py, move |_| Ok(s.distance_matrix(&samples, symmetric)?))?;
+        to_rows(py, k, k, d.concat())
+    }
+
+    /// Farthest-point sampling of `k` vertices from `start`.
+    fn farthest_point_sampling(
+        &self,
+        py: Python<'_>,
+        k: usize,
+        start: usize,
+    ) -> PyResult<Vec<usize>> {
+        let s = self.solver.clone();
+        run(py, move |_| Ok(farthest_point_sampling(&s, k, start)?))
+    }
+
+    /// The time step `t = m h^2`.
+    #[getter]
+    fn t(&self) -> f64 {
+        self.solver.time()
+    }
+
+    /// The mean edge length `h`.
+    #[getter]
+    fn h(&self) -> f64 {
+        self.solver.mean_edge_length()
+    }
+
+    /// Number of vertices.
+    #[getter]
+    fn n(&self) -> usize {
+        self.solver.n()
+    }
+}
