@@ -1,6 +1,8 @@
 //! The heat method: convergence on the sphere, Euclidean distance on a flat disk, several
 //! sources, face points, errors, components, sampling.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use spectral_mesh::Laplacian;
 use spectral_mesh::geodesic::{
     Convention, GeodesicError, GeodesicParams, GeodesicSolver, Source, farthest_point_sampling,

@@ -115,7 +115,8 @@ impl FaceFrames {
 /// `[|p0 p1|, |p1 p2|, |p2 p0|]` laid out with `p0 = 0`, `p1` on the positive x axis and
 /// `p2` above it. `None` for a zero first edge.
 fn layout(l: [f64; 3]) -> Option<[[f64; 2]; 3]> {
-    if !(l[0] > 0.0) {
+    // Also refuses NaN.
+    if l[0].is_nan() || l[0] <= 0.0 {
         return None;
     }
     let x = (l[0] * l[0] + l[2] * l[2] - l[1] * l[1]) / (2.0 * l[0]);
