@@ -27,6 +27,9 @@ pub enum CholeskyError {
     /// faer could not allocate or analyse the matrix.
     #[error("sparse factorization failed: {0}")]
     Internal(String),
+    /// An `L D L^T` factorization met a zero (or non-finite) pivot.
+    #[error("zero pivot in the L D L^T factorization: {0}")]
+    ZeroPivot(String),
 }
 
 /// A sparse `L L^T` factorization of a symmetric positive definite matrix.
@@ -484,6 +487,98 @@ impl SparseCholesky {
         self.solve_in_place(&mut x);
         x
     }
+
+    /// The inertia of a symmetric (possibly indefinite) matrix `a` of this factor's
+    /// sparsity pattern (a fresh analysis when the pattern differs): see [`inertia`]. The
+    /// eigensolver's certificate factors `S - sigma B`, whose pattern is that of the
+    /// factored `S - sigma_0 B`, so the analysis (ordering, supernodes) is reused.
+    pub fn inertia_of(&self, a: &SparseMatrix) -> Result<Inertia, CholeskyError> {
+        if a.nrows() != a.ncols() || a.nrows() != self.n || pattern_fingerprint(a) != self.pattern {
+            return inertia(a);
+        }
+        ldlt_inertia(&self.symbolic, a)
+    }
+}
+
+/// The inertia of a symmetric matrix: how many eigenvalues are negative and positive
+/// (Sylvester's law of inertia: those of `D` in any `A = L D L^T` with `L` invertible).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Inertia {
+    /// Negative eigenvalues (negative pivots of `D`).
+    pub negative: usize,
+    /// Positive eigenvalues (positive pivots of `D`).
+    pub positive: usize,
+}
+
+/// The inertia of the symmetric matrix `a` (its lower triangle is read) from a sparse
+/// `L D L^T` factorization without pivoting (AMD ordering, supernodal): by Sylvester's law
+/// of inertia the signs of the pivots `D` are those of the eigenvalues of `a`. A zero (or
+/// non-finite) pivot is an error ([`CholeskyError::ZeroPivot`]): a caller counting
+/// eigenvalues below a shift moves the shift.
+///
+/// Without pivoting the factorization exists whenever every leading principal minor (in
+/// the elimination order) is nonzero, which holds for `S - sigma B` at a shift `sigma`
+/// that is not an eigenvalue of the pencil unless by an exact cancellation. It is the
+/// factorization spectrum slicing uses (as SLEPc's with Cholesky or MUMPS without
+/// pivoting); the certificate's shifts lie just above `lambda_k` with `k` much smaller
+/// than `n`, where `S - sigma B` is definite but for a few directions.
+pub fn inertia(a: &SparseMatrix) -> Result<Inertia, CholeskyError> {
+    let analysis = CholeskyAnalysis::new(a)?;
+    ldlt_inertia(&analysis.symbolic, a)
+}
+
+fn ldlt_inertia(
+    symbolic: &SymbolicCholesky<usize>,
+    a: &SparseMatrix,
+) -> Result<Inertia, CholeskyError> {
+    let m = view(a)?;
+    let SymbolicCholeskyRaw::Supernodal(sn) = symbolic.raw() else {
+        return Err(CholeskyError::Internal(
+            "the analysis is not supernodal".to_string(),
+        ));
+    };
+    let mut values = vec![0.0; symbolic.len_val()];
+    let par = Par::Seq;
+    let mut mem =
+        MemBuffer::try_new(symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()))
+            .map_err(|e| CholeskyError::Internal(format!("{e:?}")))?;
+    symbolic
+        .factorize_numeric_ldlt::<f64>(
+            &mut values,
+            m,
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .map_err(|e| CholeskyError::ZeroPivot(format!("{e:?}")))?;
+    let (mut negative, mut positive) = (0usize, 0usize);
+    let begin = sn.supernode_begin();
+    let end = sn.supernode_end();
+    let val_ptr = sn.col_ptr_for_val();
+    let nnz = sn.nnz_per_super();
+    for s in 0..sn.n_supernodes() {
+        let ncols = end[s] - begin[s];
+        let nrows = ncols + nnz[s];
+        let block = &values[val_ptr[s]..val_ptr[s + 1]];
+        for j in 0..ncols {
+            let d = block[j * nrows + j];
+            if !d.is_finite() || d == 0.0 {
+                return Err(CholeskyError::ZeroPivot(format!(
+                    "pivot {d:e} at column {} of {}",
+                    begin[s] + j,
+                    a.ncols()
+                )));
+            }
+            if d < 0.0 {
+                negative += 1;
+            } else {
+                positive += 1;
+            }
+        }
+    }
+    Ok(Inertia { negative, positive })
 }
 
 #[cfg(test)]

@@ -8,7 +8,10 @@ mod scratch;
 pub mod sparse;
 mod timing;
 
-pub use cholesky::{CholeskyError, SparseCholesky};
+pub use cholesky::{CholeskyError, Inertia, SparseCholesky, inertia};
+pub use eigen::{
+    CERTIFICATE_GAP, Certificate, Completed, certificate, certify_and_complete, count_below,
+};
 pub use eigen::{
     ComponentNullSpace, DenseEigenError, EigenProgress, PartialEigen, ShiftInvert, SparseAlgorithm,
     SparseEigenError, SparseEigenOptions, b_orthogonality_error, connected_components,

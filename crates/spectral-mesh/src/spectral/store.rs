@@ -62,6 +62,59 @@ pub struct BasisMeta {
     pub params: EigenParams,
     /// The program that wrote the file.
     pub generator: String,
+    /// The floating-point type of the stored eigenvalues and eigenvectors (`float64`
+    /// when absent: archives written before the field existed).
+    #[serde(default)]
+    pub dtype: BasisDtype,
+}
+
+/// The floating-point type the eigenvalues and eigenvectors of an archive are stored in.
+/// The basis is always computed in double precision; `Float32` rounds each value once
+/// (to nearest, ties to even) when it is written. The mass matrix and the residuals stay
+/// float64.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum BasisDtype {
+    /// IEEE double precision (NumPy `float64`), the default.
+    #[default]
+    Float64,
+    /// IEEE single precision (NumPy `float32`), as learning pipelines store bases.
+    Float32,
+}
+
+impl BasisDtype {
+    /// The accepted names, for messages.
+    pub const NAMES: &'static str = "float64, float32";
+
+    /// The NumPy name (`float64`, `float32`).
+    pub fn name(self) -> &'static str {
+        match self {
+            BasisDtype::Float64 => "float64",
+            BasisDtype::Float32 => "float32",
+        }
+    }
+
+    /// Parses a NumPy name (`float64`/`f8`/`double`, `float32`/`f4`/`single`).
+    pub fn parse(s: &str) -> Result<Self, String> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "float64" | "f8" | "double" => Ok(BasisDtype::Float64),
+            "float32" | "f4" | "single" => Ok(BasisDtype::Float32),
+            other => Err(format!(
+                "unknown dtype '{other}' (valid: {})",
+                BasisDtype::NAMES
+            )),
+        }
+    }
+
+    /// `x` rounded to this type (the identity for `Float64`): what an archive stores.
+    pub fn round(self, x: f64) -> f64 {
+        match self {
+            BasisDtype::Float64 => x,
+            BasisDtype::Float32 => x as f32 as f64,
+        }
+    }
 }
 
 impl BasisMeta {
@@ -75,7 +128,13 @@ impl BasisMeta {
             mesh_hash: mesh.map(mesh_hash).unwrap_or_default(),
             params: params.clone(),
             generator: format!("spectral-mesh {}", env!("CARGO_PKG_VERSION")),
+            dtype: BasisDtype::Float64,
         }
+    }
+
+    /// The same metadata for an archive stored in `dtype` (see [`save_npz`]).
+    pub fn with_dtype(self, dtype: BasisDtype) -> Self {
+        Self { dtype, ..self }
     }
 }
 
@@ -100,29 +159,53 @@ pub fn npy_f64(data: &[f64], shape: &[u64], fortran: bool) -> std::io::Result<Ve
     Ok(buf)
 }
 
-/// Streams [`npy_f64`]'s bytes to `out` (through a buffer: the writer sees large writes).
+/// Streams [`npy_f64`]'s bytes to `out` (through a buffer: the writer sees large writes),
+/// as float32 (each value rounded once) when `dtype` says so.
+fn write_npy(
+    out: &mut impl Write,
+    data: &[f64],
+    shape: &[u64],
+    fortran: bool,
+    dtype: BasisDtype,
+) -> std::io::Result<()> {
+    let mut buffered = std::io::BufWriter::with_capacity(1 << 20, out);
+    let order = if fortran {
+        npyz::Order::Fortran
+    } else {
+        npyz::Order::C
+    };
+    match dtype {
+        BasisDtype::Float64 => {
+            let mut w = npyz::WriteOptions::<f64>::new()
+                .default_dtype()
+                .shape(shape)
+                .order(order)
+                .writer(&mut buffered)
+                .begin_nd()?;
+            w.extend(data.iter().copied())?;
+            w.finish()?;
+        }
+        BasisDtype::Float32 => {
+            let mut w = npyz::WriteOptions::<f32>::new()
+                .default_dtype()
+                .shape(shape)
+                .order(order)
+                .writer(&mut buffered)
+                .begin_nd()?;
+            w.extend(data.iter().map(|&x| x as f32))?;
+            w.finish()?;
+        }
+    }
+    buffered.flush()
+}
+
 fn write_npy_f64(
     out: &mut impl Write,
     data: &[f64],
     shape: &[u64],
     fortran: bool,
 ) -> std::io::Result<()> {
-    let mut buffered = std::io::BufWriter::with_capacity(1 << 20, out);
-    {
-        let mut w = npyz::WriteOptions::new()
-            .default_dtype()
-            .shape(shape)
-            .order(if fortran {
-                npyz::Order::Fortran
-            } else {
-                npyz::Order::C
-            })
-            .writer(&mut buffered)
-            .begin_nd()?;
-        w.extend(data.iter().copied())?;
-        w.finish()?;
-    }
-    buffered.flush()
+    write_npy(out, data, shape, fortran, BasisDtype::Float64)
 }
 
 fn npy_i64(data: &[i64]) -> std::io::Result<Vec<u8>> {
@@ -156,8 +239,11 @@ fn npy_u8(data: &[u8]) -> std::io::Result<Vec<u8>> {
 /// Writes `basis` to `path` as an `.npz` archive (the eigenvectors stored, the small
 /// arrays deflated; see the module documentation for the arrays). The file is written to a temporary name and renamed,
 /// so a crash never leaves a truncated archive under `path`.
+///
+/// The eigenvalues and eigenvectors are stored in `meta.dtype` (float32: each double
+/// rounded once; see [`BasisDtype`]).
 pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(), StoreError> {
-    save_npz_with(basis, path, meta, true, &[])
+    save_npz_as(basis, path, meta, true, &[], meta.dtype)
 }
 
 /// [`save_npz`] with any metadata (`meta`, serialized as the `meta` JSON array), the
@@ -172,6 +258,17 @@ pub fn save_npz_with(
     vectors: bool,
     extra: &[(String, Vec<u8>)],
 ) -> Result<(), StoreError> {
+    save_npz_as(basis, path, meta, vectors, extra, BasisDtype::Float64)
+}
+
+fn save_npz_as(
+    basis: &Eigenbasis,
+    path: &Path,
+    meta: &impl serde::Serialize,
+    vectors: bool,
+    extra: &[(String, Vec<u8>)],
+    dtype: BasisDtype,
+) -> Result<(), StoreError> {
     let (n, k) = (basis.n, basis.k());
     let e = io_err(path);
     let meta_json = serde_json::to_vec(meta).map_err(|err| StoreError::Format {
@@ -183,10 +280,9 @@ pub fn save_npz_with(
     // The small arrays are compressed; the eigenvectors (n x k doubles, which deflate
     // shrinks by only about a fifth at a cost of seconds per 100 MB) are stored and
     // streamed into the archive without a copy, as NumPy's `savez` stores every array.
-    let mut small: Vec<(&str, Vec<u8>)> = vec![(
-        "eigenvalues",
-        npy_f64(&basis.values, &[k as u64], false).map_err(&e)?,
-    )];
+    let mut values_npy = Vec::new();
+    write_npy(&mut values_npy, &basis.values, &[k as u64], false, dtype).map_err(&e)?;
+    let mut small: Vec<(&str, Vec<u8>)> = vec![("eigenvalues", values_npy)];
     if vectors {
         small.extend([
             (
@@ -228,11 +324,12 @@ pub fn save_npz_with(
         if vectors {
             zip.start_file("eigenvectors.npy", stored)
                 .map_err(std::io::Error::other)?;
-            write_npy_f64(
+            write_npy(
                 &mut zip,
                 &basis.vectors[..n * k],
                 &[n as u64, k as u64],
                 true,
+                dtype,
             )?;
         }
         let rest = rest.iter().map(|(name, b)| (*name, b.as_slice()));
@@ -302,9 +399,18 @@ pub fn load_npz_from_reader<R: Read + std::io::Seek>(
         npyz::NpyFile::new(std::io::Cursor::new(bytes))
             .map_err(|err| fmt(format!("array '{name}': {err}")))
     };
+    // float64, or float32 (an archive saved with `BasisDtype::Float32`), widened.
     let f64s = |f: npyz::NpyFile<std::io::Cursor<Vec<u8>>>, name: &str| {
-        f.into_vec::<f64>()
-            .map_err(|err| fmt(format!("array '{name}': {err}")))
+        let is_f32 = matches!(f.dtype(), npyz::DType::Plain(t)
+            if t.type_char() == npyz::TypeChar::Float && t.size_field() == 4);
+        if is_f32 {
+            f.into_vec::<f32>()
+                .map(|v| v.into_iter().map(f64::from).collect::<Vec<f64>>())
+                .map_err(|err| fmt(format!("array '{name}': {err}")))
+        } else {
+            f.into_vec::<f64>()
+                .map_err(|err| fmt(format!("array '{name}': {err}")))
+        }
     };
     let i64s = |f: npyz::NpyFile<std::io::Cursor<Vec<u8>>>, name: &str| {
         f.into_vec::<i64>()

@@ -283,6 +283,52 @@ impl ComponentNullSpace {
     }
 }
 
+/// Dense vectors deflated besides the indicators (see
+/// [`super::SparseEigenOptions::deflate_vectors`]): `X` (`n x p`, B-orthonormal) and
+/// `B X`, so that `W -= X ((B X)^T W)` projects a block onto their B-orthogonal
+/// complement with two matrix products (rows split in a fixed order).
+#[derive(Debug, Clone)]
+pub(super) struct DenseDeflation {
+    n: usize,
+    p: usize,
+    x: std::sync::Arc<Vec<f64>>,
+    bx: Vec<f64>,
+}
+
+impl DenseDeflation {
+    /// `x` (`n x p` column-major) and `B x`; an error when its length is not a multiple of
+    /// `n`.
+    pub(super) fn new(
+        b: &SparseMatrix,
+        x: std::sync::Arc<Vec<f64>>,
+    ) -> Result<Self, SparseEigenError> {
+        let n = b.ncols();
+        if n == 0 || !x.len().is_multiple_of(n) {
+            return Err(SparseEigenError::Invalid(format!(
+                "deflated vectors: {} values is not a multiple of n = {n}",
+                x.len()
+            )));
+        }
+        let p = x.len() / n;
+        let bx = sym_spmm(b, &x, p);
+        Ok(Self { n, p, x, bx })
+    }
+
+    /// Number `p` of vectors.
+    pub(super) fn count(&self) -> usize {
+        self.p
+    }
+
+    /// `W -= X ((B X)^T W)` for the `cols` columns of `w`.
+    pub(super) fn project(&self, w: &mut [f64], cols: usize) {
+        if self.p == 0 || cols == 0 {
+            return;
+        }
+        let c = super::dense::gram(&self.bx, w, self.n, self.p, cols);
+        super::dense::sub_product(w, &self.x, c.as_ref(), self.n);
+    }
+}
+
 /// `a . b` in a fixed order with four partial sums (vectorizes).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     let mut acc = [0.0; 4];

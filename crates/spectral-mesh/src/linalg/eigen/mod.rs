@@ -33,8 +33,11 @@
 //!   deflated exactly (any number of components);
 //! - `davidson.rs` and `krylov_schur/` (the iteration in `mod.rs`, the block
 //!   orthonormalization in `orthonormalize.rs`): the two iterations;
+//! - `certify.rs`: the inertia certificate that no eigenvalue was skipped, and the search
+//!   for missing pairs;
 //! - this file: the driver (checks, shift, factorization, sizes, fallback).
 
+mod certify;
 mod davidson;
 mod deflation;
 mod dense;
@@ -45,6 +48,9 @@ mod rng;
 mod shift_invert;
 mod types;
 
+pub use certify::{
+    CERTIFICATE_GAP, Certificate, Completed, certificate, certify_and_complete, count_below,
+};
 pub use deflation::{ComponentNullSpace, connected_components};
 pub use dense::{DenseEigenError, dense_generalized_eigen};
 pub use kernels::{b_orthogonality_error, norm1, relative_residuals, sym_spmm, sym_spmm_into};
@@ -151,8 +157,18 @@ pub fn sparse_generalized_eigen_with(
 
     if krylov {
         // The iteration finds the k - nz pairs after the deflated null space, in a space
-        // of dimension n - nz.
-        let (k, dim) = (k - nz, n - nz);
+        // of dimension n - nz (less the vectors deflated on request).
+        let extra = match &opts.deflate_vectors {
+            Some(x) => Some(deflation::DenseDeflation::new(b, x.clone())?),
+            None => None,
+        };
+        let p = extra.as_ref().map_or(0, |d| d.count());
+        let (k, dim) = (k - nz, n.saturating_sub(nz + p));
+        if k > dim {
+            return Err(SparseEigenError::Invalid(format!(
+                "asked for {k} pairs besides {nz} indicators and {p} deflated vectors of an n = {n} problem"
+            )));
+        }
         let bs = if opts.block_size > 0 {
             opts.block_size
         } else {
@@ -183,6 +199,7 @@ pub fn sparse_generalized_eigen_with(
             bn,
             cancel,
             deflation: (nz > 0).then_some(&null),
+            extra: extra.as_ref(),
             dim,
         };
         let mut sizes = krylov_schur::Sizes {

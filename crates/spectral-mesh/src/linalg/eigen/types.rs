@@ -47,6 +47,13 @@ pub struct SparseEigenOptions {
     /// no iteration runs). `false`: the whole pencil is iterated on, as before (a null
     /// cluster larger than the basis then does not converge).
     pub deflate: bool,
+    /// Krylov-Schur only: vectors the iteration stays B-orthogonal to (`n x p`,
+    /// column-major, B-orthonormal, B-orthogonal to the component indicators), so that
+    /// the pairs returned are those of the pencil on their B-orthogonal complement: their
+    /// own eigenvalues are skipped. The certificate's search for missing pairs deflates
+    /// the pairs already found this way (see [`super::certify_and_complete`]); tests use
+    /// it to make a solve miss an eigenvector. `None` (default): nothing.
+    pub deflate_vectors: Option<std::sync::Arc<Vec<f64>>>,
 }
 
 impl SparseEigenOptions {
@@ -89,6 +96,7 @@ impl Default for SparseEigenOptions {
             algorithm: SparseAlgorithm::KrylovSchur,
             ks_plain: false,
             deflate: true,
+            deflate_vectors: None,
         }
     }
 }

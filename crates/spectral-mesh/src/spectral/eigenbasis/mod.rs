@@ -12,12 +12,15 @@
 //!   conditions), the dense-or-sparse choice, the kept factorizations;
 //! - `solve.rs`: [`compute_eigenbasis`] and the driver shared with the solver;
 //! - `components.rs`: several connected components, solved one by one and merged;
-//! - `solver.rs`: [`EigenSolver`], factor once and answer many `k`.
+//! - `solver.rs`: [`EigenSolver`], factor once and answer many `k`;
+//! - `certify.rs`: [`certify_eigenbasis`], the inertia certificate that no eigenvalue was
+//!   skipped, and the completion of a basis that skipped some.
 //!
 //! The numerical work (dense and sparse generalized eigensolvers, factorizations) lives in
 //! [`crate::linalg`].
 
 mod basis;
+mod certify;
 mod components;
 mod params;
 mod pencil;
@@ -26,6 +29,7 @@ mod solver;
 
 pub use crate::linalg::EigenProgress;
 pub use basis::{BasisView, Eigenbasis};
+pub use certify::{CertifyReport, certify_eigenbasis};
 pub use params::{DENSE_MAX_N, DENSE_MAX_N_LARGE_K, EigenError, EigenMethod, EigenParams};
 pub use solve::compute_eigenbasis;
 pub use solver::EigenSolver;

@@ -47,7 +47,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 use self::orthonormalize::{LanczosStep, orthonormalize};
-use super::deflation::ComponentNullSpace;
+use super::deflation::{ComponentNullSpace, DenseDeflation};
 use super::dense::{LEAF_ROWS, gram, sym_eig};
 use super::kernels::{residuals_from, sym_spmm, sym_spmm_into};
 use super::result::{PartialEigen, package};
@@ -72,6 +72,9 @@ pub(super) struct Problem<'a> {
     /// The known null space, deflated: every block is kept B-orthogonal to it (see
     /// `deflation.rs`), and `k` counts the pairs after it. `None`: nothing deflated.
     pub deflation: Option<&'a ComponentNullSpace>,
+    /// Dense vectors deflated besides the indicators (see
+    /// [`super::SparseEigenOptions::deflate_vectors`]).
+    pub extra: Option<&'a DenseDeflation>,
     /// Dimension of the space the iteration works in: `n` minus the deflated indicators.
     pub dim: usize,
 }
@@ -86,6 +89,14 @@ impl Problem<'_> {
         if let Some(d) = self.deflation {
             timed(Phase::Deflate, || d.project(w, c));
         }
+        if let Some(d) = self.extra {
+            timed(Phase::Deflate, || d.project(w, c));
+        }
+    }
+
+    /// True when something is deflated.
+    fn deflates(&self) -> bool {
+        self.deflation.is_some() || self.extra.is_some()
     }
 }
 
@@ -651,6 +662,7 @@ mod tests {
             bn: norm1(b),
             cancel: &CancelToken::new(),
             deflation: None,
+            extra: None,
             dim: s.ncols(),
         };
         let mut runs = Vec::new();

@@ -305,7 +305,7 @@ pub(super) fn orthonormalize(
     if pre.iter().any(|p| !p.is_finite()) {
         return Err(SparseEigenError::NonFinite);
     }
-    if pb.deflation.is_some() {
+    if pb.deflates() {
         // The null-space components that rounding left in the block (amplified by Op)
         // go before it is orthonormalized (its B W is then stale).
         pb.deflate(w, c);
