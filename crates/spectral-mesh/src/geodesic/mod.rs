@@ -2,7 +2,7 @@
 //! Heat", 2013, and "The Heat Method for Distance Computation", 2017).
 //!
 //! A [`GeodesicSolver`] factors its matrices once and then answers any number of source
-//! sets; the formulas, signs and the boundary rule are those of `docs/math/geodesic.md`:
+//! sets; the formulas, signs and the boundary rule are in `docs/MATH.md` ("Geodesic distance"):
 //!
 //! 1. **Heat.** `(B + t S) u = delta`, `t = m h^2` with `h` the mean edge length and `m`
 //!    [`GeodesicParams::time_factor`] (1 by default). `delta` is 1 at a source vertex (the
