@@ -435,7 +435,10 @@ mod tests {
         assert!(raw.minima.len() + raw.maxima.len() > 2);
         let fig = Figure::new(&mesh, &f, Vec::new(), FigureOptions::default()).unwrap();
         let cp = fig.critical.as_ref().unwrap();
-        assert_eq!((cp.minima.len(), cp.maxima.len(), cp.saddle_count()), (1, 1, 0));
+        assert_eq!(
+            (cp.minima.len(), cp.maxima.len(), cp.saddle_count()),
+            (1, 1, 0)
+        );
         assert_eq!(
             fig.critical_hidden,
             raw.minima.len() + raw.maxima.len() + raw.saddle_count() - 2

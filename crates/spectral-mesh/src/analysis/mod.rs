@@ -47,8 +47,8 @@ use crate::cancel::CancelToken;
 use crate::fields::critical_points::{
     BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError, FLAT_RELATIVE_TOLERANCE,
 };
-use crate::fields::persistence::{Persistence, PersistencePair, persistence};
 use crate::fields::harmonic::{Constraint, FloatingComponent, HarmonicError, HarmonicSolver};
+use crate::fields::persistence::{Persistence, PersistencePair, persistence};
 use crate::fields::segmentation::SegmentationError;
 use crate::linalg::EigenProgress;
 use crate::mesh::topology::Topology;
@@ -802,12 +802,7 @@ impl CriticalReport {
     /// `topo`, leaving out the components `excluded`.
     pub fn new(p: Persistence, topo: &Topology, excluded: &[usize]) -> Self {
         let nc = topo.n_components();
-        let comp_of = |v: usize| {
-            topo.vertex_component
-                .get(v)
-                .copied()
-                .filter(|&c| c < nc)
-        };
+        let comp_of = |v: usize| topo.vertex_component.get(v).copied().filter(|&c| c < nc);
         let mut plateau_components: Vec<usize> = p
             .raw
             .plateaus
@@ -837,8 +832,11 @@ impl CriticalReport {
         };
         let raw = restrict(p.raw);
         let shown = restrict(p.shown);
-        let pairs: Vec<PersistencePair> =
-            p.pairs.into_iter().filter(|q| counted(q.extremum)).collect();
+        let pairs: Vec<PersistencePair> = p
+            .pairs
+            .into_iter()
+            .filter(|q| counted(q.extremum))
+            .collect();
         let included: Vec<usize> = (0..nc).filter(|&c| !left_out(c)).collect();
         let included_shown: Vec<usize> = included
             .iter()

@@ -19,8 +19,8 @@ use crate::experiments::harmonic::{
     HarmonicExperimentError, HarmonicExperimentParams, harmonic_experiment,
 };
 use crate::fields::critical_points::{CriticalPointFinder, critical_points};
-use crate::fields::persistence::persistence;
 use crate::fields::harmonic::{Constraint, ConstraintSpec, harmonic_map_with_operators};
+use crate::fields::persistence::persistence;
 use crate::linalg::{EigenProgress, b_orthogonality_error};
 use crate::mesh::Mesh;
 use crate::mesh::topology::Topology;
@@ -627,7 +627,8 @@ pub fn run_harmonic(
                 .map(|u| u.component)
                 .collect();
             let raw = critical_points(mesh, &field)?;
-            let critical = CriticalReport::new(persistence(finder(), &field, raw)?, &topo, &excluded);
+            let critical =
+                CriticalReport::new(persistence(finder(), &field, raw)?, &topo, &excluded);
             push(&mut maps, c, field, critical, None, None);
         }
     }

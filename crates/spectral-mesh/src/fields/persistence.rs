@@ -277,8 +277,12 @@ pub fn persistence(
     }
     let hidden_extremum = |v: usize| pairs.iter().any(|p| p.extremum == v && p.hidden);
     let mut shown = raw.clone();
-    shown.minima.retain(|&v| !is_quiet(v) && !hidden_extremum(v));
-    shown.maxima.retain(|&v| !is_quiet(v) && !hidden_extremum(v));
+    shown
+        .minima
+        .retain(|&v| !is_quiet(v) && !hidden_extremum(v));
+    shown
+        .maxima
+        .retain(|&v| !is_quiet(v) && !hidden_extremum(v));
     shown.saddles = raw
         .saddles
         .iter()
@@ -291,7 +295,12 @@ pub fn persistence(
             || shown.maxima.binary_search(&v).is_ok()
             || shown.saddles.binary_search_by_key(&v, |s| s.0).is_ok()
     };
-    shown.on_boundary = raw.on_boundary.iter().copied().filter(|&v| kept(v)).collect();
+    shown.on_boundary = raw
+        .on_boundary
+        .iter()
+        .copied()
+        .filter(|&v| kept(v))
+        .collect();
     let quiet_components = (0..nc).filter(|&c| quiet[c]).map(|c| first[c]).collect();
     Ok(Persistence {
         raw,
@@ -318,7 +327,11 @@ pub fn simplified_critical_points(
 /// One sweep over `order` (every vertex a triangle uses): the pairs `(extremum, saddle)`
 /// of the pieces that die, and the extremum of each piece left at the end (one per
 /// connected component).
-fn sweep(finder: &CriticalPointFinder, order: &[usize], n: usize) -> (Vec<(usize, usize)>, Vec<usize>) {
+fn sweep(
+    finder: &CriticalPointFinder,
+    order: &[usize],
+    n: usize,
+) -> (Vec<(usize, usize)>, Vec<usize>) {
     let mut rank = vec![usize::MAX; n];
     for (i, &v) in order.iter().enumerate() {
         rank[v] = i;
