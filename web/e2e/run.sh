@@ -63,4 +63,9 @@ export SPECTRAL_MESH_URL="$URL"
 # repository as it found it.
 export SPECTRAL_MESH_SCREENSHOT="${SPECTRAL_MESH_SCREENSHOT:-${CARGO_TARGET_DIR:-$ROOT/target}/e2e/web-app.png}"
 
-node --test --test-concurrency=1 "$ROOT"/web/e2e/*.test.mjs
+# Arguments: only these test files (e.g. web/e2e/figures.test.mjs); default all.
+if [ $# -gt 0 ]; then
+  node --test --test-concurrency=1 "$@"
+else
+  node --test --test-concurrency=1 "$ROOT"/web/e2e/*.test.mjs
+fi

@@ -7,7 +7,8 @@ use std::path::Path;
 use spectral_mesh::Mesh;
 use spectral_mesh::analysis::{Analysis, Field};
 use spectral_mesh::experiments::file::FigureFile;
-use spectral_mesh::fields::critical_points::{CriticalPoints, critical_points};
+use spectral_mesh::fields::critical_points::CriticalPoints;
+use spectral_mesh::fields::persistence::simplified_critical_points;
 use spectral_mesh::io::{IoError, MeshFormat, WriteOptions, write_atomic, write_mesh_to};
 
 use crate::raster::{
@@ -154,8 +155,12 @@ pub struct Figure<'a> {
     pub field: &'a [f64],
     /// Source / anchor / constrained vertices, marked in yellow.
     pub sources: Vec<usize>,
-    /// Critical points, computed once and shared by the outputs (`None` when not drawn).
+    /// Critical points shown (simplified by persistence, as on every face), computed once
+    /// and shared by the outputs (`None` when not drawn).
     pub critical: Option<CriticalPoints>,
+    /// Raw critical points (minima, maxima, saddles with multiplicity) hidden by the
+    /// persistence simplification ([`spectral_mesh::fields::persistence`]).
+    pub critical_hidden: usize,
     /// Explicit per-vertex colours (RGB in `[0, 1]`) replacing the colour map, e.g. for
     /// categorical labels; level sets and the colour bar are then not drawn.
     pub colors: Option<Vec<[f32; 3]>>,
@@ -187,16 +192,22 @@ impl<'a> Figure<'a> {
                 n: mesh.n_vertices(),
             });
         }
-        let critical = if options.critical_points {
-            critical_points(mesh, field).ok()
-        } else {
-            None
+        let (critical, critical_hidden) = match options.critical_points {
+            true => match simplified_critical_points(mesh, field) {
+                Ok(p) => {
+                    let hidden = p.hidden_minima() + p.hidden_maxima() + p.hidden_saddles();
+                    (Some(p.shown), hidden)
+                }
+                Err(_) => (None, 0),
+            },
+            false => (None, 0),
         };
         Ok(Self {
             mesh,
             field,
             sources,
             critical,
+            critical_hidden,
             colors: None,
             options,
             point_radius: None,
@@ -407,6 +418,40 @@ mod tests {
     use super::*;
     use spectral_mesh::analysis::{Analysis, AnalysisOptions, FieldRequest};
     use spectral_mesh::shapes::build_str;
+
+    /// The picture marks the critical points simplified by persistence (as every face):
+    /// a smooth field plus small ripples shows its one minimum and one maximum, not the
+    /// ripples' extrema, and says how many it hides.
+    #[test]
+    fn the_picture_marks_the_simplified_critical_points() {
+        let mesh = build_str("sphere:res=3").unwrap();
+        let f: Vec<f64> = mesh
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| p[2] + 8e-3 * ((i * 7919 % 101) as f64 / 101.0))
+            .collect();
+        let raw = spectral_mesh::fields::critical_points::critical_points(&mesh, &f).unwrap();
+        // (On this sphere the ripples make no raw extremum of their own; the count of
+        // hidden points is still checked against the raw set.)
+        let fig = Figure::new(&mesh, &f, Vec::new(), FigureOptions::default()).unwrap();
+        let cp = fig.critical.as_ref().unwrap();
+        assert_eq!(
+            (cp.minima.len(), cp.maxima.len(), cp.saddle_count()),
+            (1, 1, 0)
+        );
+        assert_eq!(
+            fig.critical_hidden,
+            raw.minima.len() + raw.maxima.len() + raw.saddle_count() - 2
+        );
+        let markers = fig
+            .scene()
+            .markers
+            .iter()
+            .filter(|m| m.kind != MarkerKind::Source)
+            .count();
+        assert_eq!(markers, 2);
+    }
 
     #[test]
     fn options_round_trip_through_experiment_files() {

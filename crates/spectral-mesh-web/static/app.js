@@ -12,9 +12,9 @@ const HAS_SOURCE = new Set(['heat', 'diffusion', 'distance']);
 
 const GUIDANCE = {
   harmonic: 'Harmonic map: the smoothest field that takes the constrained values. Click the surface to add a constraint (values alternate 0, 1); × removes one. Level sets and critical points show its structure.',
-  heat: 'Heat kernel: the heat at time t from the anchor (yellow). Click the surface to move the anchor; drag t to let the heat spread.',
-  diffusion: 'wFEM diffusion distance from the source (yellow) at time t: small t is local, large t global. Click the surface to move the source.',
-  distance: 'Filtered spectral distance from the source (yellow): bi-harmonic by default. Click the surface to move the source; switch the filter to compare distances.',
+  heat: 'Heat kernel: the heat at time t from the anchor (the black-edged star). Click the surface to move the anchor; drag t to let the heat spread.',
+  diffusion: 'wFEM diffusion distance from the source (the black-edged star) at time t: small t is local, large t global. Click the surface to move the source.',
+  distance: 'Filtered spectral distance from the source (the black-edged star): bi-harmonic by default. Click the surface to move the source; switch the filter to compare distances.',
   signature: 'Spectral signature G(p,p) of every vertex for the filter: a shape descriptor (no source).',
   segmentation: 'Segments: the watershed of a signature, basins whose maxima differ by less than the persistence merged.',
   embedding: 'One coordinate of the spectral embedding for the filter (component 1 is the first non-constant one).',
@@ -86,6 +86,9 @@ function render() {
 }
 controls.addEventListener('change', render);
 const nextFrame = () => new Promise((r) => requestAnimationFrame(() => r()));
+// The frame that shows what was just rendered: the second animation frame after it (the
+// first one's callbacks run before that frame is composited).
+const drawnFrame = () => nextFrame().then(nextFrame);
 
 // ---------- colour maps: one 256 x 1 texture ----------
 const STOPS = {
@@ -264,8 +267,10 @@ function buildLegend() {
   el.appendChild(lines);
 }
 
+const MARKER_MAT = {};
 function clearMarkers() {
-  for (const o of markerObjs) { scene.remove(o); o.geometry.dispose(); o.material.dispose(); }
+  // The materials stay (one per kind): a new field costs no new material or program.
+  for (const o of markerObjs) { scene.remove(o); o.geometry.dispose(); }
   markerObjs.length = 0;
   window.__markers = {};
 }
@@ -281,10 +286,10 @@ function addMarkers(kind, vertices) {
   });
   const g = new THREE.BufferGeometry();
   g.setAttribute('position', new THREE.BufferAttribute(pts, 3));
-  const mat = new THREE.PointsMaterial({
+  const mat = MARKER_MAT[kind] || (MARKER_MAT[kind] = new THREE.PointsMaterial({
     size: MARKERS[kind].size, sizeAttenuation: false, map: MARKER_TEX[kind].texture,
     transparent: true, alphaTest: 0.3, depthTest: true,
-  });
+  }));
   const o = new THREE.Points(g, mat);
   o.renderOrder = kind === 'source' || kind === 'constraint' ? 3 : 2;
   markerObjs.push(o);
@@ -303,7 +308,14 @@ function showError(control, msg) {
   const id = ERROR_AT[control] || control || 'experiment';
   const ctl = $(id) || $('experiment');
   const anchor = ctl.closest('.row') || ctl;
-  document.querySelectorAll(`.ctl-error[data-for="${id}"]`).forEach((e) => e.remove());
+  // The page asks for k = n when more than the n vertices are typed: an error about that k
+  // names the number typed as well.
+  const typed = kWanted();
+  if (id === 'k' && app.n && typed > app.n && !msg.includes(String(typed))) {
+    msg = `k = ${typed} typed (this ${app.isCloud ? 'point cloud' : 'mesh'} has ${app.n}, so k = ${app.n} was asked): ${msg}`;
+  }
+  // One error on screen at a time: a later error replaces every earlier one.
+  document.querySelectorAll('.ctl-error').forEach((e) => e.remove());
   const div = document.createElement('div');
   div.className = 'ctl-error';
   div.setAttribute('role', 'alert');
@@ -543,6 +555,8 @@ async function setMesh(reply, fileName = null) {
     o.className = 'file'; o.value = ''; o.textContent = `file: ${fileName}`;
     sel.prepend(o);
     sel.value = '';
+    $('shape-spec').value = ''; // not the shape shown before
+    $('shape-spec').placeholder = `file: ${fileName} (type a shape spec to load one)`;
   } else {
     const shapeName = String(reply.source).split(':')[0];
     if ([...sel.options].some((o) => o.value === shapeName)) sel.value = shapeName;
@@ -641,7 +655,11 @@ async function loadFile(file) {
       headers: { 'Content-Type': 'application/octet-stream', 'X-Filename': file.name.replace(/[^\x20-\x7e]/g, '_') },
     }, false);
     await setMesh(r, file.name);
-  } catch (e) { showError('file-input', `${file.name}: ${e.message}`); }
+  } catch (e) {
+    // The server's messages about the file already name it (as it was sent).
+    const sent = file.name.replace(/[^\x20-\x7e]/g, '_');
+    showError('file-input', e.message.includes(sent) ? e.message : `${file.name}: ${e.message}`);
+  }
 }
 
 // ---------- basis ----------
@@ -756,14 +774,14 @@ async function updateOnce() {
     app.field.body = body;
     clearErrors();
     drawField();
-    await nextFrame();
+    await drawnFrame();
     const t2 = performance.now();
     const h = app.field.header;
     const timing = { total_ms: t2 - t0, fetch_ms: t1 - t0, draw_ms: t2 - t1, server_ms: h.timing_ms.total, experiment: p.experiment, control };
     window.__timings.push(timing);
     window.__lastField = { values: app.field.values, header: h, params: p, body, timing };
     window.__fieldCount = (window.__fieldCount || 0) + 1;
-    $('field-stats').textContent = `input to picture ${timing.total_ms.toFixed(0)} ms (server ${timing.server_ms.toFixed(0)} ms)`;
+    $('field-stats').textContent = `input to drawn frame ${timing.total_ms.toFixed(0)} ms (server ${timing.server_ms.toFixed(0)} ms)`;
   } catch (e) {
     let at = control;
     if (/\bk\b must|eigenbasis of k|pairs/.test(e.message) && !/constraint/.test(e.message)) at = 'k';
@@ -850,7 +868,8 @@ function drawField() {
   } else if (cp) {
     const what = cp.doubled ? '2(m − s + M) inside + (m − s + M) on the boundary' : 'minima − saddles + maxima';
     el.textContent = `minima ${cp.minima}  maxima ${cp.maxima}  saddles ${cp.points.saddles.length} (with multiplicity ${cp.saddles})\n` +
-      `${cp.holds ? '✓' : '✗'} ${what} = ${cp.lhs}, ${cp.doubled ? '2χ' : 'χ'} = ${cp.rhs}`;
+      `${cp.holds ? '✓' : '✗'} ${what} = ${cp.lhs}, ${cp.doubled ? '2χ' : 'χ'} = ${cp.rhs}` +
+      hiddenNote(cp);
     el.className = 'info small ' + (cp.holds ? 'ok' : 'bad');
   } else {
     el.textContent = header.categorical ? `${header.max + 1} segments` : '';
@@ -861,6 +880,17 @@ function drawField() {
   te.textContent = tr ? tr.message : '';
   te.className = tr && tr.warning ? 'small warn' : 'small';
   render();
+}
+
+// How many raw critical points the persistence simplification hides (the library's
+// threshold, reported with the field), with the raw counts.
+function hiddenNote(cp) {
+  const h = cp.hidden;
+  if (!h) return '';
+  const n = h.minima + h.maxima + h.saddles;
+  if (n === 0) return '';
+  return `\n${n} hidden: persistence below ${cp.persistence_threshold.toPrecision(3)} ` +
+    `(raw: minima ${cp.raw.minima}  maxima ${cp.raw.maxima}  saddles ${cp.raw.saddles})`;
 }
 
 // The markers of the field drawn, with the constraints as the page holds them now (a
@@ -968,7 +998,8 @@ window.__downloadUrl = downloadUrl;
 
 // ---------- wiring ----------
 function onInput(e) {
-  app.inputTime = performance.now();
+  // Timed from the input event itself (its time stamp), not from when the handler ran.
+  app.inputTime = e?.timeStamp > 0 ? Math.min(e.timeStamp, performance.now()) : performance.now();
   app.lastControl = e?.target?.id || null;
   refreshParamVisibility();
   requestUpdate();
@@ -983,7 +1014,7 @@ async function onViewInput(e) {
   applyView();
   if (e.target.id === 'show-critical') drawMarkers();
   render();
-  await nextFrame();
+  await drawnFrame();
   window.__timings.push({ total_ms: performance.now() - t0, server_ms: 0, control: e.target.id });
   window.__viewCount = (window.__viewCount || 0) + 1;
 }

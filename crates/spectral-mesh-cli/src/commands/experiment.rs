@@ -398,6 +398,19 @@ fn experiment_file(
     e
 }
 
+/// ", N hidden by persistence" when the simplification hid raw critical points.
+fn hidden_note(c: &spectral_mesh::analysis::CriticalReport) -> String {
+    let n = c.hidden.minima + c.hidden.maxima + c.hidden.saddles;
+    if n == 0 {
+        String::new()
+    } else {
+        format!(
+            ", {n} hidden by persistence (below {:.3e})",
+            c.persistence_threshold
+        )
+    }
+}
+
 /// Runs the harmonic experiment on `input` and writes its maps and `summary.json`.
 pub fn run_harmonic(
     input: Input,
@@ -451,20 +464,23 @@ pub fn run_harmonic(
         fig.point_radius = an.point_spacing().map(|h| POINT_RADIUS_FACTOR * h);
         if o.figure.critical_points {
             fig.critical = Some(map.critical.points.clone());
+            let h = &map.critical.hidden;
+            fig.critical_hidden = h.minima + h.maxima + h.saddles;
         }
         for p in &paths[3 * i..3 * i + 3] {
             fig.write(p)?;
         }
         let c = &map.critical;
         println!(
-            "map {}: {} constraints, m = {}, M = {}, s = {} (with multiplicity), m - s + M = {} (chi = {})",
+            "map {}: {} constraints, m = {}, M = {}, s = {} (with multiplicity), m - s + M = {} (chi = {}){}",
             i + 1,
             map.constraints.len(),
             c.minima,
             c.maxima,
             c.saddles,
             c.minima as i64 - c.saddles as i64 + c.maxima as i64,
-            c.chi
+            c.chi,
+            hidden_note(c)
         );
     }
     write_json(paths.last().context("no summary path")?, &run.summary)?;

@@ -32,7 +32,9 @@ class CriticalPoints:
     monkey saddle of ``2m + 2`` sign changes); ``on_boundary``: the critical points on the
     boundary; ``non_manifold``: non-manifold vertices met. The check: ``lhs == rhs``
     (``minima - saddles + maxima = chi`` on a closed surface, ``formula`` states the
-    bordered form).
+    bordered form). The points are those every face shows: simplified by persistence
+    (pairs below ``persistence_threshold`` hidden; ``hidden`` raw points, saddles with
+    multiplicity, are not listed).
     """
 
     minima: IntArray
@@ -46,6 +48,8 @@ class CriticalPoints:
     rhs: int
     holds: bool
     formula: str
+    hidden: int = 0
+    persistence_threshold: float = 0.0
 
     @property
     def saddle_count(self) -> int:
@@ -772,6 +776,8 @@ class Analysis:
             rhs=r["rhs"],
             holds=r["holds"],
             formula=r["formula"],
+            hidden=sum(r["hidden"].values()),
+            persistence_threshold=r["persistence_threshold"],
         )
 
     def level_sets(

@@ -48,6 +48,7 @@ use crate::fields::critical_points::{
     BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError, FLAT_RELATIVE_TOLERANCE,
 };
 use crate::fields::harmonic::{Constraint, FloatingComponent, HarmonicError, HarmonicSolver};
+use crate::fields::persistence::{Persistence, PersistencePair, persistence};
 use crate::fields::segmentation::SegmentationError;
 use crate::linalg::EigenProgress;
 use crate::mesh::topology::Topology;
@@ -551,16 +552,16 @@ impl Analysis {
     /// The critical points of per-vertex values on this mesh, with the Euler check of its
     /// topology.
     pub fn critical_points(&self, values: &[f64]) -> Result<CriticalReport, AnalysisError> {
-        let cp = self.find_critical_points(values)?;
-        Ok(CriticalReport::new(cp, self.topology(), &[]))
+        let p = self.find_critical_points(values)?;
+        Ok(CriticalReport::new(p, self.topology(), &[]))
     }
 
     /// The critical points of a computed field: the components a harmonic map left
     /// unconstrained are left out (their constant values have no critical points).
     pub fn field_critical_points(&self, field: &Field) -> Result<CriticalReport, AnalysisError> {
-        let cp = self.find_critical_points(&field.values)?;
+        let p = self.find_critical_points(&field.values)?;
         let excluded: Vec<usize> = field.floating.iter().map(|c| c.component).collect();
-        Ok(CriticalReport::new(cp, self.topology(), &excluded))
+        Ok(CriticalReport::new(p, self.topology(), &excluded))
     }
 
     /// How much the truncation of a heat or diffusion field weighs (the time of the
@@ -573,12 +574,14 @@ impl Analysis {
         TruncationHint::new(&basis.values, k, t, self.n())
     }
 
-    /// The critical points of `values`, with the link edges built once per analysis.
-    fn find_critical_points(&self, values: &[f64]) -> Result<CriticalPoints, AnalysisError> {
-        Ok(self
+    /// The critical points of `values` with their persistence, with the link edges built
+    /// once per analysis.
+    fn find_critical_points(&self, values: &[f64]) -> Result<Persistence, AnalysisError> {
+        let finder = self
             .critical
-            .get_or_init(|| CriticalPointFinder::new(&self.mesh))
-            .find(values, BoundaryRule::default())?)
+            .get_or_init(|| CriticalPointFinder::new(&self.mesh));
+        let raw = finder.find(values, BoundaryRule::default())?;
+        Ok(persistence(finder, values, raw)?)
     }
 
     /// `B X` of `basis` (cached for the held basis).
@@ -628,27 +631,33 @@ impl Analysis {
 
 /// Critical points with the Euler characteristic check, as every face reports them.
 ///
+/// The points are the ones shown: the raw critical points simplified by persistence
+/// ([`crate::fields::persistence`]: the pairs below the threshold hidden, components whose
+/// range is below it quiet); the raw counts and their check are in `raw`, the number hidden
+/// in `hidden`, every pair with its persistence in `pairs`.
+///
 /// Components left out (those of a harmonic map that hold no constraint, see
 /// [`crate::fields::harmonic::FloatingComponent`], and plateaus: components on which the
 /// field is constant within [`FLAT_RELATIVE_TOLERANCE`] of its largest magnitude, see
 /// [`crate::fields::critical_points`]) contribute neither critical points nor Euler
-/// characteristic; every other component is checked on its own as well. A field that is
-/// flat on every component reports no critical points and `flat = true`.
+/// characteristic; every other component is checked on its own as well (quiet components
+/// are left out of the check of the shown points only). A field that is flat on every
+/// component reports no critical points and `flat = true`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CriticalReport {
-    /// The critical points (those of left-out components removed).
+    /// The critical points shown (those of left-out components removed).
     pub points: CriticalPoints,
-    /// Minima.
+    /// Minima shown.
     pub minima: usize,
-    /// Maxima.
+    /// Maxima shown.
     pub maxima: usize,
-    /// Saddles counted with multiplicity.
+    /// Saddles shown, counted with multiplicity.
     pub saddles: usize,
     /// Euler characteristic of the components counted.
     pub chi: i64,
     /// True when the check is doubled across the boundary (bordered surfaces).
     pub doubled: bool,
-    /// Left side of the check (`m - s + M`, or its doubled form).
+    /// Left side of the check of the shown points (`m - s + M`, or its doubled form).
     pub lhs: i64,
     /// Right side (`chi` or `2 chi`).
     pub rhs: i64,
@@ -670,6 +679,50 @@ pub struct CriticalReport {
     /// True when every component is a plateau or left out, and at least one is a
     /// plateau: the field is constant (up to rounding), with no critical points.
     pub flat: bool,
+    /// The raw critical points' counts and their check (before simplification).
+    pub raw: RawCritical,
+    /// How many raw critical points are not shown.
+    pub hidden: HiddenCritical,
+    /// The persistence below which a pair is hidden (absolute, in the field's units).
+    pub persistence_threshold: f64,
+    /// [`crate::fields::persistence::PERSISTENCE_RELATIVE_THRESHOLD`].
+    pub persistence_relative_threshold: f64,
+    /// [`crate::fields::persistence::PERSISTENCE_NOISE_FLOOR`].
+    pub persistence_noise_floor: f64,
+    /// Components (as in `Topology::components`) whose range is below the threshold: no
+    /// critical point shown.
+    pub quiet_components: Vec<usize>,
+    /// Every extremum of the counted components with its persistence (see
+    /// [`PersistencePair`]).
+    pub pairs: Vec<PersistencePair>,
+}
+
+/// The raw critical points' counts and Euler check.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RawCritical {
+    /// Minima.
+    pub minima: usize,
+    /// Maxima.
+    pub maxima: usize,
+    /// Saddles counted with multiplicity.
+    pub saddles: usize,
+    /// Left side of the check.
+    pub lhs: i64,
+    /// Right side.
+    pub rhs: i64,
+    /// `lhs == rhs` on every component counted.
+    pub holds: bool,
+}
+
+/// Raw critical points not shown (pairs below the persistence threshold, quiet components).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct HiddenCritical {
+    /// Minima hidden.
+    pub minima: usize,
+    /// Maxima hidden.
+    pub maxima: usize,
+    /// Saddles hidden, with multiplicity.
+    pub saddles: usize,
 }
 
 /// The Euler check on one connected component.
@@ -687,31 +740,19 @@ pub struct ComponentCheck {
     pub holds: bool,
 }
 
-impl CriticalReport {
-    /// The report of `cp` on a mesh of topology `topo`, leaving out the components
-    /// `excluded`.
-    pub fn new(cp: CriticalPoints, topo: &Topology, excluded: &[usize]) -> Self {
+/// The Euler check of `cp` over the components `included`.
+struct Check {
+    components: Vec<ComponentCheck>,
+    chi: i64,
+    lhs: i64,
+    rhs: i64,
+    doubled: bool,
+    holds: bool,
+}
+
+impl Check {
+    fn new(cp: &CriticalPoints, topo: &Topology, included: &[usize]) -> Self {
         let nc = topo.n_components();
-        let mut plateau_components: Vec<usize> = cp
-            .plateaus
-            .iter()
-            .filter_map(|p| topo.vertex_component.get(p.first_vertex).copied())
-            .filter(|&c| c < nc && !excluded.contains(&c))
-            .collect();
-        plateau_components.sort_unstable();
-        plateau_components.dedup();
-        let left_out = |c: usize| excluded.contains(&c) || plateau_components.contains(&c);
-        let counted = |v: usize| {
-            let c = topo.vertex_component.get(v).copied().unwrap_or(usize::MAX);
-            c < nc && !left_out(c)
-        };
-        let mut cp = cp;
-        cp.minima.retain(|&v| counted(v));
-        cp.maxima.retain(|&v| counted(v));
-        cp.saddles.retain(|&(v, _)| counted(v));
-        cp.on_boundary.retain(|&v| counted(v));
-        cp.non_manifold.retain(|&v| counted(v));
-        let included: Vec<usize> = (0..nc).filter(|&c| !left_out(c)).collect();
         let doubled = included.iter().any(|&c| !topo.components[c].closed);
         // Doubled across the boundary: interior points count twice, boundary ones once.
         let weight = |v: usize| -> i64 {
@@ -746,25 +787,103 @@ impl CriticalReport {
         let lhs: i64 = components.iter().map(|c| c.lhs).sum();
         let rhs = factor * chi;
         Self {
-            minima: cp.minima.len(),
-            maxima: cp.maxima.len(),
-            saddles: cp.saddle_count(),
-            points: cp,
+            holds: lhs == rhs && components.iter().all(|c| c.holds),
+            components,
             chi,
-            doubled,
             lhs,
             rhs,
-            holds: lhs == rhs && components.iter().all(|c| c.holds),
-            formula: if doubled {
+            doubled,
+        }
+    }
+}
+
+impl CriticalReport {
+    /// The report of `p` (raw points, persistence, simplified set) on a mesh of topology
+    /// `topo`, leaving out the components `excluded`.
+    pub fn new(p: Persistence, topo: &Topology, excluded: &[usize]) -> Self {
+        let nc = topo.n_components();
+        let comp_of = |v: usize| topo.vertex_component.get(v).copied().filter(|&c| c < nc);
+        let mut plateau_components: Vec<usize> = p
+            .raw
+            .plateaus
+            .iter()
+            .filter_map(|pl| comp_of(pl.first_vertex))
+            .filter(|c| !excluded.contains(c))
+            .collect();
+        plateau_components.sort_unstable();
+        plateau_components.dedup();
+        let mut quiet_components: Vec<usize> = p
+            .quiet_components
+            .iter()
+            .filter_map(|&v| comp_of(v))
+            .filter(|c| !excluded.contains(c) && !plateau_components.contains(c))
+            .collect();
+        quiet_components.sort_unstable();
+        quiet_components.dedup();
+        let left_out = |c: usize| excluded.contains(&c) || plateau_components.contains(&c);
+        let counted = |v: usize| comp_of(v).is_some_and(|c| !left_out(c));
+        let restrict = |mut cp: CriticalPoints| {
+            cp.minima.retain(|&v| counted(v));
+            cp.maxima.retain(|&v| counted(v));
+            cp.saddles.retain(|&(v, _)| counted(v));
+            cp.on_boundary.retain(|&v| counted(v));
+            cp.non_manifold.retain(|&v| counted(v));
+            cp
+        };
+        let raw = restrict(p.raw);
+        let shown = restrict(p.shown);
+        let pairs: Vec<PersistencePair> = p
+            .pairs
+            .into_iter()
+            .filter(|q| counted(q.extremum))
+            .collect();
+        let included: Vec<usize> = (0..nc).filter(|&c| !left_out(c)).collect();
+        let included_shown: Vec<usize> = included
+            .iter()
+            .copied()
+            .filter(|c| !quiet_components.contains(c))
+            .collect();
+        let raw_check = Check::new(&raw, topo, &included);
+        let check = Check::new(&shown, topo, &included_shown);
+        let hidden = HiddenCritical {
+            minima: raw.minima.len() - shown.minima.len(),
+            maxima: raw.maxima.len() - shown.maxima.len(),
+            saddles: raw.saddle_count() - shown.saddle_count(),
+        };
+        Self {
+            minima: shown.minima.len(),
+            maxima: shown.maxima.len(),
+            saddles: shown.saddle_count(),
+            points: shown,
+            chi: check.chi,
+            doubled: check.doubled,
+            lhs: check.lhs,
+            rhs: check.rhs,
+            holds: check.holds,
+            formula: if check.doubled {
                 "doubled across the boundary: 2(m_i - s_i + M_i) + (m_b - s_b + M_b) = 2 chi"
             } else {
                 "m - s + M = chi"
             },
             flat: included.is_empty() && !plateau_components.is_empty(),
-            components,
+            components: check.components,
             excluded_components: excluded.to_vec(),
             plateau_components,
             flat_tolerance: FLAT_RELATIVE_TOLERANCE,
+            raw: RawCritical {
+                minima: raw.minima.len(),
+                maxima: raw.maxima.len(),
+                saddles: raw.saddle_count(),
+                lhs: raw_check.lhs,
+                rhs: raw_check.rhs,
+                holds: raw_check.holds,
+            },
+            hidden,
+            persistence_threshold: p.threshold,
+            persistence_relative_threshold: p.relative_threshold,
+            persistence_noise_floor: p.noise_floor,
+            quiet_components,
+            pairs,
         }
     }
 }

@@ -18,8 +18,9 @@ use crate::experiments::file::HarmonicConstraints;
 use crate::experiments::harmonic::{
     HarmonicExperimentError, HarmonicExperimentParams, harmonic_experiment,
 };
-use crate::fields::critical_points::critical_points;
+use crate::fields::critical_points::{CriticalPointFinder, critical_points};
 use crate::fields::harmonic::{Constraint, ConstraintSpec, harmonic_map_with_operators};
+use crate::fields::persistence::persistence;
 use crate::linalg::{EigenProgress, b_orthogonality_error};
 use crate::mesh::Mesh;
 use crate::mesh::topology::Topology;
@@ -169,6 +170,13 @@ pub struct CriticalSummary {
     /// True when the field is constant within the tolerance on every component counted:
     /// no critical points.
     pub flat: bool,
+    /// The counts above are the points shown, simplified by persistence
+    /// ([`crate::fields::persistence`]); these many raw points are hidden.
+    pub hidden: crate::analysis::HiddenCritical,
+    /// The raw counts and their check.
+    pub raw: crate::analysis::RawCritical,
+    /// Pairs of persistence below this are hidden.
+    pub persistence_threshold: f64,
 }
 
 impl From<&CriticalReport> for CriticalSummary {
@@ -195,6 +203,9 @@ impl From<&CriticalReport> for CriticalSummary {
             flat_relative_tolerance: r.flat_tolerance,
             plateau_components: r.plateau_components.clone(),
             flat: r.flat,
+            hidden: r.hidden,
+            raw: r.raw.clone(),
+            persistence_threshold: r.persistence_threshold,
         }
     }
 }
@@ -545,6 +556,8 @@ pub fn run_harmonic(
     laplacian: Laplacian,
 ) -> Result<HarmonicRun, HarmonicExperimentError> {
     let topo = Topology::new(mesh);
+    let finder_cell = std::sync::OnceLock::new();
+    let finder = || finder_cell.get_or_init(|| CriticalPointFinder::new(mesh));
     let chi = topo.euler_characteristic();
     let genus: Vec<Option<i64>> = topo.components.iter().map(|c| c.genus).collect();
     let mut maps = Vec::new();
@@ -588,7 +601,8 @@ pub fn run_harmonic(
                     .iter()
                     .map(|u| u.component)
                     .collect();
-                let critical = CriticalReport::new(r.critical, &topo, &excluded);
+                let p = persistence(finder(), &r.field, r.critical)?;
+                let critical = CriticalReport::new(p, &topo, &excluded);
                 let locality = Locality {
                     rings: params.locality_rings,
                     max_change_near_previous_constraints: r.change_near_previous,
@@ -612,7 +626,9 @@ pub fn run_harmonic(
                 .iter()
                 .map(|u| u.component)
                 .collect();
-            let critical = CriticalReport::new(critical_points(mesh, &field)?, &topo, &excluded);
+            let raw = critical_points(mesh, &field)?;
+            let critical =
+                CriticalReport::new(persistence(finder(), &field, raw)?, &topo, &excluded);
             push(&mut maps, c, field, critical, None, None);
         }
     }

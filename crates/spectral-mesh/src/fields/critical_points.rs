@@ -312,6 +312,23 @@ impl CriticalPointFinder {
         (plateaus, on)
     }
 
+    /// The link edges of `v` (one per triangle around it): their ends are its neighbours.
+    pub(crate) fn link_edges(&self, v: usize) -> &[(usize, usize)] {
+        &self.edges[self.offsets[v]..self.offsets[v + 1]]
+    }
+
+    /// Connected component of `v` (through triangles, numbered by lowest vertex), `None`
+    /// for a vertex no triangle uses.
+    pub(crate) fn component_of(&self, v: usize) -> Option<usize> {
+        let c = self.component[v];
+        (c != u32::MAX).then_some(c as usize)
+    }
+
+    /// Number of connected components (through triangles).
+    pub(crate) fn n_components(&self) -> usize {
+        self.components.len()
+    }
+
     /// Number of vertices of the mesh it was built for.
     pub fn n_vertices(&self) -> usize {
         self.simple.len()
@@ -422,7 +439,7 @@ impl CriticalPointFinder {
 /// `field` rounded to multiples of `FLAT_RELATIVE_TOLERANCE * max |f|` above its minimum
 /// (differences below the tolerance become ties); unchanged when that step is zero (a
 /// field of zeros or without finite values).
-fn quantized(field: &[f64]) -> Vec<f64> {
+pub(crate) fn quantized(field: &[f64]) -> Vec<f64> {
     let (mut lo, mut scale) = (f64::INFINITY, 0.0f64);
     for &x in field.iter().filter(|x| x.is_finite()) {
         lo = lo.min(x);

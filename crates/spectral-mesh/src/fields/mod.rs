@@ -3,4 +3,5 @@
 pub mod critical_points;
 pub mod harmonic;
 pub mod level_sets;
+pub mod persistence;
 pub mod segmentation;

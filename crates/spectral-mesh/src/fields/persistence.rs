@@ -1,0 +1,380 @@
+//! Critical points simplified by persistence: which of the critical points of
+//! [`crate::fields::critical_points`] are features and which are ripples (of a truncated
+//! series, of rounding).
+//!
+//! ## Pairing
+//! The vertices are swept up in the order of the classification (values rounded as there,
+//! ties broken by vertex index), with a union-find over the mesh's vertex graph holding the
+//! connected pieces of the sublevel set. A vertex with no lower neighbour starts a piece:
+//! it is a minimum. A vertex whose lower neighbours lie in several pieces joins them: each
+//! piece but the oldest (the one whose minimum is lowest, the *elder rule*) dies there, and
+//! its minimum is paired with this vertex, a saddle, with persistence `f(saddle) -
+//! f(minimum)`. The sweep down pairs maxima with saddles the same way (`f(maximum) -
+//! f(saddle)`). The lowest minimum and the highest maximum of each connected component are
+//! never paired (*essential*); their persistence is reported as the component's range. On
+//! a closed surface every saddle (with multiplicity) is paired in exactly one sweep or is
+//! one of the `2 g` essential saddles of the handles.
+//!
+//! ## Threshold and what is shown
+//! With `R = max f - min f` and `S = max |f|` over the finite values, the threshold is
+//!
+//! ```text
+//! threshold = max(PERSISTENCE_RELATIVE_THRESHOLD * R, PERSISTENCE_NOISE_FLOOR * S)
+//! ```
+//!
+//! - A component whose range is below the threshold shows no critical point at all (the
+//!   field is constant on it up to noise: it is left out of the Euler check like a
+//!   plateau). This is what "no critical point" means for a constant field plus rounding
+//!   noise: not even its global minimum and maximum, which the pairing can never cancel.
+//! - Otherwise the essential points are shown, and the pairs are taken by ascending
+//!   persistence: a pair below the threshold hides its extremum and one unit of its
+//!   saddle's multiplicity. Hiding a pair removes one `+1` (extremum) and one `-1` (saddle)
+//!   from `minima - saddles + maxima`, so the Euler characteristic holds for the shown set
+//!   as for the raw one. On a bordered surface the check is doubled across the boundary
+//!   (interior points count twice, boundary points once), so a pair is hidden only when
+//!   its two ends weigh the same in that count (an interior extremum may use two units of
+//!   a boundary saddle); a saddle whose units are used up is hidden.
+//!
+//! The raw set stays available ([`Persistence::raw`]) with its own check.
+
+use rayon::prelude::*;
+
+use crate::fields::critical_points::{
+    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError, quantized,
+};
+use crate::mesh::topology::UnionFind;
+
+/// A pair whose persistence is below this fraction of the field's range (`max - min`) is
+/// hidden. Truncation ripples of a heat kernel are many orders of magnitude below it; the
+/// extrema and saddles of the paper's harmonic maps are tens of percent of it.
+pub const PERSISTENCE_RELATIVE_THRESHOLD: f64 = 0.01;
+
+/// Nothing below this fraction of the field's largest magnitude `max |f|` is significant
+/// (a field of f32 values, as the pictures hold them, cannot tell apart relative
+/// differences below about `1e-7`): a component whose range is below it shows no
+/// critical point.
+pub const PERSISTENCE_NOISE_FLOOR: f64 = 1e-6;
+
+/// The kind of extremum a pair starts from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ExtremumKind {
+    /// Paired by the sweep up.
+    Minimum,
+    /// Paired by the sweep down.
+    Maximum,
+}
+
+/// A critical point with its persistence.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct PersistencePair {
+    /// Minimum or maximum.
+    pub kind: ExtremumKind,
+    /// The extremum's vertex.
+    pub extremum: usize,
+    /// The saddle it dies at; `None` for an essential extremum (lowest minimum or highest
+    /// maximum of its component).
+    pub saddle: Option<usize>,
+    /// `|f(saddle) - f(extremum)|`, or the component's range for an essential extremum
+    /// (NaN when a value is not finite: never hidden).
+    pub persistence: f64,
+    /// True when the pair is hidden (below the threshold, or in a component whose range is
+    /// below it).
+    pub hidden: bool,
+}
+
+/// The critical points of a field with their persistence pairs, and the simplified set.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Persistence {
+    /// Every critical point (as classified by [`crate::fields::critical_points`]).
+    pub raw: CriticalPoints,
+    /// The critical points shown: the raw ones minus the hidden pairs (a saddle's
+    /// multiplicity lowered by the pairs that used it).
+    pub shown: CriticalPoints,
+    /// The pairs whose extremum is a raw critical point, ascending by extremum kind and
+    /// vertex.
+    pub pairs: Vec<PersistencePair>,
+    /// The absolute threshold (see the module documentation).
+    pub threshold: f64,
+    /// [`PERSISTENCE_RELATIVE_THRESHOLD`].
+    pub relative_threshold: f64,
+    /// [`PERSISTENCE_NOISE_FLOOR`].
+    pub noise_floor: f64,
+    /// Components (identified by their lowest vertex) whose range is below the threshold:
+    /// no critical point shown.
+    pub quiet_components: Vec<usize>,
+}
+
+impl Persistence {
+    /// Minima hidden.
+    pub fn hidden_minima(&self) -> usize {
+        self.raw.minima.len() - self.shown.minima.len()
+    }
+
+    /// Maxima hidden.
+    pub fn hidden_maxima(&self) -> usize {
+        self.raw.maxima.len() - self.shown.maxima.len()
+    }
+
+    /// Saddles hidden, counted with multiplicity.
+    pub fn hidden_saddles(&self) -> usize {
+        self.raw.saddle_count() - self.shown.saddle_count()
+    }
+
+    /// The persistence of critical point `v` when it is an extremum (`None` for a saddle or
+    /// a regular vertex).
+    pub fn of(&self, v: usize) -> Option<f64> {
+        self.pairs
+            .iter()
+            .find(|p| p.extremum == v)
+            .map(|p| p.persistence)
+    }
+}
+
+/// The persistence of the critical points `raw` of `field` (found by `finder` with
+/// [`CriticalPointFinder::find`]) and the simplified set under the default threshold.
+pub fn persistence(
+    finder: &CriticalPointFinder,
+    field: &[f64],
+    raw: CriticalPoints,
+) -> Result<Persistence, CriticalPointsError> {
+    let n = finder.n_vertices();
+    if field.len() != n {
+        return Err(CriticalPointsError::LengthMismatch {
+            expected: n,
+            got: field.len(),
+        });
+    }
+    // The classification's order: rounded values, ties by index.
+    let q = quantized(field);
+    let mut order: Vec<usize> = (0..n)
+        .filter(|&v| finder.component_of(v).is_some())
+        .collect();
+    order.par_sort_unstable_by(|&a, &b| q[a].total_cmp(&q[b]).then(a.cmp(&b)));
+    let (up_pairs, up_essential) = sweep(finder, &order, n);
+    order.reverse();
+    let (down_pairs, down_essential) = sweep(finder, &order, n);
+
+    // Range and scale over finite values; per component as well.
+    let nc = finder.n_components();
+    let mut lo = vec![f64::INFINITY; nc];
+    let mut hi = vec![f64::NEG_INFINITY; nc];
+    let mut finite = vec![true; nc];
+    let mut first = vec![usize::MAX; nc];
+    for v in 0..n {
+        let Some(c) = finder.component_of(v) else {
+            continue;
+        };
+        first[c] = first[c].min(v);
+        let x = field[v];
+        if x.is_finite() {
+            lo[c] = lo[c].min(x);
+            hi[c] = hi[c].max(x);
+        } else {
+            finite[c] = false;
+        }
+    }
+    let (glo, ghi) = (0..nc).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
+        (a.min(lo[c]), b.max(hi[c]))
+    });
+    let (scale, range) = if ghi >= glo {
+        (glo.abs().max(ghi.abs()), ghi - glo)
+    } else {
+        (0.0, 0.0) // no finite value
+    };
+    let threshold = (PERSISTENCE_RELATIVE_THRESHOLD * range).max(PERSISTENCE_NOISE_FLOOR * scale);
+    let comp_range = |c: usize| {
+        if hi[c] >= lo[c] && finite[c] {
+            hi[c] - lo[c]
+        } else {
+            f64::NAN
+        }
+    };
+    // A component is quiet when its (finite) range is below the threshold.
+    let quiet: Vec<bool> = (0..nc).map(|c| comp_range(c) < threshold).collect();
+    let is_quiet = |v: usize| finder.component_of(v).is_some_and(|c| quiet[c]);
+
+    // Weights of the Euler count: doubled across the boundary under the Double rule.
+    let on_boundary = |v: usize| raw.on_boundary.binary_search(&v).is_ok();
+    let weight = |v: usize| -> usize {
+        match raw.boundary_rule {
+            BoundaryRule::Double if !on_boundary(v) => 2,
+            _ => 1,
+        }
+    };
+    let is_min = |v: usize| raw.minima.binary_search(&v).is_ok();
+    let is_max = |v: usize| raw.maxima.binary_search(&v).is_ok();
+    let saddle_index = |v: usize| raw.saddles.binary_search_by_key(&v, |s| s.0).ok();
+
+    let mut pairs: Vec<PersistencePair> = Vec::new();
+    let value_gap = |a: usize, b: usize| {
+        let d = (field[a] - field[b]).abs();
+        if d.is_finite() { d } else { f64::NAN }
+    };
+    for (kind, list, essential, is_kind) in [
+        (
+            ExtremumKind::Minimum,
+            &up_pairs,
+            &up_essential,
+            &is_min as &dyn Fn(usize) -> bool,
+        ),
+        (ExtremumKind::Maximum, &down_pairs, &down_essential, &is_max),
+    ] {
+        for &(e, s) in list.iter() {
+            if is_kind(e) {
+                pairs.push(PersistencePair {
+                    kind,
+                    extremum: e,
+                    saddle: Some(s),
+                    persistence: value_gap(e, s),
+                    hidden: false,
+                });
+            }
+        }
+        for &e in essential.iter() {
+            if is_kind(e) {
+                let c = finder.component_of(e).unwrap_or(0);
+                pairs.push(PersistencePair {
+                    kind,
+                    extremum: e,
+                    saddle: None,
+                    persistence: comp_range(c),
+                    hidden: false,
+                });
+            }
+        }
+    }
+    pairs.sort_by_key(|p| (p.kind == ExtremumKind::Maximum, p.extremum));
+
+    // Units of each raw saddle still shown, in the weights of the Euler count.
+    let mut budget: Vec<usize> = raw.saddles.iter().map(|&(v, m)| weight(v) * m).collect();
+    let mut by_persistence: Vec<usize> = (0..pairs.len())
+        .filter(|&i| pairs[i].saddle.is_some() && pairs[i].persistence < threshold)
+        .collect();
+    by_persistence.sort_by(|&a, &b| {
+        pairs[a]
+            .persistence
+            .total_cmp(&pairs[b].persistence)
+            .then(pairs[a].extremum.cmp(&pairs[b].extremum))
+    });
+    for i in by_persistence {
+        let p = pairs[i];
+        let Some(s) = p.saddle else { continue };
+        if is_quiet(p.extremum) {
+            continue;
+        }
+        let Some(k) = saddle_index(s) else { continue };
+        let (we, ws) = (weight(p.extremum), weight(s));
+        if we % ws == 0 && budget[k] >= we {
+            budget[k] -= we;
+            pairs[i].hidden = true;
+        }
+    }
+    for p in &mut pairs {
+        if is_quiet(p.extremum) {
+            p.hidden = true;
+        }
+    }
+    let hidden_extremum = |v: usize| pairs.iter().any(|p| p.extremum == v && p.hidden);
+    let mut shown = raw.clone();
+    shown
+        .minima
+        .retain(|&v| !is_quiet(v) && !hidden_extremum(v));
+    shown
+        .maxima
+        .retain(|&v| !is_quiet(v) && !hidden_extremum(v));
+    shown.saddles = raw
+        .saddles
+        .iter()
+        .zip(&budget)
+        .filter(|&(&(v, _), &b)| b > 0 && !is_quiet(v))
+        .map(|(&(v, _), &b)| (v, b / weight(v)))
+        .collect();
+    let kept = |v: usize| {
+        shown.minima.binary_search(&v).is_ok()
+            || shown.maxima.binary_search(&v).is_ok()
+            || shown.saddles.binary_search_by_key(&v, |s| s.0).is_ok()
+    };
+    shown.on_boundary = raw
+        .on_boundary
+        .iter()
+        .copied()
+        .filter(|&v| kept(v))
+        .collect();
+    let quiet_components = (0..nc).filter(|&c| quiet[c]).map(|c| first[c]).collect();
+    Ok(Persistence {
+        raw,
+        shown,
+        pairs,
+        threshold,
+        relative_threshold: PERSISTENCE_RELATIVE_THRESHOLD,
+        noise_floor: PERSISTENCE_NOISE_FLOOR,
+        quiet_components,
+    })
+}
+
+/// The critical points of `field` on `mesh` (default boundary rule) with their
+/// persistence and the simplified set.
+pub fn simplified_critical_points(
+    mesh: &crate::mesh::Mesh,
+    field: &[f64],
+) -> Result<Persistence, CriticalPointsError> {
+    let finder = CriticalPointFinder::new(mesh);
+    let raw = finder.find(field, BoundaryRule::default())?;
+    persistence(&finder, field, raw)
+}
+
+/// One sweep over `order` (every vertex a triangle uses): the pairs `(extremum, saddle)`
+/// of the pieces that die, and the extremum of each piece left at the end (one per
+/// connected component).
+fn sweep(
+    finder: &CriticalPointFinder,
+    order: &[usize],
+    n: usize,
+) -> (Vec<(usize, usize)>, Vec<usize>) {
+    let mut rank = vec![usize::MAX; n];
+    for (i, &v) in order.iter().enumerate() {
+        rank[v] = i;
+    }
+    let mut uf = UnionFind::new(n);
+    // The extremum (oldest vertex) of the piece whose root this is.
+    let mut birth = vec![usize::MAX; n];
+    let mut pairs = Vec::new();
+    let mut roots: Vec<usize> = Vec::new();
+    for &v in order {
+        roots.clear();
+        for &(a, b) in finder.link_edges(v) {
+            for u in [a, b] {
+                if rank[u] < rank[v] {
+                    let r = uf.find(u);
+                    if !roots.contains(&r) {
+                        roots.push(r);
+                    }
+                }
+            }
+        }
+        let Some(&elder) = roots.iter().min_by_key(|&&r| rank[birth[r]]) else {
+            birth[v] = v;
+            continue;
+        };
+        let oldest = birth[elder];
+        for &r in &roots {
+            if r != elder {
+                pairs.push((birth[r], v));
+            }
+            uf.union(r, v);
+        }
+        let root = uf.find(v);
+        birth[root] = oldest;
+    }
+    let mut essential: Vec<usize> = order
+        .iter()
+        .filter(|&&v| uf.find(v) == v)
+        .map(|&v| birth[v])
+        .collect();
+    essential.sort_unstable();
+    (pairs, essential)
+}
+
+#[cfg(test)]
+mod tests;
