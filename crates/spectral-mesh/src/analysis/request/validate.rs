@@ -1,7 +1,7 @@
 //! Checks of a request that do not depend on the mesh, and the error naming the key at fault.
 
-use super::{Constraints, DistanceSpec, FieldRequest, MAX_SPEC_LEN, Signal, SignatureSpec};
-use crate::spectral::filters::{Filter, FilterError};
+use super::FieldRequest;
+use crate::spectral::filters::FilterError;
 
 impl FieldRequest {
     /// Checks every parameter that does not depend on the mesh (times finite and
