@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use spectral_mesh::shapes::build_str;
 use spectral_mesh::spectral::eigenbasis::{EigenParams, compute_eigenbasis};
-use spectral_mesh::spectral::heat::{HeatSolver, KernelKind, ScaleNormalization};
+use spectral_mesh::spectral::heat::{HeatSolver, Kernel, ScaleNormalization};
 use spectral_mesh::{Laplacian, Operators};
 
 fn main() {
@@ -31,7 +31,7 @@ fn main() {
     };
     let basis = compute_eigenbasis(&ops, &params, &mut |_| {}).unwrap();
     let basis_s = t0.elapsed().as_secs_f64();
-    let solver = HeatSolver::new(&basis, KernelKind::Wfem, ScaleNormalization::UnitArea);
+    let solver = HeatSolver::new(&basis, Kernel::Wfem, ScaleNormalization::UnitArea);
     let mut times = Vec::with_capacity(q);
     let mut state = 0x9e3779b97f4a7c15u64;
     let mut checksum = 0.0;

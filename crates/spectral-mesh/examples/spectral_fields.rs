@@ -16,7 +16,7 @@ use std::path::Path;
 
 use spectral_mesh::spectral::distances::distances_from;
 use spectral_mesh::spectral::filters::Filter;
-use spectral_mesh::spectral::heat::{KernelKind, basis_function};
+use spectral_mesh::spectral::heat::{Kernel, basis_function};
 use spectral_mesh::spectral::signatures::{hks, hks_auto_times};
 use spectral_mesh::{Laplacian, Mesh, Operators};
 
@@ -103,7 +103,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     for &a in &anchors {
         write(
             &out.join(format!("heat_{a}.txt")),
-            &basis_function(&basis, a, t, KernelKind::Wfem)?,
+            &basis_function(&basis, a, t, Kernel::Wfem)?,
         )?;
         write(
             &out.join(format!("biharmonic_{a}.txt")),

@@ -5,7 +5,7 @@
 mod spectral_util;
 
 use spectral_mesh::spectral::heat::{
-    HeatSolver, KernelKind, ScaleNormalization, basis_function, diffuse, normalize_basis,
+    HeatSolver, Kernel, ScaleNormalization, basis_function, diffuse, normalize_basis,
     reference_basis_function_dense, reference_heat_time_stepping, sphere_heat_kernel, total_mass,
 };
 use spectral_mesh::{Eigenbasis, Laplacian, Operators};
@@ -31,9 +31,9 @@ fn full_spectrum_kernel_properties() {
         let n = ops.n();
         let basis = Eigenbasis::dense(&ops, n).unwrap();
         let kind = if lap == Laplacian::Fem {
-            KernelKind::Wfem
+            Kernel::Wfem
         } else {
-            KernelKind::VoronoiCot
+            Kernel::VoronoiCot
         };
         let f = signal(n, 1);
         let g = signal(n, 2);
@@ -80,7 +80,7 @@ fn wfem_s_t_is_symmetric_positive_definite() {
     for j in 0..n {
         let col = ops
             .mass
-            .mul_vec(&basis_function(&basis, j, t, KernelKind::Wfem).unwrap());
+            .mul_vec(&basis_function(&basis, j, t, Kernel::Wfem).unwrap());
         for i in 0..n {
             st[i][j] = col[i];
         }
@@ -135,7 +135,7 @@ fn sphere_kernel_converges_with_refinement() {
         let mesh = icosphere(level);
         let (ops, basis) = fem_full_basis(&mesh);
         let anchor = 0;
-        let k = basis_function(&basis, anchor, t, KernelKind::Wfem).unwrap();
+        let k = basis_function(&basis, anchor, t, Kernel::Wfem).unwrap();
         let area = ops.mass.row_sums()[anchor];
         let p0 = mesh.positions()[anchor];
         let mut err: f64 = 0.0;
@@ -171,11 +171,7 @@ fn solver_matches_free_functions_and_normalisation_is_documented() {
     let a = total_mass(&basis);
     assert!((a - mesh.area()).abs() <= 1e-12 * a);
     let t = 0.002;
-    for kind in [
-        KernelKind::Wfem,
-        KernelKind::VoronoiCot,
-        KernelKind::Standard,
-    ] {
+    for kind in [Kernel::Wfem, Kernel::VoronoiCot, Kernel::Standard] {
         let plain = HeatSolver::new(&basis, kind, ScaleNormalization::None);
         let x = plain.basis_function(7, t).unwrap();
         let y = basis_function(&basis, 7, t, kind).unwrap();
@@ -184,7 +180,7 @@ fn solver_matches_free_functions_and_normalisation_is_documented() {
         let unit = HeatSolver::new(&basis, kind, ScaleNormalization::UnitArea);
         let u = unit.basis_function(7, t).unwrap();
         let v = basis_function(&basis, 7, a * t, kind).unwrap();
-        let factor = if kind == KernelKind::Standard { a } else { 1.0 };
+        let factor = if kind == Kernel::Standard { a } else { 1.0 };
         let vs: Vec<f64> = v.iter().map(|z| z * factor).collect();
         assert!(max_diff(&u, &vs) <= 1e-12 * max_abs(&vs), "{kind:?}");
         let many = unit.basis_functions(&[7, 2], t).unwrap();
@@ -200,8 +196,8 @@ fn solver_matches_free_functions_and_normalisation_is_documented() {
     for j in 0..30 {
         assert!((n1.values[j] - n2.values[j]).abs() <= 1e-9 * n1.values[29]);
     }
-    let s1 = HeatSolver::new(&basis, KernelKind::Wfem, ScaleNormalization::UnitArea);
-    let s2 = HeatSolver::new(&b2, KernelKind::Wfem, ScaleNormalization::UnitArea);
+    let s1 = HeatSolver::new(&basis, Kernel::Wfem, ScaleNormalization::UnitArea);
+    let s2 = HeatSolver::new(&b2, Kernel::Wfem, ScaleNormalization::UnitArea);
     let (k1, k2) = (
         s1.basis_function(3, 0.01).unwrap(),
         s2.basis_function(3, 0.01).unwrap(),
@@ -214,9 +210,9 @@ fn bad_inputs_are_errors() {
     let mesh = planar_patch(5, 1);
     let ops = fem(&mesh);
     let basis = Eigenbasis::dense(&ops, 5).unwrap();
-    assert!(basis_function(&basis, 99, 0.1, KernelKind::Wfem).is_err());
-    assert!(basis_function(&basis, 0, -1.0, KernelKind::Wfem).is_err());
-    assert!(basis_function(&basis, 0, f64::NAN, KernelKind::Wfem).is_err());
-    assert!(diffuse(&basis, &[1.0, 2.0], 0.1, KernelKind::Wfem).is_err());
+    assert!(basis_function(&basis, 99, 0.1, Kernel::Wfem).is_err());
+    assert!(basis_function(&basis, 0, -1.0, Kernel::Wfem).is_err());
+    assert!(basis_function(&basis, 0, f64::NAN, Kernel::Wfem).is_err());
+    assert!(diffuse(&basis, &[1.0, 2.0], 0.1, Kernel::Wfem).is_err());
     assert!(reference_heat_time_stepping(&ops, &[0.0; 25], 0.1, 0.0).is_err());
 }

@@ -8,7 +8,7 @@ use spectral_mesh::Eigenbasis;
 use spectral_mesh::fields::segmentation::{SegmentParams, segment};
 use spectral_mesh::spectral::distances::spectral_function;
 use spectral_mesh::spectral::filters::Filter;
-use spectral_mesh::spectral::heat::{KernelKind, basis_function};
+use spectral_mesh::spectral::heat::{Kernel, basis_function};
 use spectral_mesh::spectral::signatures::{
     auto_diffusion, hks, hks_auto_times, wks, wks_auto_energies,
 };
@@ -31,7 +31,7 @@ fn hks_is_the_kernel_diagonal_and_auto_times_follow_pyfm() {
     for (ti, &t) in times.iter().enumerate() {
         let trace: f64 = basis.values.iter().map(|l| (-l * t).exp()).sum();
         for p in [0usize, 13, 40] {
-            let col = basis_function(&basis, p, t, KernelKind::Standard).unwrap();
+            let col = basis_function(&basis, p, t, Kernel::Standard).unwrap();
             assert!((h[ti][p] - col[p]).abs() <= 1e-12 * col[p]);
             assert!((hs[ti][p] * trace - h[ti][p]).abs() <= 1e-12 * h[ti][p]);
         }

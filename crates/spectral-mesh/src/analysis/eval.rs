@@ -152,14 +152,14 @@ pub(super) fn evaluate(
             let a = source("anchor", *anchor)?;
             request.set_source(Some(a));
             marks.push(a);
-            basis_function(need()?, a, *t, (*kernel).into())?
+            basis_function(need()?, a, *t, *kernel)?
         }
         FieldRequest::Diffusion {
             signal, t, kernel, ..
         } => {
             let (f, mark) = signal_values(an, signal)?;
             marks.extend(mark);
-            diffuse(need()?, &f, *t, (*kernel).into())?
+            diffuse(need()?, &f, *t, *kernel)?
         }
         FieldRequest::Distance {
             source: s,

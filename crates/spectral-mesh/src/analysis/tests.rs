@@ -3,7 +3,7 @@ use crate::fields::harmonic::{ConstraintSpec, harmonic_map_with_operators};
 use crate::shapes::build_str;
 use crate::spectral::distances::{distances_from, wfem_diffusion_distances_from};
 use crate::spectral::filters::Filter;
-use crate::spectral::heat::{HeatSolver, KernelKind, ScaleNormalization, normalize_basis};
+use crate::spectral::heat::{HeatSolver, Kernel, ScaleNormalization, normalize_basis};
 
 fn analysis(shape: &str, normalize: bool) -> Analysis {
     Analysis::new(
@@ -47,7 +47,7 @@ fn unit_area_fields_equal_the_normalised_basis_path() {
             k,
         })
         .unwrap();
-    let old = HeatSolver::new(&rb, KernelKind::Wfem, ScaleNormalization::UnitArea)
+    let old = HeatSolver::new(&rb, Kernel::Wfem, ScaleNormalization::UnitArea)
         .basis_function(src, 0.01)
         .unwrap();
     close(&heat.values, &old, 1e-9);

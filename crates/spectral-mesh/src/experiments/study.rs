@@ -46,7 +46,7 @@ use crate::spectral::Eigenbasis;
 use crate::spectral::distances::distances_from;
 use crate::spectral::eigenbasis::{EigenParams, compute_eigenbasis};
 use crate::spectral::filters::Filter;
-use crate::spectral::heat::{HeatSolver, KernelKind, ScaleNormalization, normalize_basis};
+use crate::spectral::heat::{HeatSolver, Kernel, ScaleNormalization, normalize_basis};
 use crate::spectral::signatures::hks;
 
 /// Errors of a study.
@@ -423,7 +423,7 @@ pub fn compute_fields(
             )
             .map_err(|e| e.to_string())?,
             (Quantity::Heat, Some(b), _) => {
-                let solver = HeatSolver::new(b, KernelKind::Wfem, ScaleNormalization::UnitArea);
+                let solver = HeatSolver::new(b, Kernel::Wfem, ScaleNormalization::UnitArea);
                 let mut f = solver
                     .basis_function(source, params.heat_t)
                     .map_err(|e| e.to_string())?;

@@ -5,9 +5,9 @@
 //! With `S X = B X Lambda`, `X^T B X = I` (S positive semi-definite) and
 //! `D_t = diag(exp(-lambda_j t))`:
 //!
-//! - [`KernelKind::Wfem`]: `K_t = X D_t X^T B` (the paper's wFEM kernel),
-//! - [`KernelKind::VoronoiCot`]: `K*_t = X D_t X^T D`, `D` = lumped mass = row sums of B,
-//! - [`KernelKind::Standard`]: `K~_t = X D_t X^T`.
+//! - [`Kernel::Wfem`]: `K_t = X D_t X^T B` (the paper's wFEM kernel),
+//! - [`Kernel::VoronoiCot`]: `K*_t = X D_t X^T D`, `D` = lumped mass = row sums of B,
+//! - [`Kernel::Standard`]: `K~_t = X D_t X^T`.
 //!
 //! `K_t f` is the solution at time t of `B F' + S F = 0`, `F(0) = f` (exactly so for the full
 //! spectrum and the wFEM kernel). Nothing here forms an `n x n` matrix: a column `K_t e_i` or
@@ -84,16 +84,44 @@ pub enum HeatError {
     },
 }
 
-/// Which discretization of the heat kernel (see the module documentation).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum KernelKind {
-    /// `K_t = X D_t X^T B` (the paper's wFEM kernel; default).
+/// Which discretization of the heat kernel (see the module documentation). Typed (and
+/// serialized) as `wfem`, `voronoi-cot` or `standard`.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Kernel {
+    /// `K_t = X D_t X^T B` (the paper's wFEM kernel; conserves the B-mass). Default.
     #[default]
     Wfem,
     /// `K*_t = X D_t X^T D`, `D` = lumped mass (row sums of B).
     VoronoiCot,
     /// `K~_t = X D_t X^T` (no mass; LaPy's and pyFM's kernel).
     Standard,
+}
+
+impl Kernel {
+    /// Every kernel, in a stable order.
+    pub const ALL: [Kernel; 3] = [Kernel::Wfem, Kernel::VoronoiCot, Kernel::Standard];
+
+    /// The name typed.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kernel::Wfem => "wfem",
+            Kernel::VoronoiCot => "voronoi-cot",
+            Kernel::Standard => "standard",
+        }
+    }
+}
+
+impl std::str::FromStr for Kernel {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Kernel::ALL
+            .into_iter()
+            .find(|k| k.name() == s.trim())
+            .ok_or_else(|| format!("unknown kernel '{s}': expected wfem, voronoi-cot or standard"))
+    }
 }
 
 /// Scale normalisation of times (see the module documentation).
@@ -212,17 +240,17 @@ fn check_time(t: f64) -> Result<(), HeatError> {
 }
 
 /// The row `i` of `X^T M` for the kernel's right factor `M` (B, D or I): `k` entries.
-fn anchor_coefficients(basis: BasisView<'_>, anchor: usize, kind: KernelKind) -> Vec<f64> {
+fn anchor_coefficients(basis: BasisView<'_>, anchor: usize, kind: Kernel) -> Vec<f64> {
     let n = basis.n;
     let k = basis.k();
     match kind {
-        KernelKind::Standard => (0..k).map(|j| basis.vectors[j * n + anchor]).collect(),
-        KernelKind::VoronoiCot => {
+        Kernel::Standard => (0..k).map(|j| basis.vectors[j * n + anchor]).collect(),
+        Kernel::VoronoiCot => {
             let (_, vals) = basis.mass.col(anchor);
             let d: f64 = vals.iter().sum();
             (0..k).map(|j| d * basis.vectors[j * n + anchor]).collect()
         }
-        KernelKind::Wfem => {
+        Kernel::Wfem => {
             // Row `anchor` of B X = column `anchor` of B (B symmetric) against X.
             let (rows, vals) = basis.mass.col(anchor);
             (0..k)
@@ -244,7 +272,7 @@ pub fn basis_function<'a>(
     basis: impl Into<BasisView<'a>>,
     anchor: usize,
     t: f64,
-    kind: KernelKind,
+    kind: Kernel,
 ) -> Result<Vec<f64>, HeatError> {
     let basis: BasisView<'a> = basis.into();
     if anchor >= basis.n {
@@ -267,7 +295,7 @@ pub fn diffuse<'a>(
     basis: impl Into<BasisView<'a>>,
     f: &[f64],
     t: f64,
-    kind: KernelKind,
+    kind: Kernel,
 ) -> Result<Vec<f64>, HeatError> {
     let basis: BasisView<'a> = basis.into();
     if f.len() != basis.n {
@@ -278,15 +306,15 @@ pub fn diffuse<'a>(
     }
     check_time(t)?;
     let g = match kind {
-        KernelKind::Wfem => basis.mass.mul_vec(f),
-        KernelKind::VoronoiCot => basis
+        Kernel::Wfem => basis.mass.mul_vec(f),
+        Kernel::VoronoiCot => basis
             .mass
             .row_sums()
             .iter()
             .zip(f)
             .map(|(d, v)| d * v)
             .collect(),
-        KernelKind::Standard => f.to_vec(),
+        Kernel::Standard => f.to_vec(),
     };
     let mut c = project(basis.vectors, basis.n, &g);
     for (cj, l) in c.iter_mut().zip(basis.values) {
@@ -300,7 +328,7 @@ pub fn diffuse<'a>(
 #[derive(Debug, Clone)]
 pub struct HeatSolver {
     basis: Eigenbasis,
-    kind: KernelKind,
+    kind: Kernel,
     normalization: ScaleNormalization,
     area: f64,
     /// `M X`, row-major `n x k` (row i = coefficients of anchor i before `D_t`).
@@ -311,7 +339,7 @@ pub struct HeatSolver {
 
 impl HeatSolver {
     /// Builds the solver for `basis`, kernel `kind`, and scale normalisation `norm`.
-    pub fn new(basis: &Eigenbasis, kind: KernelKind, norm: ScaleNormalization) -> Self {
+    pub fn new(basis: &Eigenbasis, kind: Kernel, norm: ScaleNormalization) -> Self {
         let area = total_mass(basis);
         let b = normalize_basis(basis, norm);
         let (n, k) = (b.n, b.k());
@@ -339,7 +367,7 @@ impl HeatSolver {
     }
 
     /// The kernel kind.
-    pub fn kind(&self) -> KernelKind {
+    pub fn kind(&self) -> Kernel {
         self.kind
     }
 
@@ -399,7 +427,7 @@ pub fn reference_basis_function_dense(
         return Err(HeatError::VertexOutOfRange { vertex: anchor, n });
     }
     let basis = Eigenbasis::dense(ops, n).map_err(|e| HeatError::Eigen(e.to_string()))?;
-    basis_function(&basis, anchor, t, KernelKind::Wfem)
+    basis_function(&basis, anchor, t, Kernel::Wfem)
 }
 
 /// The result of [`reference_heat_time_stepping`].

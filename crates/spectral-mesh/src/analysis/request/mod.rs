@@ -16,14 +16,13 @@ use serde::{Deserialize, Serialize};
 use crate::spectral::filters::Filter;
 
 mod constraints;
-mod kernel;
 mod serde_text;
 mod signal;
 mod spec;
 mod validate;
 
+pub use crate::spectral::heat::Kernel;
 pub use constraints::Constraints;
-pub use kernel::Kernel;
 pub use serde_text::filter_text;
 pub use signal::Signal;
 pub use spec::{DistanceSpec, SignatureSpec};

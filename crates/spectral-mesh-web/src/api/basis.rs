@@ -1,0 +1,125 @@
+//! Routes of the eigenbasis job: start, cancel, status.
+
+use super::*;
+
+/// The analysis of `key`: the existing one, or a new one made off the request thread
+/// with the memory of its assembly reserved first.
+pub(super) async fn analysis_for(
+    s: &Arc<AppState>,
+    item: &Arc<Item>,
+    key: &AnalysisKey,
+    deadline: Deadline,
+) -> ApiResult<Arc<Analysis>> {
+    if let Some(a) = s.existing_analysis(key) {
+        return Ok(a);
+    }
+    let e = entry(item)?;
+    let (n, points) = (e.n(), e.is_points());
+    let r = reserve(
+        s,
+        "assembling the operators",
+        analysis_creation_bytes(n, key.laplacian, points),
+        deadline,
+        StatusCode::UNPROCESSABLE_ENTITY,
+    )
+    .await?;
+    let (s2, key2, item2) = (s.clone(), key.clone(), item.clone());
+    tokio::task::spawn_blocking(move || -> ApiResult<Arc<Analysis>> {
+        let a = s2.analysis(entry(&item2)?, &key2)?;
+        drop(r);
+        Ok(a)
+    })
+    .await
+    .map_err(internal)?
+}
+
+/// The `X-Client-Id` of a request, if it is a short visible ASCII string.
+pub(super) fn client_id(headers: &HeaderMap) -> Option<String> {
+    let v = headers.get("x-client-id")?.to_str().ok()?.trim();
+    (!v.is_empty() && v.len() <= 64 && v.bytes().all(|b| b.is_ascii_graphic()))
+        .then(|| v.to_string())
+}
+
+/// Queues `analysis.basis(k)` (see [`crate::jobs`] for the queue, the admission and the
+/// rules that stop a job).
+pub(super) async fn start_basis(
+    State(s): St,
+    Extension(deadline): Extension<Deadline>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+    body: Body,
+) -> ApiResult<Response> {
+    check_id(&id)?;
+    let (bytes, r) = json_body(&s, &headers, body, deadline).await?;
+    let b = body::parse_basis(&bytes)?;
+    drop(r);
+    let item = get_mesh(&s, &id)?;
+    let e = entry(&item)?;
+    let (n, noun, mesh) = (e.n(), e.noun(), e.bytes());
+    let laplacian = e.laplacian(b.laplacian).map_err(ApiError::unprocessable)?;
+    let limits = &s.config.limits;
+    check_k(b.k, n, noun, limits.max_k)?;
+    let key = AnalysisKey {
+        id: id.clone(),
+        laplacian,
+        normalize: b.normalize,
+    };
+    let analysis = analysis_for(&s, &item, &key, deadline).await?;
+    let estimate = jobs::estimate(n, b.k, &analysis);
+    let after = jobs::held_after(n, b.k, &analysis);
+    if analysis.held_k() < b.k {
+        if after + mesh > limits.cache_bytes {
+            return Err(ApiError::unprocessable(format!(
+                "an eigenbasis of k = {} on {n} {noun} would make this input and its analysis hold about {}, more than the cache's {} (--cache-mib): ask for fewer pairs",
+                b.k,
+                mib(after + mesh),
+                mib(limits.cache_bytes)
+            )));
+        }
+        let held = crate::state::analysis_bytes(&analysis) + mesh;
+        if estimate + held > limits.memory_bytes {
+            return Err(ApiError::unprocessable(format!(
+                "an eigenbasis of k = {} on {n} {noun} needs about {} at its peak (estimate) besides the {} its input and analysis hold, more than this server's memory budget of {} (--memory-mib): ask for fewer pairs",
+                b.k,
+                mib(estimate),
+                mib(held),
+                mib(limits.memory_bytes)
+            )));
+        }
+    }
+    let submitted = s.jobs.submit(
+        &s,
+        Submit {
+            id: id.clone(),
+            key,
+            k: b.k,
+            analysis,
+            estimate,
+            client: client_id(&headers),
+        },
+    );
+    match submitted {
+        Submitted::Done(job) => Ok((StatusCode::OK, Json(job)).into_response()),
+        Submitted::QueueFull(msg) => Ok(busy(msg, 5)),
+        Submitted::Accepted(_) => {
+            jobs::pump(&s);
+            Ok((StatusCode::ACCEPTED, Json(s.jobs.status(&id))).into_response())
+        }
+    }
+}
+
+/// Cancels the eigenbasis job of a mesh (queued: removed; running: stopped).
+pub(super) async fn cancel_basis(State(s): St, Path(id): Path<String>) -> ApiResult<Json<Job>> {
+    get_mesh(&s, &id)?;
+    let job = s
+        .jobs
+        .cancel(&id)
+        .ok_or_else(|| ApiError::not_found("no eigenbasis computation for this mesh"))?;
+    jobs::pump(&s);
+    Ok(Json(job))
+}
+
+pub(super) async fn basis_status(State(s): St, Path(id): Path<String>) -> ApiResult<Json<Job>> {
+    get_mesh(&s, &id)?;
+    Ok(Json(s.jobs.status(&id)))
+}
