@@ -1,6 +1,7 @@
 //! Tests of the request type: serde forms, texts, validation.
 
 use super::*;
+use crate::fields::harmonic::Constraint;
 
 fn json(v: &str) -> Result<FieldRequest, String> {
     serde_json::from_str(v).map_err(|e| e.to_string())
