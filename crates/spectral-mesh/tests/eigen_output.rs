@@ -41,7 +41,10 @@ fn float32_archive_is_the_float64_basis_rounded_once() {
         std::fs::metadata(&p64).unwrap().len(),
         std::fs::metadata(&p32).unwrap().len(),
     );
-    assert!(s32 < s64 - (basis.vectors.len() as u64) * 3, "{s32} vs {s64}");
+    assert!(
+        s32 < s64 - (basis.vectors.len() as u64) * 3,
+        "{s32} vs {s64}"
+    );
     assert_eq!(BasisDtype::parse("f4").unwrap(), BasisDtype::Float32);
     assert!(BasisDtype::parse("float16").is_err());
     std::fs::remove_dir_all(&dir).unwrap();
