@@ -103,7 +103,9 @@ test('one error on screen at a time; a random-bytes PLY names its file once; the
   assert.equal(e.msg.split('random-e2e.ply').length - 1, 1, e.msg);
   // The k error is gone: only the latest is on screen.
   assert.equal(await page.$$eval('.ctl-error', (l) => l.length), 1);
-  // An upload that works: the shape box no longer says 3torus.
+  // An upload that works (with a valid k again: the k = 0 typed above would be refused on
+  // any mesh): the shape box no longer says 3torus, and no error is left on screen.
+  await page.evaluate(() => { document.getElementById('k').value = '20'; });
   const file = path.join(os.tmpdir(), 'pyramid-e2e.off');
   writePyramidOff(file);
   const loaded = await page.evaluate(() => window.__meshLoaded || 0);
@@ -111,7 +113,8 @@ test('one error on screen at a time; a random-bytes PLY names its file once; the
   await page.waitForFunction((l) => (window.__meshLoaded || 0) > l, loaded, { timeout: 30000 });
   fs.rmSync(file);
   assert.notEqual(await page.inputValue('#shape-spec'), '3torus');
-  assert.equal(await page.$$eval('.ctl-error', (l) => l.length), 0);
+  const left = await page.$$eval('.ctl-error', (l) => l.map((e) => `${e.dataset.for}: ${e.textContent}`));
+  assert.equal(left.length, 0, left.join(' | '));
   // Back to the built-in shape for the next tests.
   const b = await fieldCount();
   await page.evaluate(() => { document.getElementById('shape-spec').value = '3torus'; document.getElementById('shape-load').click(); });

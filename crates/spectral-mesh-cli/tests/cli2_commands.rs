@@ -448,3 +448,28 @@ fn cache_is_filled_then_used() {
     assert!(second.contains("loaded from"), "{second}");
     assert_eq!(values(&a), values(&b));
 }
+
+#[test]
+fn eigs_certify_counts_the_sphere_clusters_and_float32_is_the_float64_basis_rounded() {
+    // 1 + 3 + 5 = 9 pairs end a cluster of the sphere's spectrum: the inertia count agrees.
+    let out = ok(&["eigs", "sphere:res=2", "-k", "9", "--certify"]);
+    assert!(
+        out.contains("certified: no eigenvalue up to lambda_9 was skipped"),
+        "{out}"
+    );
+    assert!(out.contains("certificate time:"), "{out}");
+    let (dir, [b64, b32]) = temp_paths(["b64.npz", "b32.npz"]);
+    ok_with("eigs sphere:res=2 -k 9 -o {}", &[&b64]);
+    let out = ok_with("eigs sphere:res=2 -k 9 --dtype float32 -o {}", &[&b32]);
+    assert!(out.contains("basis (float32)"), "{out}");
+    let (x64, _) = spectral_mesh::spectral::store::load_npz(&b64).unwrap();
+    let (x32, m32) = spectral_mesh::spectral::store::load_npz(&b32).unwrap();
+    assert_eq!(m32.dtype.name(), "float32");
+    let round = |v: &[f64]| -> Vec<f64> { v.iter().map(|&x| f64::from(x as f32)).collect() };
+    assert_eq!(x32.values, round(&x64.values));
+    assert_eq!(x32.vectors, round(&x64.vectors));
+    let bad = dir.path().join("bad.npz");
+    let e = err_with("eigs sphere:res=2 -k 3 --dtype float16 -o {}", &[&bad]);
+    assert!(e.contains("--dtype"), "{e}");
+    assert!(!bad.exists());
+}

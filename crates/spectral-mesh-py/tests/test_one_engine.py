@@ -211,6 +211,7 @@ WHERE: dict[str, dict[str, str]] = {
     "eigenbasis": {"k": "analysis/k", **_ANALYSIS},
     "eigsh": {"seed": "analysis/seed", "method": "analysis/method"},
     "save_basis": {"kind": "analysis/kind"},
+    "geodesic_distance": {"kind": "analysis/kind"},
     "render": _FIGURE,
     "batch": {
         "k": "batch/k",

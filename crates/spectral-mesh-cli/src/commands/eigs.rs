@@ -5,10 +5,11 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
+use spectral_mesh::cancel::CancelToken;
 use spectral_mesh::experiments::paper::BasisReport;
-use spectral_mesh::spectral::eigenbasis::EigenParams;
+use spectral_mesh::spectral::eigenbasis::{EigenParams, Eigenbasis, certify_eigenbasis};
 use spectral_mesh::spectral::filters::ZERO_EIGENVALUE_EPS;
-use spectral_mesh::spectral::store::{BasisMeta, save_npz};
+use spectral_mesh::spectral::store::{BasisDtype, BasisMeta, save_npz};
 use spectral_mesh::{Analysis, AnalysisOptions};
 use spectral_mesh_render::figure::field_text;
 
@@ -38,6 +39,17 @@ pub struct Args {
     /// Relative gap below which consecutive eigenvalues count as one cluster.
     #[arg(long, default_value_t = 1e-6)]
     pub cluster_tolerance: f64,
+    /// Floating-point type of the eigenvalues and eigenvectors in the .npz (float64 or
+    /// float32): computed in double precision either way and rounded once when written.
+    #[arg(long, default_value = "float64")]
+    pub dtype: String,
+    /// Certify that no eigenvalue was skipped, multiplicities included: count the
+    /// eigenvalues below a shift just above lambda_k from the negative pivots of an
+    /// L D L^T factorization of S - sigma B (Sylvester's law of inertia) and compare; when
+    /// they disagree, search for the missing pairs and certify again (the completed basis
+    /// is the one saved). Exits with an error when the count still disagrees.
+    #[arg(long)]
+    pub certify: bool,
     /// Overwrite existing outputs.
     #[arg(long, short = 'f')]
     pub force: bool,
@@ -61,6 +73,13 @@ pub fn run(args: Args) -> Result<()> {
         && !matches!(extension(p).as_deref(), Some("png") | Some("svg"))
     {
         bail!("{}: the spectrum plot is .png or .svg", p.display());
+    }
+    let dtype = BasisDtype::parse(&args.dtype).map_err(|e| anyhow::anyhow!("--dtype: {e}"))?;
+    if dtype != BasisDtype::Float64 && args.out.is_none() {
+        bail!(
+            "--dtype {}: applies to the .npz basis; give -o",
+            dtype.name()
+        );
     }
     if !(args.cluster_tolerance.is_finite() && args.cluster_tolerance >= 0.0) {
         bail!(
@@ -101,14 +120,41 @@ pub fn run(args: Args) -> Result<()> {
         None
     };
     let solved = engine::basis(&an, args.basis.k, args.basis.cache.as_deref())?;
-    let (b, seconds) = (&solved.basis, solved.seconds);
+    let seconds = solved.seconds;
+    let params = EigenParams {
+        k: args.basis.k,
+        ..an.options().eigen.clone()
+    };
+    let mut certify_lines = Vec::new();
+    let mut certified = true;
+    let completed = if args.certify {
+        let t0 = std::time::Instant::now();
+        let (completed, report) =
+            certify_eigenbasis(an.operators(), &params, &solved.basis, &CancelToken::new())
+                .context("--certify")?;
+        certify_lines = report.lines();
+        certify_lines.push(format!(
+            "certificate time: {:.3} s",
+            t0.elapsed().as_secs_f64()
+        ));
+        certified = report.certified();
+        completed
+    } else {
+        None
+    };
+    let b: &Eigenbasis = completed.as_ref().unwrap_or(&solved.basis);
     // The solver's own orthogonality report when it computed the basis now.
     let r = BasisReport::with_orthogonality(
         b,
         an.topology(),
         dirichlet.as_deref(),
         args.cluster_tolerance,
-        solved.orthogonality,
+        // The solver's report is of the basis it returned, not of a completed one.
+        if completed.is_some() {
+            None
+        } else {
+            solved.orthogonality
+        },
     );
     let mesh = an.mesh();
     println!(
@@ -178,14 +224,17 @@ pub fn run(args: Args) -> Result<()> {
             println!("note: the last cluster reaches k; it may continue beyond the computed pairs");
         }
     }
+    for l in &certify_lines {
+        println!("{l}");
+    }
     if let Some(p) = &args.out {
-        let params = EigenParams {
-            k: args.basis.k,
-            ..an.options().eigen.clone()
-        };
-        save_npz(b, p, &BasisMeta::new(b, Some(mesh), &params))
-            .with_context(|| format!("{}: cannot save the basis", p.display()))?;
-        println!("basis -> {}", p.display());
+        save_npz(
+            b,
+            p,
+            &BasisMeta::new(b, Some(mesh), &params).with_dtype(dtype),
+        )
+        .with_context(|| format!("{}: cannot save the basis", p.display()))?;
+        println!("basis ({}) -> {}", dtype.name(), p.display());
     }
     if let Some(p) = &args.eigenvalues_txt {
         write(p, field_text(&b.values).as_bytes())?;
@@ -196,6 +245,11 @@ pub fn run(args: Args) -> Result<()> {
         spectral_mesh_render::plots::plot_spectrum(p, &b.values, &title)
             .with_context(|| format!("{}: cannot plot the spectrum", p.display()))?;
         println!("spectrum plot -> {}", p.display());
+    }
+    if !certified {
+        bail!(
+            "--certify: the eigenvalue count disagrees (see above); the outputs hold the pairs found"
+        );
     }
     Ok(())
 }
