@@ -40,6 +40,25 @@ disk = _shape_fixture("disk", "disk:res=1", "A disk (bordered).")
 pretzel = _shape_fixture("pretzel", "3torus", "The paper's 3-torus (genus 3).")
 
 
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def cli() -> str:
+    """The command line the tests compare with: ``SPECTRAL_MESH_CLI`` (scripts/test-python.sh
+    sets it), else the newest of the workspace's release and debug builds."""
+    exe = os.environ.get("SPECTRAL_MESH_CLI")
+    if exe:
+        return exe
+    found = [
+        p
+        for p in (ROOT / "target/release/spectral-mesh", ROOT / "target/debug/spectral-mesh")
+        if p.exists()
+    ]
+    if not found:
+        pytest.skip("no spectral-mesh binary: set SPECTRAL_MESH_CLI (scripts/test-python.sh does)")
+    return str(max(found, key=lambda p: p.stat().st_mtime))
+
+
 def under_ci() -> bool:
     """Whether this run is CI's (``CI`` set, and not ``false`` or ``0``)."""
     return os.environ.get("CI", "") not in ("", "false", "0")

@@ -10,7 +10,6 @@ stands in (under CI the missing folder fails).
 
 from __future__ import annotations
 
-import os
 import subprocess
 from pathlib import Path
 
@@ -18,23 +17,8 @@ import numpy as np
 import pytest
 
 import spectral_mesh as sm
-from conftest import shared_point_cloud
+from conftest import cli, shared_point_cloud
 
-ROOT = Path(__file__).resolve().parents[3]
-
-
-def cli() -> str:
-    exe = os.environ.get("SPECTRAL_MESH_CLI")
-    if exe:
-        return exe
-    found = [
-        p
-        for p in (ROOT / "target/release/spectral-mesh", ROOT / "target/debug/spectral-mesh")
-        if p.exists()
-    ]
-    if not found:
-        pytest.skip("no spectral-mesh binary: set SPECTRAL_MESH_CLI (scripts/test-python.sh does)")
-    return str(max(found, key=lambda p: p.stat().st_mtime))
 
 
 def run_cli(*args: str, cwd: Path) -> str:

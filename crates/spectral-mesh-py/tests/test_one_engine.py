@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import ast
 import inspect
-import os
 import subprocess
 from pathlib import Path
 from typing import Any
@@ -23,23 +22,9 @@ import pytest
 
 import spectral_mesh as sm
 from spectral_mesh import _native
+from conftest import cli
 
 PACKAGE = Path(sm.__file__).parent
-ROOT = Path(__file__).resolve().parents[3]
-
-
-def cli() -> str:
-    exe = os.environ.get("SPECTRAL_MESH_CLI")
-    if exe:
-        return exe
-    found = [
-        p
-        for p in (ROOT / "target/release/spectral-mesh", ROOT / "target/debug/spectral-mesh")
-        if p.exists()
-    ]
-    if not found:
-        pytest.skip("no spectral-mesh binary: set SPECTRAL_MESH_CLI (scripts/test-python.sh does)")
-    return str(max(found, key=lambda p: p.stat().st_mtime))
 
 
 @pytest.fixture(scope="module")

@@ -42,7 +42,7 @@ pub struct Args {
     /// crane: on a mesh with boundary, the average of the Neumann and Dirichlet heat
     /// solutions, exact Poisson solve (the default); potpourri3d: geometry-central's
     /// solver (Neumann heat, Poisson matrix shifted by 1e-6 I), for comparisons.
-    #[arg(long, default_value = "crane")]
+    #[arg(long, default_value_t = GeodesicParams::default().convention)]
     pub convention: Convention,
     /// Distances from each --source on its own instead of from the set, solved as blocks
     /// of right-hand sides: one row per source in .npy (sources x n) and .txt (one line

@@ -75,6 +75,12 @@ impl Convention {
     }
 }
 
+impl std::fmt::Display for Convention {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl std::str::FromStr for Convention {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
