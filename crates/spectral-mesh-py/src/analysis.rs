@@ -93,6 +93,29 @@ impl PyAnalysis {
         self.with_basis_progress(py, k, Progress::default(), f)
     }
 
+    /// [`PyAnalysis::with_basis`] with the per-pair weights of a Python weight function:
+    /// `weights` are its values at [`PyAnalysis::filter_eigenvalues`], checked by the
+    /// library ([`weights_of_pairs`], `name` says which function) and handed to `f` as one
+    /// weight per pair of the basis.
+    fn with_weights<T, F>(
+        &self,
+        py: Python<'_>,
+        k: usize,
+        weights: &PyReadonlyArray1<'_, f64>,
+        name: String,
+        f: F,
+    ) -> PyResult<T>
+    where
+        T: Send + 'static,
+        F: FnOnce(BasisView<'_>, &[f64]) -> Result<T, Failure> + Send + 'static,
+    {
+        let given = raw_weights(weights).map_err(|e| e.into_pyerr(py))?;
+        self.with_basis(py, k, move |b| {
+            let w = pair_weights(b, &given, &name)?;
+            f(b, &w)
+        })
+    }
+
     /// [`PyAnalysis::with_basis`] reporting the eigensolve to a Python callback.
     fn with_basis_progress<T, F>(
         &self,
@@ -563,11 +586,9 @@ impl PyAnalysis {
         name: String,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
         let (n, cols) = (self.inner.n(), sources.len());
-        let data = self.with_basis(py, k, move |b| {
-            let w = pair_weights(b, &given, &name)?;
-            Ok(distances_from_many_weights(b, &sources, &w)
+        let data = self.with_weights(py, k, &weights, name, move |b, w| {
+            Ok(distances_from_many_weights(b, &sources, w)
                 .map_err(|e| Failure::value(e.to_string()))?
                 .concat())
         })?;
@@ -583,10 +604,8 @@ impl PyAnalysis {
         name: String,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
-        let data = self.with_basis(py, k, move |b| {
-            let w = pair_weights(b, &given, &name)?;
-            green_row_weights(b, source, &w).map_err(|e| Failure::value(e.to_string()))
+        let data = self.with_weights(py, k, &weights, name, move |b, w| {
+            green_row_weights(b, source, w).map_err(|e| Failure::value(e.to_string()))
         })?;
         Ok(to_vector(py, data))
     }
@@ -599,10 +618,8 @@ impl PyAnalysis {
         name: String,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
-        let data = self.with_basis(py, k, move |b| {
-            let w = pair_weights(b, &given, &name)?;
-            spectral_function_weights(b, &w).map_err(|e| Failure::value(e.to_string()))
+        let data = self.with_weights(py, k, &weights, name, move |b, w| {
+            spectral_function_weights(b, w).map_err(|e| Failure::value(e.to_string()))
         })?;
         Ok(to_vector(py, data))
     }
@@ -616,10 +633,8 @@ impl PyAnalysis {
         name: String,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
-        let (n, d, data) = self.with_basis(py, k, move |b| {
-            let w = pair_weights(b, &given, &name)?;
-            let rows = spectral_embedding_weights(b, &w, usize::MAX)
+        let (n, d, data) = self.with_weights(py, k, &weights, name, move |b, w| {
+            let rows = spectral_embedding_weights(b, w, usize::MAX)
                 .map_err(|e| Failure::value(e.to_string()))?;
             let d = rows.first().map_or(0, Vec::len);
             Ok((rows.len(), d, rows.concat()))
@@ -637,10 +652,8 @@ impl PyAnalysis {
         component: usize,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
-        let data = self.with_basis(py, k, move |b| {
-            let w = pair_weights(b, &given, &name)?;
-            embedding_component(b, &w, component).map_err(|e| Failure::value(e.to_string()))
+        let data = self.with_weights(py, k, &weights, name, move |b, w| {
+            embedding_component(b, w, component).map_err(|e| Failure::value(e.to_string()))
         })?;
         Ok(to_vector(py, data))
     }
