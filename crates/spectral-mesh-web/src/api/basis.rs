@@ -12,7 +12,7 @@ use spectral_mesh::analysis::memory::creation_bytes;
 
 use super::meshes::{check_id, check_k, entry, get_mesh};
 use super::reading::{json_body, reserve};
-use crate::body::{self};
+use crate::body;
 use crate::entries::{AnalysisKey, Item};
 use crate::error::{ApiError, ApiResult, busy, internal};
 use crate::jobs::{self, Job, Submit, Submitted};

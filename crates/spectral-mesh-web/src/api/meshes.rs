@@ -19,7 +19,7 @@ use spectral_mesh::{Laplacian, Mesh};
 use super::reading::{
     SHAPE_BYTES_PER_VERTEX, UPLOAD_FACTOR, json_body, no_room, read_body, reserve,
 };
-use crate::body::{self};
+use crate::body;
 use crate::entries::{AnalysisKey, Item, Key, Loaded, MeshEntry, Reservation};
 use crate::error::{ApiError, ApiResult, internal};
 use crate::limits::{Deadline, mib};
