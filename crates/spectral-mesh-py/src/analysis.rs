@@ -32,7 +32,7 @@ use crate::arrays::{
 use crate::errors::Failure;
 use crate::pyjson;
 use crate::run::{Progress, run};
-use crate::{draw, eigen_params, figure_options, laplacian_of, with_values};
+use crate::{FigureArgs, draw, eigen_params, laplacian_of, with_values};
 
 /// The `k` weights of a Python weight function from its values at the eigenvalues of
 /// [`weighted_pairs`] (the library's checks: strictly positive and finite).
@@ -784,36 +784,18 @@ impl PyAnalysis {
     }
 
     /// Draws a field on this mesh (see the module-level `render`).
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (values, marks, labels, levels, colormap, view, size, transparent, critical_points, colorbar, path))]
+    #[pyo3(signature = (values, marks, labels, figure, path))]
     fn render(
         &self,
         py: Python<'_>,
         values: PyReadonlyArray1<'_, f64>,
         marks: Vec<usize>,
         labels: Option<Vec<usize>>,
-        levels: usize,
-        colormap: &str,
-        view: &str,
-        size: u32,
-        transparent: bool,
-        critical_points: bool,
-        colorbar: bool,
+        figure: FigureArgs,
         path: Option<PathBuf>,
     ) -> PyResult<Py<PyAny>> {
         let prepare = || -> Result<_, Failure> {
-            Ok((
-                arrays::values(&values, "values")?,
-                figure_options(
-                    levels,
-                    colormap,
-                    view,
-                    size,
-                    transparent,
-                    critical_points,
-                    colorbar,
-                )?,
-            ))
+            Ok((arrays::values(&values, "values")?, figure.options()?))
         };
         let (values, options) = prepare().map_err(|e| e.into_pyerr(py))?;
         draw(

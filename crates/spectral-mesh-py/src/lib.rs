@@ -183,10 +183,7 @@ fn laplacian<'py>(
     let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
     let (s, b, total) = run(py, move |_| {
         let mut ops = Operators::new(&mesh, lap);
-        let total: f64 = ops.mass.values().iter().sum();
-        if normalize && total > 0.0 && total.is_finite() {
-            ops.mass = ops.mass.add_scaled(1.0 / total, &ops.mass, 0.0);
-        }
+        let total = ops.normalize_mass(normalize);
         Ok((csc_parts(&ops.stiffness), csc_parts(&ops.mass), total))
     })?;
     Ok((csc_to_py(py, s)?, csc_to_py(py, b)?, total))
@@ -240,10 +237,7 @@ fn point_laplacian<'py>(
     let (s, b, total) = run(py, move |_| {
         let mut ops =
             Operators::from_points(&cloud, &params).map_err(|e| Failure::value(e.to_string()))?;
-        let total: f64 = ops.mass.values().iter().sum();
-        if normalize && total > 0.0 && total.is_finite() {
-            ops.mass = ops.mass.add_scaled(1.0 / total, &ops.mass, 0.0);
-        }
+        let total = ops.normalize_mass(normalize);
         Ok((csc_parts(&ops.stiffness), csc_parts(&ops.mass), total))
     })?;
     Ok((csc_to_py(py, s)?, csc_to_py(py, b)?, total))
@@ -435,29 +429,39 @@ fn load_basis<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Archive<'py>> {
     ))
 }
 
-/// Figure options from the Python keywords.
-pub(crate) fn figure_options(
+/// The picture options as the Python layer passes them to both `render`s: a dict of
+/// these keys, checked and converted there (`_render_args`).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub(crate) struct FigureArgs {
     levels: usize,
-    colormap: &str,
-    view: &str,
+    colormap: String,
+    view: String,
     size: u32,
     transparent: bool,
     critical_points: bool,
     colorbar: bool,
-) -> Result<FigureOptions, Failure> {
-    Ok(FigureOptions {
-        levels,
-        colormap: colormap
-            .parse::<Colormap>()
-            .map_err(|e| Failure::value(e.to_string()))?,
-        view: view
-            .parse::<View>()
-            .map_err(|e| Failure::value(format!("view: {e}")))?,
-        size,
-        transparent,
-        critical_points,
-        colorbar,
-    })
+}
+
+impl FigureArgs {
+    /// The render crate's options; an unknown colour map or view is a `ValueError`.
+    pub(crate) fn options(&self) -> Result<FigureOptions, Failure> {
+        Ok(FigureOptions {
+            levels: self.levels,
+            colormap: self
+                .colormap
+                .parse::<Colormap>()
+                .map_err(|e| Failure::value(e.to_string()))?,
+            view: self
+                .view
+                .parse::<View>()
+                .map_err(|e| Failure::value(format!("view: {e}")))?,
+            size: self.size,
+            transparent: self.transparent,
+            critical_points: self.critical_points,
+            colorbar: self.colorbar,
+        })
+    }
 }
 
 /// Draws `values` on `mesh`: writes `path` (format from its extension) and returns
@@ -522,7 +526,7 @@ pub(crate) fn draw(
 /// Draws a field on `(V, F)` (see [`draw`]).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v, f, values, marks, labels, levels, colormap, view, size, transparent, critical_points, colorbar, path))]
+#[pyo3(signature = (v, f, values, marks, labels, figure, path))]
 fn render(
     py: Python<'_>,
     v: PyReadonlyArray2<'_, f64>,
@@ -530,28 +534,14 @@ fn render(
     values: PyReadonlyArray1<'_, f64>,
     marks: Vec<usize>,
     labels: Option<Vec<usize>>,
-    levels: usize,
-    colormap: &str,
-    view: &str,
-    size: u32,
-    transparent: bool,
-    critical_points: bool,
-    colorbar: bool,
+    figure: FigureArgs,
     path: Option<PathBuf>,
 ) -> PyResult<Py<PyAny>> {
     let prepare = || -> Result<(Mesh, Vec<f64>, FigureOptions), Failure> {
         Ok((
             mesh_from(&v, &f)?,
             arrays::values(&values, "values")?,
-            figure_options(
-                levels,
-                colormap,
-                view,
-                size,
-                transparent,
-                critical_points,
-                colorbar,
-            )?,
+            figure.options()?,
         ))
     };
     let (mesh, values, options) = prepare().map_err(|e| e.into_pyerr(py))?;

@@ -22,6 +22,8 @@ pub mod operators;
 pub mod perturb;
 pub mod shapes;
 pub mod spectral;
+#[cfg(test)]
+mod test_support;
 
 pub use analysis::{Analysis, AnalysisOptions, Field, FieldRequest};
 pub use cancel::CancelToken;

@@ -82,6 +82,16 @@ pub struct Outputs {
     pub figure: FigureOptions,
 }
 
+impl Outputs {
+    /// Creates the output folder and returns the paths of `names` in it, checking before
+    /// any work that none of them, nor the experiment file, exists unless `--force`.
+    fn prepare(&self, names: &[&str]) -> Result<Vec<PathBuf>> {
+        let paths = prepare_outputs(&self.out, names, self.force)?;
+        check_experiment_file(self.save_experiment.as_ref(), self.force)?;
+        Ok(paths)
+    }
+}
+
 impl From<&Common> for Outputs {
     fn from(c: &Common) -> Self {
         Self {
@@ -290,8 +300,7 @@ pub fn run_field(input: Input, setup: &FieldSetup, o: &Outputs) -> Result<()> {
         names[2].as_str(),
         SUMMARY_FILE,
     ];
-    let paths = prepare_outputs(&o.out, &all, o.force)?;
-    check_experiment_file(o.save_experiment.as_ref(), o.force)?;
+    let paths = o.prepare(&all)?;
     let Input { shape, info } = input;
     let an = Analysis::from_input(
         shape,
@@ -431,8 +440,7 @@ pub fn run_harmonic(
     let mut names: Vec<String> = (1..=maps).flat_map(harmonic_outputs).collect();
     names.push(SUMMARY_FILE.into());
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
-    let paths = prepare_outputs(&o.out, &name_refs, o.force)?;
-    check_experiment_file(o.save_experiment.as_ref(), o.force)?;
+    let paths = o.prepare(&name_refs)?;
     let Input { shape, info } = input;
     // The analysis holds the mesh (a point cloud's triangle union), its topology and the
     // hash; the maps need no basis. On a point cloud the maps use the robust Laplacian of

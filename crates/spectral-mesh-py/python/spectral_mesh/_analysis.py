@@ -13,7 +13,7 @@ import numpy.typing as npt
 from . import _arrays, _native
 from ._arrays import FloatArray, IntArray
 from ._errors import InternalError
-from ._api import _labels, _marks, _view_text
+from ._api import _render_args
 if TYPE_CHECKING:
     from ._arrays import CsrMatrix
 
@@ -818,16 +818,6 @@ class Analysis:
         when ``values`` is the array that request returned."""
         if marks is None:
             marks = self._info.get("marks", []) if values is self._last else []
-        return self._a.render(
-            _arrays.per_vertex(values, self.n),
-            _marks(marks),
-            _labels(labels, self.n),
-            _arrays.count(levels, "levels"),
-            str(colormap),
-            _view_text(view),
-            _arrays.count(size, "size", 1),
-            bool(transparent),
-            bool(critical_points),
-            bool(colorbar),
-            None if path is None else os.fspath(path),
-        )
+        args = _render_args(values, self.n, marks, labels, levels, colormap, view, size,
+                            transparent, critical_points, colorbar, path)
+        return self._a.render(*args)

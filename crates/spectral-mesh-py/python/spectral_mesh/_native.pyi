@@ -11,7 +11,7 @@ worker thread, raises ``KeyboardInterrupt`` on Ctrl-C and never lets a Rust pani
 """
 
 from os import PathLike
-from typing import Any, Callable
+from typing import Any, Callable, TypedDict
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,6 +19,19 @@ from numpy.typing import NDArray
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 Csc = tuple[F64, I64, I64]
+# The picture options of both ``render``s, checked by the Python layer (``_render_args``).
+Figure = TypedDict(
+    "Figure",
+    {
+        "levels": int,
+        "colormap": str,
+        "view": str,
+        "size": int,
+        "transparent": bool,
+        "critical_points": bool,
+        "colorbar": bool,
+    },
+)
 
 __version__: str
 
@@ -87,13 +100,7 @@ def render(
     values: F64,
     marks: list[int],
     labels: list[int] | None,
-    levels: int,
-    colormap: str,
-    view: str,
-    size: int,
-    transparent: bool,
-    critical_points: bool,
-    colorbar: bool,
+    figure: Figure,
     path: str | PathLike[str] | None,
 ) -> NDArray[np.uint8] | None:
     """Writes ``path`` (format from its extension) and returns None, or returns the
@@ -211,13 +218,7 @@ class Analysis:
         values: F64,
         marks: list[int],
         labels: list[int] | None,
-        levels: int,
-        colormap: str,
-        view: str,
-        size: int,
-        transparent: bool,
-        critical_points: bool,
-        colorbar: bool,
+        figure: Figure,
         path: str | PathLike[str] | None,
     ) -> NDArray[np.uint8] | None: ...
     def options(self) -> dict:

@@ -272,10 +272,7 @@ impl Analysis {
         options: AnalysisOptions,
     ) -> Self {
         let mesh = mesh.into();
-        let input_mass: f64 = ops.mass.values().iter().sum();
-        if options.normalize && input_mass > 0.0 && input_mass.is_finite() {
-            ops.mass = ops.mass.add_scaled(1.0 / input_mass, &ops.mass, 0.0);
-        }
+        let input_mass = ops.normalize_mass(options.normalize);
         let ops = Arc::new(ops);
         let solver = EigenSolver::new(ops.clone(), options.eigen.clone());
         Self {

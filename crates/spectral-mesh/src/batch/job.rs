@@ -418,10 +418,7 @@ fn solve(
             let mut ops = Operators::from_points(&cloud, &params.point_cloud)?;
             rec.components = Some(connected_components(&ops.stiffness, &ops.mass)?.len());
             // The same scale normalisation as an analysis of a mesh.
-            let total: f64 = ops.mass.values().iter().sum();
-            if params.normalize && total > 0.0 && total.is_finite() {
-                ops.mass = ops.mass.add_scaled(1.0 / total, &ops.mass, 0.0);
-            }
+            ops.normalize_mass(params.normalize);
             let mut solver = EigenSolver::new(Arc::new(ops), eigen);
             let basis = solver
                 .solve(k, &mut progress, &options.cancel)

@@ -236,19 +236,15 @@ fn thumbnails_eigenvalues_only_panics_and_point_clouds() {
         thumbnail: Some(64),
         ..Default::default()
     };
+    let png = JobOptions {
+        thumbnailer: Some(&Png),
+        ..Default::default()
+    };
     // No renderer given: a failure of the run (no marker).
     let r = process_one(&input, &p, &out, &JobOptions::default());
     assert!(r.error.unwrap().contains("thumbnail"));
     assert!(!out.join("s.off.error.json").exists());
-    let r = process_one(
-        &input,
-        &p,
-        &out,
-        &JobOptions {
-            thumbnailer: Some(&Png),
-            ..Default::default()
-        },
-    );
+    let r = process_one(&input, &p, &out, &png);
     assert_eq!(r.status, Status::Ok, "{r:?}");
     assert_eq!(r.outputs, ["s.off.png", "s.off.npz"]);
     assert!(read(out.join("s.off.png")).starts_with(b"png 64 "));
@@ -256,15 +252,7 @@ fn thumbnails_eigenvalues_only_panics_and_point_clouds() {
     assert!(load_npz(&out.join("s.off.npz")).is_err());
     // A lost thumbnail is made again.
     std::fs::remove_file(out.join("s.off.png")).unwrap();
-    let r = process_one(
-        &input,
-        &p,
-        &out,
-        &JobOptions {
-            thumbnailer: Some(&Png),
-            ..Default::default()
-        },
-    );
+    let r = process_one(&input, &p, &out, &png);
     assert_eq!(r.status, Status::Ok);
     assert!(out.join("s.off.png").is_file());
     // A panic inside is a row, not a crash.
@@ -301,10 +289,7 @@ fn thumbnails_eigenvalues_only_panics_and_point_clouds() {
             ..p.clone()
         },
         &out,
-        &JobOptions {
-            thumbnailer: Some(&Png),
-            ..Default::default()
-        },
+        &png,
     );
     assert_eq!(r.status, Status::Ok, "{r:?}");
     assert_eq!(

@@ -185,15 +185,7 @@ impl Mesh {
 
     /// Axis-aligned bounding box as `(min, max)`.
     pub fn bounding_box(&self) -> ([f64; 3], [f64; 3]) {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for p in &self.positions {
-            for d in 0..3 {
-                lo[d] = lo[d].min(p[d]);
-                hi[d] = hi[d].max(p[d]);
-            }
-        }
-        (lo, hi)
+        bounding_box(&self.positions)
     }
 
     /// Length of the bounding-box diagonal.
@@ -260,6 +252,27 @@ impl Mesh {
         };
         (m, s)
     }
+}
+
+/// Axis-aligned bounding box `(min, max)` of points (infinite, inverted for none).
+pub fn bounding_box(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for d in 0..3 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    (lo, hi)
+}
+
+/// The vertices of a triangle in ascending order (the same for every orientation and
+/// rotation of it).
+pub(crate) fn sorted_triangle(t: [usize; 3]) -> [usize; 3] {
+    let mut s = t;
+    s.sort_unstable();
+    s
 }
 
 /// `a - b`.

@@ -64,7 +64,7 @@ use super::robust::{
 };
 use super::stiffness::assemble_laplacian;
 use crate::linalg::SparseMatrix;
-use crate::mesh::{PointCloud, add, cross, dot, norm, normalize, scale, sub};
+use crate::mesh::{PointCloud, add, cross, dot, norm, normalize, scale, sorted_triangle, sub};
 
 /// Default neighbourhood size, as `robust_laplacian.point_cloud_laplacian(n_neighbors=30)`.
 pub const DEFAULT_NEIGHBORS: usize = 30;
@@ -434,14 +434,7 @@ fn union_of_stars(pts: &[[f64; 3]], nbrs: &[Vec<usize>], nrm: &[[f64; 3]]) -> Ve
 /// Distinct triangles (sorted vertex triples, ascending) with the number of times they
 /// occur.
 fn count_triangles(tris: &[[usize; 3]]) -> Vec<([usize; 3], usize)> {
-    let mut sorted: Vec<[usize; 3]> = tris
-        .iter()
-        .map(|t| {
-            let mut s = *t;
-            s.sort_unstable();
-            s
-        })
-        .collect();
+    let mut sorted: Vec<[usize; 3]> = tris.iter().map(|t| sorted_triangle(*t)).collect();
     sorted.par_sort_unstable();
     let mut out = Vec::with_capacity(sorted.len() / 3 + 1);
     let mut k = 0;
@@ -622,14 +615,7 @@ fn patched_union(
             }
         }
     }
-    let mut set: Vec<[usize; 3]> = chosen
-        .iter()
-        .map(|t| {
-            let mut s = *t;
-            s.sort_unstable();
-            s
-        })
-        .collect();
+    let mut set: Vec<[usize; 3]> = chosen.iter().map(|t| sorted_triangle(*t)).collect();
     set.sort_unstable();
     let mut out: Vec<[usize; 3]> = Vec::with_capacity(3 * chosen.len());
     for t in &chosen {
