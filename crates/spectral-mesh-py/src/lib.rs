@@ -636,6 +636,7 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
             "adf": bp.adf.as_ref().map(ToString::to_string),
             "scaled": bp.scaled,
             "thumbnail": bp.thumbnail,
+            "geodesic": bp.geodesic,
         },
         "zero_eigenvalue_eps": spectral_mesh::spectral::filters::ZERO_EIGENVALUE_EPS,
         "shape": spectral_mesh::shapes::DEFAULT_SHAPE,
