@@ -390,6 +390,7 @@ impl PyAnalysis {
         let an = self.inner.clone();
         let (values, labels, info) = run(py, move |token| {
             let mut field = an.field_with(&req, &mut |_| {}, token)?;
+            let unreachable = field.unreachable_message();
             let values = std::mem::take(&mut field.values);
             let labels = field.labels.take();
             // Per-vertex payloads stay out of the info.
@@ -404,8 +405,11 @@ impl PyAnalysis {
                 }
                 _ => {}
             }
-            let info =
+            let mut info =
                 serde_json::to_value(&field).map_err(|e| Failure::Internal(e.to_string()))?;
+            if let (Some(m), Some(o)) = (unreachable, info.as_object_mut()) {
+                o.insert("unreachable_message".into(), m.into());
+            }
             Ok((values, labels, info))
         })?;
         let labels = labels.map(|l| to_vector(py, l.into_iter().map(|x| x as i64).collect()));

@@ -346,6 +346,9 @@ pub fn run_field(input: Input, setup: &FieldSetup, o: &Outputs) -> Result<()> {
         describe(&run.field.request),
         o.out.display()
     );
+    if let Some(msg) = &run.summary.unreachable {
+        eprintln!("warning: {msg}");
+    }
     if let Some(file) = &o.save_experiment {
         let mut e = experiment_file(setup.experiment, &info, &an, o, file);
         let req = run.field.request.clone();
@@ -387,6 +390,17 @@ fn describe(r: &FieldRequest) -> String {
         FieldRequest::Distance {
             source, distance, ..
         } => format!("{distance} from vertex {}", source.unwrap_or(0)),
+        FieldRequest::Geodesic {
+            source, sources, ..
+        } => {
+            let mut all: Vec<String> = source
+                .iter()
+                .chain(sources)
+                .map(|v| v.to_string())
+                .collect();
+            all.dedup();
+            format!("geodesic distance from vertex {}", all.join(", "))
+        }
         other => other.kind().to_string(),
     }
 }

@@ -4,6 +4,7 @@ with ``k``, answering every field of the paper."""
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Literal, Sequence, overload
 
@@ -458,10 +459,13 @@ class Analysis:
         """Any field by its request kind and parameters, exactly as in experiment files
         and the web app (``kind`` is one of ``harmonic``, ``heat``, ``diffusion``,
         ``distance``, ``spectral-function``, ``hks``, ``wks``, ``adf``, ``segmentation``,
-        ``embedding``, ``eigenfunction``, ``green``; unknown parameters are refused by
-        name). Returns the ``(n,)`` values, or ``(values, info)`` with
-        ``return_info=True`` (``info``: see :attr:`last_info`). A segmentation returns its
-        int64 labels."""
+        ``embedding``, ``eigenfunction``, ``green``, ``geodesic``; unknown parameters are
+        refused by name). ``geodesic`` (``source``, ``sources``, ``time_factor``,
+        ``convention``) is the heat method's distance in the mesh's units, from the
+        solver the analysis keeps; vertices its sources cannot reach are ``inf``, with a
+        ``RuntimeWarning`` and ``info["unreachable"]``. Returns the ``(n,)`` values, or
+        ``(values, info)`` with ``return_info=True`` (``info``: see :attr:`last_info`). A
+        segmentation returns its int64 labels."""
         values, labels = self._request(kind, params.pop("_values", None), params)
         out = labels if labels is not None else values
         return (out, self._info) if return_info else out
@@ -479,6 +483,9 @@ class Analysis:
         info.pop("labels", None)
         self._info = info
         self._last = labels if labels is not None else vals
+        if info.get("unreachable_message"):
+            # A geodesic distance's unreachable components: inf, said aloud.
+            warnings.warn(info["unreachable_message"], RuntimeWarning, stacklevel=3)
         return vals, labels
 
     def _values(self, kind: str, values: FloatArray | None = None, **params: Any) -> FloatArray:

@@ -62,12 +62,14 @@ pub fn creation_bytes(n: usize, laplacian: Laplacian, point_cloud: bool) -> usiz
 
 /// Peak bytes of a field request on `n` vertices beyond what the analysis holds: the
 /// values, the reply, critical points and level sets (400 per vertex), plus a harmonic
-/// map's factorization (when not kept from an earlier request) or the wFEM distance's
-/// `B X` (`n x k`, computed once).
+/// map's factorization (when not kept from an earlier request), a geodesic distance's
+/// heat-method factors, or the wFEM distance's `B X` (`n x k`, computed once).
 pub fn field_bytes(n: usize, request: &FieldRequest) -> usize {
     let base = 400 * n;
     match request {
         FieldRequest::Harmonic { .. } => base + predicted_factor_len(n) * 13,
+        // The heat method factors up to three matrices (heat, Dirichlet heat, Poisson).
+        FieldRequest::Geodesic { .. } => base + 3 * predicted_factor_len(n) * 13,
         FieldRequest::Distance {
             distance: DistanceSpec::WfemDiffusion { .. },
             k,

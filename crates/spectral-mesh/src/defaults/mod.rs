@@ -115,6 +115,7 @@ pub fn to_json() -> Value {
             "adf": bp.adf.as_ref().map(ToString::to_string),
             "scaled": bp.scaled,
             "thumbnail": bp.thumbnail,
+            "geodesic": bp.geodesic,
         },
         "pictures": {
             "levels": LEVELS,

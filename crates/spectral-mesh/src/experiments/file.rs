@@ -720,6 +720,52 @@ mod tests {
     }
 
     #[test]
+    fn a_geodesic_field_file_parses_round_trips_and_names_its_errors() {
+        let base = "experiment = \"field\"\nmesh = \"3torus\"\n[field]\nkind = \"geodesic\"\n";
+        let f = ExperimentFile::parse(
+            &format!("{base}source = 3\nsources = [7, 9]\ntime_factor = 2.0\nconvention = \"potpourri3d\"\n"),
+            "g.toml",
+        )
+        .unwrap();
+        let req = FieldRequest::Geodesic {
+            source: Some(3),
+            sources: vec![7, 9],
+            time_factor: 2.0,
+            convention: crate::geodesic::Convention::Potpourri3d,
+        };
+        assert_eq!(f.request(), Some(req.clone()));
+        let back = ExperimentFile::parse(
+            &ExperimentFile::for_field("3torus", req.clone())
+                .to_toml()
+                .unwrap(),
+            "x",
+        )
+        .unwrap();
+        assert_eq!(back.request(), Some(req));
+        // Defaults; a basis_k has no meaning without eigenpairs, and is not asked for.
+        let d = ExperimentFile::parse(base, "g.toml").unwrap();
+        assert_eq!(
+            d.request(),
+            Some(FieldRequest::Geodesic {
+                source: None,
+                sources: vec![],
+                time_factor: crate::analysis::request::DEFAULT_GEODESIC_TIME_FACTOR,
+                convention: Default::default(),
+            })
+        );
+        for (extra, says) in [
+            ("time_factor = 0.0\n", "time_factor"),
+            ("k = 30\n", "unknown field"),
+            ("convention = \"exact\"\n", "exact"),
+        ] {
+            let e = ExperimentFile::parse(&format!("{base}{extra}"), "g.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("g.toml") && e.contains(says), "{extra:?}: {e}");
+        }
+    }
+
+    #[test]
     fn point_cloud_parameters_round_trip_and_are_checked() {
         let params = PointCloudParams {
             neighbors: 8,
