@@ -23,15 +23,20 @@ computes the operators of every mesh (OFF) and prints one line per mesh and the 
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 
-import numpy as np
-import potpourri3d as pp3d
-import robust_laplacian
-import scipy.sparse as sp
-import scipy.sparse.linalg as sla
-from scipy.spatial import cKDTree
+# This folder holds a script named robust_laplacian.py: import the package, not it.
+_here = os.path.dirname(os.path.abspath(__file__))
+sys.path = [p for p in sys.path if os.path.abspath(p or ".") != _here]
+
+import numpy as np  # noqa: E402
+import potpourri3d as pp3d  # noqa: E402
+import robust_laplacian  # noqa: E402
+import scipy.sparse as sp  # noqa: E402
+import scipy.sparse.linalg as sla  # noqa: E402
+from scipy.spatial import cKDTree  # noqa: E402
 
 EPS = 1e-8
 EPS_REG = 1e-5

@@ -17,7 +17,8 @@ import spectral_mesh as sm
 from spectral_mesh import _native, learning
 from conftest import clusters, subspace_gap
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "conformance"))
+# Appended, not prepended: conformance/ holds a script named robust_laplacian.py.
+sys.path.append(str(Path(__file__).resolve().parents[3] / "conformance"))
 import diffusionnet_scipy as dn  # noqa: E402
 
 
@@ -178,25 +179,32 @@ def test_conformance_with_diffusionnet_on_a_mesh(torus):
     ours = learning.get_operators(V, F, k_eig=k)
     ref = dn.operators(V, F, k)
     frames, mass, L, evals, evecs, gx, gy = ours
-    # Operators: pp3d's cotan Laplacian and vertex areas (+1e-8 mean), to rounding.
-    assert abs(L - ref[2]).max() <= 1e-12 * abs(ref[2]).max()
+    # Operators: pp3d's cotan Laplacian (whose cotangents divide by |cross| + 1e-10: about
+    # 2e-7 relative on this mesh) and vertex areas (+1e-8 mean, to rounding).
+    assert abs(L - ref[2]).max() <= 1e-6 * abs(ref[2]).max()
     np.testing.assert_allclose(mass, ref[1], rtol=1e-13)
     # Frames and gradients: DiffusionNet divides by norm + 1e-6 when it normalizes; that
     # is the only difference on this mesh.
     assert np.abs(frames - ref[0]).max() < 1e-4
     assert abs(gx - ref[5]).max() < 1e-3 * abs(ref[5]).max()
     assert abs(gy - ref[6]).max() < 1e-3 * abs(ref[6]).max()
-    # Eigenpairs: DiffusionNet solves with L + 1e-8 I; eigenvalues agree to that shift,
-    # eigenvectors span the same spaces.
-    np.testing.assert_allclose(evals, ref[3], rtol=1e-5, atol=1e-6)
+    # Eigenpairs: DiffusionNet solves with L + 1e-8 I, which raises every eigenvalue by
+    # about 1e-8 / mass (its zero one is 4e-6 here); eigenvectors span the same spaces.
+    shift = 2e-8 / mass.min()
+    assert 0 < ref[3][0] < shift
+    np.testing.assert_allclose(evals, ref[3], rtol=1e-6, atol=shift)
     M = sp.diags(mass)
     for c in clusters(evals):
         if c.stop < k:
             assert subspace_gap(evecs[:, c], ref[4][:, c], M) < 1e-4
 
 
-def test_conformance_with_diffusionnet_on_a_point_cloud(sphere):
-    V, _ = sphere
+def test_conformance_with_diffusionnet_on_a_point_cloud():
+    # Random points on the unit sphere: no ties among the 30 nearest neighbours (an
+    # icosphere's vertices have many, which either side may break its own way).
+    rng = np.random.default_rng(3)
+    V = rng.normal(size=(1500, 3))
+    V /= np.linalg.norm(V, axis=1)[:, None]
     ours = learning.get_operators(V, None, k_eig=10, grad_regularization=1e-5)
     ref = dn.operators(V, None, 10)
     frames = ours[0]
@@ -237,10 +245,12 @@ def test_geomfum_registry_finds_the_library_s_laplacian_and_basis(torus):
     )
     w, X = sm.eigenbasis(V, F, 20, "voronoi-cot")
     assert np.array_equal(gs.to_numpy(vals), w) and np.array_equal(gs.to_numpy(vecs), X)
-    # geomfum's own route (its cotangent Laplacian, SciPy's eigsh) gives the same spectrum.
+    # geomfum's own default route (robust_laplacian's mesh Laplacian, SciPy's eigsh)
+    # gives the spectrum of the library's robust Laplacian.
     ref = TriangleMesh(V, F)
     ref_vals, _ = ref.laplacian.find_spectrum(spectrum_size=20, recompute=True)
-    np.testing.assert_allclose(np.sort(gs.to_numpy(ref_vals)), w, rtol=1e-6, atol=1e-8)
+    w_robust, _ = sm.eigenbasis(V, F, 20, "robust")
+    np.testing.assert_allclose(np.sort(gs.to_numpy(ref_vals)), w_robust, rtol=1e-6, atol=1e-8)
     # Point clouds.
     cf = LaplacianFinder.from_registry(mesh=False, which="spectral_mesh")
     Sc, Bc = cf(PointCloud(V))
