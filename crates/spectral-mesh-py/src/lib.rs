@@ -28,6 +28,7 @@ mod arrays;
 mod batch;
 mod errors;
 mod geodesic;
+mod learning;
 mod pyjson;
 mod run;
 
@@ -636,6 +637,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(batch::batch_summary, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     m.add_function(wrap_pyfunction!(_work_for_tests, m)?)?;
+    m.add_function(wrap_pyfunction!(learning::learning_operators, m)?)?;
+    m.add_function(wrap_pyfunction!(learning::learning_defaults, m)?)?;
     m.add_class::<analysis::PyAnalysis>()?;
     m.add_class::<geodesic::PyGeodesicSolver>()?;
     Ok(())

@@ -16,6 +16,7 @@ pub mod experiments;
 pub mod fields;
 pub mod geodesic;
 pub mod io;
+pub mod learning;
 pub mod linalg;
 pub mod mesh;
 pub mod operators;

@@ -111,6 +111,25 @@ def defaults() -> dict[str, Any]:
     ``figure``, ``point_cloud``, ``batch`` (``spectral_mesh.batch``'s keywords),
     ``zero_eigenvalue_eps``, ``shape``, ``laplacians``, ``colormaps``."""
 
+def learning_operators(
+    v: F64,
+    f: I64 | None,
+    k_eig: int,
+    cache_dir: str | None,
+    dtype: str,
+    normals: F64 | None,
+    laplacian: str,
+    grad_regularization: float,
+    n_neighbors: int,
+    tol: float,
+) -> tuple[tuple[Any, Any, Csc, Any, Any, Csc, Csc], bool, str | None]:
+    """``((frames (n, 3, 3), mass, L, evals, evecs (n, k) Fortran, gradX, gradY),
+    from_cache, cache_file)``; a point cloud when ``f`` is None; float arrays in ``dtype``
+    (``"float64"`` or ``"float32"``, rounded once), sparse ones as CSC arrays."""
+
+def learning_defaults() -> dict:
+    """The library's defaults of the learning operators."""
+
 def num_threads() -> int: ...
 def _panic_for_tests(message: str) -> None: ...
 def _work_for_tests(seconds: float, checks: bool) -> float: ...

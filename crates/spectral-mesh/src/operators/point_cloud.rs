@@ -248,7 +248,7 @@ pub fn pca_normal(pts: impl Iterator<Item = [f64; 3]> + Clone) -> [f64; 3] {
 }
 
 /// Eigenvector of the smallest eigenvalue of a symmetric 3x3 matrix (cyclic Jacobi).
-fn smallest_eigenvector(mut a: [[f64; 3]; 3]) -> [f64; 3] {
+pub(crate) fn smallest_eigenvector(mut a: [[f64; 3]; 3]) -> [f64; 3] {
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     let scale_ = a[0][0].abs() + a[1][1].abs() + a[2][2].abs();
     if !scale_.is_finite() || scale_ <= 0.0 {

@@ -202,7 +202,7 @@ fn write_npy_f64(
     write_npy(out, data, shape, fortran, BasisDtype::Float64)
 }
 
-fn npy_i64(data: &[i64]) -> std::io::Result<Vec<u8>> {
+pub(crate) fn npy_i64(data: &[i64]) -> std::io::Result<Vec<u8>> {
     let mut buf = Vec::new();
     {
         let mut w = npyz::WriteOptions::new()
@@ -216,7 +216,7 @@ fn npy_i64(data: &[i64]) -> std::io::Result<Vec<u8>> {
     Ok(buf)
 }
 
-fn npy_u8(data: &[u8]) -> std::io::Result<Vec<u8>> {
+pub(crate) fn npy_u8(data: &[u8]) -> std::io::Result<Vec<u8>> {
     let mut buf = Vec::new();
     {
         let mut w = npyz::WriteOptions::new()
@@ -510,7 +510,7 @@ pub fn load_npz_from_reader<R: Read + std::io::Seek>(
 /// than the file holds (`npyz` multiplies the shape unchecked and reserves that many
 /// elements): the shape's product times the item size must fit in the bytes after the
 /// header.
-fn check_npy_size(bytes: &[u8]) -> Result<(), String> {
+pub(crate) fn check_npy_size(bytes: &[u8]) -> Result<(), String> {
     let bad = |m: &str| Err(format!("not a valid .npy array ({m})"));
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return bad("no NUMPY magic");
