@@ -35,7 +35,7 @@ from __future__ import annotations
 from . import _native
 from ._analysis import Analysis, CriticalPoints, LevelSet
 from ._batch import batch
-from ._geodesic import GeodesicSolver, geodesic_distance
+from ._geodesic import GeodesicSolver, geodesic_distance, point_cloud_geodesic_distance
 from ._api import (
     eigenbasis,
     eigsh,
@@ -81,6 +81,7 @@ __all__ = [
     "laplacian",
     "load_basis",
     "num_threads",
+    "point_cloud_geodesic_distance",
     "point_cloud_laplacian",
     "read_mesh",
     "read_points",

@@ -263,6 +263,16 @@ class GeodesicSolver:
     def __init__(
         self, v: F64, f: I64, kind: str, time_factor: float | None = None, convention: str | None = None
     ) -> None: ...
+    @staticmethod
+    def from_points(
+        p: F64,
+        normals: F64 | None = None,
+        neighbors: int | None = None,
+        mollify_factor: float | None = None,
+        gradient_neighbors: int | None = None,
+        time_factor: float | None = None,
+        convention: str | None = None,
+    ) -> GeodesicSolver: ...
     def distance(self, vertices: list[int], points: list[tuple[int, float, float, float]]) -> F64: ...
     def distances(self, vertices: list[int]) -> F64: ...
     def distance_matrix(self, samples: list[int], symmetric: bool) -> F64: ...

@@ -193,7 +193,8 @@ fn write_npy(
     buffered.flush()
 }
 
-fn write_npy_f64(
+/// Streams [`npy_f64`]'s bytes to `out` (no copy of the data in memory).
+pub fn write_npy_f64(
     out: &mut impl Write,
     data: &[f64],
     shape: &[u64],
