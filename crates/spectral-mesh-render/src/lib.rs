@@ -14,6 +14,7 @@
 
 pub mod colormap;
 pub mod figure;
+pub mod pair;
 pub mod plots;
 pub mod raster;
 mod text;
