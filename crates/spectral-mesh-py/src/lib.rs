@@ -26,6 +26,7 @@ use spectral_mesh_render::{Colormap, Figure, FigureOptions, View};
 mod analysis;
 mod arrays;
 mod batch;
+mod correspondence;
 mod errors;
 mod geodesic;
 mod learning;
@@ -629,6 +630,13 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(defaults, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(
+        correspondence::correspondence_defaults,
+        m
+    )?)?;
+    m.add_function(wrap_pyfunction!(correspondence::functional_map, m)?)?;
+    m.add_function(wrap_pyfunction!(correspondence::zoomout_refine, m)?)?;
+    m.add_function(wrap_pyfunction!(correspondence::point_map, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_params, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_inputs, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_prepare, m)?)?;

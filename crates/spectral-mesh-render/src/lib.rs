@@ -15,6 +15,7 @@
 pub mod colormap;
 pub mod defaults;
 pub mod figure;
+pub mod pair;
 pub mod plots;
 pub mod raster;
 mod text;

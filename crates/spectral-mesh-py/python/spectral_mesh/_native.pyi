@@ -283,3 +283,33 @@ class GeodesicSolver:
     def h(self) -> float: ...
     @property
     def n(self) -> int: ...
+
+def correspondence_defaults() -> str: ...
+def functional_map(
+    v1: F64,
+    f1: I64,
+    evals1: F64,
+    evecs1_t: F64,
+    v2: F64,
+    f2: I64,
+    evals2: F64,
+    evecs2_t: F64,
+    kind: str,
+    params: str,
+    landmarks: list[tuple[int, int]],
+) -> tuple[F64, float]: ...
+def zoomout_refine(
+    v1: F64,
+    f1: I64,
+    evecs1_t: F64,
+    v2: F64,
+    f2: I64,
+    evecs2_t: F64,
+    kind: str,
+    c: F64,
+    k_final: int,
+    step: int,
+) -> tuple[F64, NDArray[np.uintp]]: ...
+def point_map(
+    c: F64, evecs1_t: F64, evecs2_t: F64, adjoint: bool, to_second: bool
+) -> NDArray[np.uintp]: ...
