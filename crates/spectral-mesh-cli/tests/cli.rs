@@ -87,7 +87,10 @@ fn render_refuses_bad_fields_with_file_and_line() {
     );
     assert!(e.contains("tetrahedron-does-not-exist.off"), "{e}");
     let e = err_with("render sphere:res=1 --field {} -o {}", &[&field, &out]);
-    assert!(e.contains("f.txt:3") && e.contains("not finite"), "{e}");
+    assert!(
+        e.contains("f.txt:3") && e.contains("not a finite number"),
+        "{e}"
+    );
     std::fs::write(&field, "1\n2\n").unwrap();
     let e = err_with("render sphere:res=1 --field {} -o {}", &[&field, &out]);
     assert!(e.contains("2 values") && e.contains("42 vertices"), "{e}");

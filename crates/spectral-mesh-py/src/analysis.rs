@@ -258,11 +258,7 @@ impl PyAnalysis {
                     (mesh, None)
                 }
             };
-            let laplacian = match (kind, cloud.is_some()) {
-                (Some(l), _) => l,
-                (None, true) => Laplacian::Robust,
-                (None, false) => AnalysisOptions::default().laplacian,
-            };
+            let laplacian = spectral_mesh::defaults::laplacian_for(kind, cloud.is_some())?;
             let options = AnalysisOptions {
                 laplacian,
                 normalize,

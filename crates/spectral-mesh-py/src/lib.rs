@@ -16,9 +16,8 @@ use numpy::{PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use serde_json::{Value, json};
-use spectral_mesh::analysis::request::KINDS;
 use spectral_mesh::analysis::{AnalysisOptions, Signal, SignatureSpec};
-use spectral_mesh::operators::{Laplacian, Operators, PointCloudParams};
+use spectral_mesh::operators::{Laplacian, Operators};
 use spectral_mesh::spectral::eigenbasis::{EigenMethod, EigenParams, EigenSolver};
 use spectral_mesh::spectral::store::{BasisMeta, load_npz, save_npz};
 use spectral_mesh::{Analysis, Eigenbasis, FieldRequest, Mesh, SparseMatrix};
@@ -568,82 +567,13 @@ fn render(
     )
 }
 
-/// The library's defaults as a dict: every request kind's keys (from [`FieldRequest`]'s
-/// serde form), the analysis and eigensolver options and the figure options.
+/// Every default as a dict: the library's ([`spectral_mesh::defaults::to_json`]: every
+/// request kind's keys, the analysis, eigensolver, point-cloud, batch and picture
+/// defaults, the server limits) with the render crate's figure options
+/// ([`spectral_mesh_render::defaults::to_json`]).
 #[pyfunction]
 fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
-    let mut kinds = serde_json::Map::new();
-    for kind in KINDS {
-        let mut j = json!({ "kind": kind });
-        match kind {
-            "diffusion" => j["signal"] = json!({ "impulse": 0 }),
-            "wks" => j["energy"] = json!(0.0),
-            _ => {}
-        }
-        let internal = |e: serde_json::Error| {
-            Failure::Internal(format!("defaults of {kind}: {e}")).into_pyerr(py)
-        };
-        let req: FieldRequest = serde_json::from_value(j).map_err(internal)?;
-        let mut v = serde_json::to_value(&req).map_err(internal)?;
-        if let Some(o) = v.as_object_mut() {
-            o.remove("kind");
-            o.remove("signal");
-            o.remove("energy");
-        }
-        kinds.insert(kind.to_string(), v);
-    }
-    let a = AnalysisOptions::default();
-    let fig = FigureOptions::default();
-    let pc = PointCloudParams::default();
-    let bp = spectral_mesh::batch::BatchParams::default();
-    let all = json!({
-        "requests": kinds,
-        "analysis": {
-            "kind": a.laplacian.name(),
-            "normalize": a.normalize,
-            "k": spectral_mesh::analysis::request::DEFAULT_K,
-            "tol": a.eigen.tolerance,
-            "seed": a.eigen.seed,
-            "method": "auto",
-        },
-        "figure": {
-            "levels": fig.levels,
-            "colormap": fig.colormap.name(),
-            "view": spectral_mesh_render::figure::view_name(fig.view),
-            "size": fig.size,
-            "transparent": fig.transparent,
-            "critical_points": fig.critical_points,
-            "colorbar": fig.colorbar,
-        },
-        "point_cloud": {
-            "n_neighbors": pc.neighbors,
-            "mollify_factor": pc.mollify_factor,
-            "delaunay_tolerance": pc.delaunay_tolerance,
-            "normals": pc.normals,
-            "union": pc.union,
-        },
-        // `spectral_mesh.batch`'s keywords (Python names) from the library's batch
-        // parameters.
-        "batch": {
-            "k": bp.k,
-            "laplacian": bp.laplacian.name(),
-            "tol": bp.tolerance,
-            "normalize": bp.normalize,
-            "eigenvectors": bp.basis,
-            "hks": bp.hks.as_ref().map(ToString::to_string),
-            "wks": bp.wks.as_ref().map(ToString::to_string),
-            "wks_sigma": bp.wks_sigma,
-            "adf": bp.adf.as_ref().map(ToString::to_string),
-            "scaled": bp.scaled,
-            "thumbnail": bp.thumbnail,
-            "geodesic": bp.geodesic,
-        },
-        "zero_eigenvalue_eps": spectral_mesh::spectral::filters::ZERO_EIGENVALUE_EPS,
-        "shape": spectral_mesh::shapes::DEFAULT_SHAPE,
-        "laplacians": Laplacian::ALL.iter().map(|l| l.name()).collect::<Vec<_>>(),
-        "colormaps": Colormap::ALL.iter().map(|c| c.name()).collect::<Vec<_>>(),
-    });
-    pyjson::to_py(py, &all)
+    pyjson::to_py(py, &spectral_mesh_render::defaults::to_json())
 }
 
 /// Threads the computations use (the library's rayon pool).

@@ -46,6 +46,7 @@ const app = {
   spacing: 0,            // a cloud's mean point spacing (the library's), sizes the splats
   splatFactor: 0,        // splat radius / spacing (the server's pictures' factor)
   meshLaplacian: null,   // the Laplacian chosen for meshes, restored after a cloud
+  defaults: null,        // GET /api/defaults: the library's defaults (the page states none)
 };
 window.__app = app;
 window.__lastField = null;
@@ -407,7 +408,7 @@ function filterText(p) {
 // The body of a field request: the library's FieldRequest (serde form, tagged by kind)
 // plus the analysis keys and the number of level sets the server draws (none for the
 // page, which draws them in its shader; the downloads ask for them).
-function fieldRequest(p, levels = 0) {
+function fieldRequest(p, levels) {
   const withSource = (key, r) => (p.source === null ? r : { ...r, [key]: p.source });
   let r;
   switch (p.experiment) {
@@ -421,7 +422,7 @@ function fieldRequest(p, levels = 0) {
     case 'geodesic': r = withSource('source', { kind: 'geodesic' }); break;
     default: r = { kind: 'eigenfunction', index: p.component, k: p.k };
   }
-  return { ...r, laplacian: p.laplacian, normalize: true, levels };
+  return { ...r, laplacian: p.laplacian, normalize: app.defaults.analysis.normalize, levels };
 }
 
 // Why a harmonic request cannot be sent yet (null when it can).
@@ -680,8 +681,9 @@ async function ensureBasis(p) {
   const key = `${p.laplacian}:${p.k}`;
   if (app.basisKey === key) return true;
   const id = app.meshId;
-  const want = { laplacian: p.laplacian, normalize: true, k: p.k };
-  const mine = (st) => st.laplacian === p.laplacian && st.normalize === true && st.held_k >= p.k;
+  const normalize = app.defaults.analysis.normalize;
+  const want = { laplacian: p.laplacian, normalize, k: p.k };
+  const mine = (st) => st.laplacian === p.laplacian && st.normalize === normalize && st.held_k >= p.k;
   const moved = () => app.pending || app.meshId !== id;
   let st = await api('POST', `/api/mesh/${id}/basis`, want);
   // A computation for other parameters (another tab) may cancel this one: ask again, a
@@ -1064,7 +1066,24 @@ $('shape-select').addEventListener('change', () => {
 });
 $('file-input').addEventListener('change', (e) => { const f = e.target.files[0]; if (f) loadFile(f); });
 
+// The controls' starting values, from the library's defaults (GET /api/defaults).
+function applyDefaults(d) {
+  app.defaults = d;
+  const req = d.requests;
+  $('shape-spec').value = d.shape;
+  $('laplacian').value = d.default_laplacian.mesh;
+  $('k').value = String(d.analysis.k);
+  $('k').max = String(d.limits.max_k);
+  tTyped = req.heat.t; // exact; the slider shows it on its log scale
+  $('t').value = String(Math.log10(req.heat.t));
+  $('component').value = String(req.embedding.component);
+  $('persistence').value = String(req.segmentation.persistence);
+  $('levels').value = String(d.figure.levels);
+  $('levels-val').textContent = $('levels').value;
+}
+
 async function init() {
+  try { applyDefaults(await api('GET', '/api/defaults')); } catch (e) { showError('shape-spec', e.message); return; }
   buildLegend();
   resize();
   refreshParamVisibility();

@@ -11,6 +11,7 @@
 pub mod analysis;
 pub mod batch;
 pub mod cancel;
+pub mod defaults;
 pub mod experiments;
 pub mod fields;
 pub mod geodesic;

@@ -54,7 +54,7 @@ pub struct Args {
     pub k: usize,
     /// Discretization of meshes: cot, voronoi-cot, fem, mixed-voronoi, uniform (point
     /// clouds always use the robust point-cloud Laplacian).
-    #[arg(long, default_value_t = Laplacian::Fem)]
+    #[arg(long, default_value_t = spectral_mesh::batch::BatchParams::default().laplacian)]
     pub laplacian: Laplacian,
     /// Target relative residual of every eigenpair.
     #[arg(long, default_value_t = EigenParams::default().tolerance)]

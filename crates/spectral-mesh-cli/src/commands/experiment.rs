@@ -10,6 +10,7 @@ use spectral_mesh::analysis::request::{DEFAULT_HEAT_T, DEFAULT_K};
 use spectral_mesh::analysis::{Analysis, AnalysisOptions, DistanceSpec, FieldRequest, Kernel};
 use spectral_mesh::experiments::file::parent_dir;
 use spectral_mesh::experiments::file::{ExperimentFile, HarmonicConstraints, relative_path};
+use spectral_mesh::experiments::harmonic::HarmonicExperimentParams;
 use spectral_mesh::experiments::paper::{
     self, SUMMARY_FILE, field_outputs, harmonic_outputs, output_stem,
 };
@@ -100,7 +101,7 @@ pub struct HarmonicArgs {
     /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// Numbers of default constraints (min/max x, then y, then z), one map each.
-    #[arg(long, value_delimiter = ',', default_values_t = vec![2usize, 4, 6])]
+    #[arg(long, value_delimiter = ',', default_values_t = HarmonicExperimentParams::default().constraint_counts)]
     pub constraints: Vec<usize>,
     /// An explicit constraint VERTEX=VALUE (repeatable); replaces the defaults.
     #[arg(long = "constraint", value_parser = parse_constraint_arg)]
@@ -109,7 +110,7 @@ pub struct HarmonicArgs {
     #[arg(long)]
     pub constraints_file: Option<PathBuf>,
     /// 1 = harmonic (S f = 0), 2 = bi-harmonic (S B^-1 S f = 0).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = HarmonicExperimentParams::default().order)]
     pub order: u32,
     /// Discretization (matters for the bi-harmonic map's mass).
     #[arg(long, help = LAPLACIAN_HELP, long_help = LAPLACIAN_LONG_HELP)]

@@ -70,7 +70,7 @@ pub struct Args {
     #[arg(long)]
     pub scaled: bool,
     /// The filter of the spectral function (default biharmonic).
-    #[arg(long, default_value_t = Filter::Biharmonic.to_string(), long_help = FILTER_HELP)]
+    #[arg(long, default_value_t = Filter::default().to_string(), long_help = FILTER_HELP)]
     pub filter: String,
     /// Which column (time or energy, 0-based) is drawn in .png, .wrl and .ply outputs;
     /// .txt outputs hold every column.

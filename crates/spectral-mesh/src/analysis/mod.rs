@@ -31,6 +31,7 @@
 
 mod eval;
 pub mod hint;
+pub mod memory;
 pub mod points;
 pub mod request;
 
@@ -80,7 +81,7 @@ impl Default for AnalysisOptions {
     fn default() -> Self {
         Self {
             laplacian: Laplacian::Fem,
-            normalize: true,
+            normalize: crate::defaults::values::NORMALIZE,
             eigen: EigenParams::default(),
         }
     }

@@ -141,7 +141,7 @@ impl Default for BatchParams {
             k: DEFAULT_K,
             laplacian: Laplacian::Fem,
             tolerance: EigenParams::default().tolerance,
-            normalize: true,
+            normalize: crate::defaults::values::NORMALIZE,
             basis: true,
             hks: None,
             wks: None,
@@ -195,10 +195,8 @@ impl BatchParams {
         {
             return Err(bad("wks_sigma", format!("{s} is not a positive number")));
         }
-        if let Some(t) = self.thumbnail
-            && !(16..=4096).contains(&t)
-        {
-            return Err(bad("thumbnail", format!("{t} pixels: use 16 to 4096")));
+        if let Some(t) = self.thumbnail {
+            crate::defaults::values::check_picture_size(t).map_err(|e| bad("thumbnail", e))?;
         }
         if self.geodesic == Some(0) {
             return Err(bad(

@@ -367,14 +367,16 @@ impl ExperimentFile {
         }
         if let Some(f) = &self.figure {
             if let Some(l) = f.levels
-                && l > 1000
+                && l > crate::defaults::values::MAX_LEVELS
             {
-                return Err(key_err("figure.levels", format!("{l}: at most 1000")));
+                return Err(key_err(
+                    "figure.levels",
+                    format!("{l}: at most {}", crate::defaults::values::MAX_LEVELS),
+                ));
             }
-            if let Some(s) = f.size
-                && !(16..=8192).contains(&s)
-            {
-                return Err(key_err("figure.size", format!("{s}: must be 16..8192")));
+            if let Some(s) = f.size {
+                crate::defaults::values::check_picture_size(s)
+                    .map_err(|e| key_err("figure.size", e))?;
             }
         }
         if let Some(p) = &self.point_cloud {
@@ -401,7 +403,7 @@ impl ExperimentFile {
 
     /// Scale normalisation (default true).
     pub fn normalize(&self) -> bool {
-        self.normalize.unwrap_or(true)
+        self.normalize.unwrap_or(crate::defaults::values::NORMALIZE)
     }
 
     /// The field request of a `diffusion-basis`, `spectral-distance` or `field` file

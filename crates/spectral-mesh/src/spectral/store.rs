@@ -56,7 +56,7 @@ pub struct BasisMeta {
     pub n: usize,
     /// Number of pairs.
     pub k: usize,
-    /// [`mesh_hash`] of the mesh, empty when unknown.
+    /// [`Mesh::content_hash`] of the mesh, empty when unknown.
     pub mesh_hash: String,
     /// The solver parameters used.
     pub params: EigenParams,
@@ -125,7 +125,7 @@ impl BasisMeta {
             laplacian: basis.laplacian,
             n: basis.n,
             k: basis.k(),
-            mesh_hash: mesh.map(mesh_hash).unwrap_or_default(),
+            mesh_hash: mesh.map(Mesh::content_hash).unwrap_or_default(),
             params: params.clone(),
             generator: format!("spectral-mesh {}", env!("CARGO_PKG_VERSION")),
             dtype: BasisDtype::Float64,
@@ -136,12 +136,6 @@ impl BasisMeta {
     pub fn with_dtype(self, dtype: BasisDtype) -> Self {
         Self { dtype, ..self }
     }
-}
-
-/// A content hash of the mesh: BLAKE3 (hex) of the vertex count, the positions as
-/// little-endian f64, the triangle count and the triangles as little-endian u64.
-pub fn mesh_hash(mesh: &Mesh) -> String {
-    mesh.content_hash()
 }
 
 fn io_err(path: &Path) -> impl Fn(std::io::Error) -> StoreError + '_ {
@@ -670,7 +664,7 @@ pub fn load_or_compute(
     params: &EigenParams,
     progress: &mut dyn FnMut(EigenProgress),
 ) -> Result<(Eigenbasis, bool), StoreError> {
-    let hash = mesh_hash(mesh);
+    let hash = mesh.content_hash();
     let path = cache_dir.join(cache_file_name(
         &cache_key(&hash, ops),
         ops.laplacian,
@@ -798,7 +792,7 @@ print(repr(float(X[5, 3])), repr(float(lam[4])))
         let mut pos = mesh.positions().to_vec();
         pos[0][0] += 1e-3;
         let mesh2 = Mesh::new(pos, mesh.triangles().to_vec()).unwrap();
-        assert_ne!(mesh_hash(&mesh), mesh_hash(&mesh2));
+        assert_ne!(mesh.content_hash(), mesh2.content_hash());
         let ops2 = Operators::new(&mesh2, Laplacian::Fem);
         let (_, cached4) =
             load_or_compute(dir.path(), &mesh2, &ops2, &params, &mut |_| {}).unwrap();
@@ -820,7 +814,7 @@ print(repr(float(X[5, 3])), repr(float(lam[4])))
         assert!((b7.values[5] - 2.0 * b1.values[5]).abs() < 1e-8 * b1.values[5]);
         // A corrupt cache file is recomputed, not an error.
         let path = dir.path().join(cache_file_name(
-            &cache_key(&mesh_hash(&mesh), &ops),
+            &cache_key(&mesh.content_hash(), &ops),
             Laplacian::Fem,
             &params,
         ));
