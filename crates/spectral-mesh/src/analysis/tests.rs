@@ -226,14 +226,8 @@ fn errors_name_what_is_wrong() {
 #[test]
 fn a_component_without_constraints_floats_and_is_left_out_of_the_critical_points() {
     // Two disjoint tori; the preset constraints (min x, max x) both fall on the first.
-    let t = build_str("torus:res=2").unwrap();
-    let (p, f) = (t.positions().to_vec(), t.triangles().to_vec());
-    let n0 = p.len();
-    let mut pos = p.clone();
-    pos.extend(p.iter().map(|q| [q[0] - 10.0, q[1], q[2]]));
-    let mut tris = f.clone();
-    tris.extend(f.iter().map(|t| [t[0] + n0, t[1] + n0, t[2] + n0]));
-    let an = Analysis::new(Mesh::new(pos, tris).unwrap(), AnalysisOptions::default());
+    let (mesh, n0) = two_copies("torus:res=2");
+    let an = Analysis::new(mesh, AnalysisOptions::default());
     let field = an.field(&FieldRequest::Harmonic {
         constraints: Constraints::List(vec![
             Constraint {

@@ -22,8 +22,8 @@ use crate::operators::Laplacian;
 use crate::operators::point_cloud::PointCloudParams;
 
 pub use crate::analysis::request::{
-    DEFAULT_COMPONENT, DEFAULT_HEAT_T, DEFAULT_K, DEFAULT_PERSISTENCE, DEFAULT_SIGNATURE_T,
-    DEFAULT_WKS_SIGMA, KINDS, MAX_SPEC_LEN,
+    DEFAULT_COMPONENT, DEFAULT_GEODESIC_TIME_FACTOR, DEFAULT_HEAT_T, DEFAULT_K,
+    DEFAULT_PERSISTENCE, DEFAULT_SIGNATURE_T, DEFAULT_WKS_SIGMA, KINDS, MAX_SPEC_LEN,
 };
 pub use crate::shapes::DEFAULT_SHAPE;
 pub use crate::spectral::eigenbasis::{DENSE_MAX_N, DENSE_MAX_N_LARGE_K};
