@@ -2,6 +2,8 @@
 //! meshes, from the command line. See `spectral-mesh --help`.
 
 mod commands;
+#[cfg(test)]
+mod defaults_test;
 mod engine;
 mod figure;
 mod input;

@@ -13,6 +13,7 @@
 //! [`spectral_mesh::fields::level_sets`].
 
 pub mod colormap;
+pub mod defaults;
 pub mod figure;
 pub mod pair;
 pub mod plots;

@@ -36,7 +36,7 @@ from . import _native
 from ._analysis import Analysis, CriticalPoints, LevelSet
 from ._batch import batch
 from ._correspondence import functional_map, p2p, zoomout
-from ._geodesic import GeodesicSolver, geodesic_distance
+from ._geodesic import GeodesicSolver, geodesic_distance, point_cloud_geodesic_distance
 from ._api import (
     eigenbasis,
     eigsh,
@@ -84,6 +84,7 @@ __all__ = [
     "load_basis",
     "num_threads",
     "p2p",
+    "point_cloud_geodesic_distance",
     "point_cloud_laplacian",
     "read_mesh",
     "read_points",
