@@ -37,15 +37,28 @@ fn nearest_kd<const K: usize>(
     queries: &[f64],
     m: usize,
     d: usize,
+    hint: Option<&[usize]>,
 ) -> Vec<usize> {
     let rows: Vec<[f64; K]> = (0..n).map(|i| row::<K>(points, n, d, i)).collect();
     let tree: ImmutableKdTree<f64, K> = ImmutableKdTree::new_from_slice(&rows);
-    drop(rows);
+    let one = std::num::NonZero::<usize>::MIN;
     (0..m)
         .into_par_iter()
+        .with_min_len(256)
         .map(|i| {
             let q = row::<K>(queries, m, d, i);
-            tree.nearest_one::<SquaredEuclidean>(&q).item as usize
+            match hint {
+                // The nearest point is no farther than the hinted one: searching within
+                // that distance is exact and prunes far more in many dimensions.
+                Some(h) => {
+                    let j = h[i];
+                    let r: f64 = q.iter().zip(&rows[j]).map(|(a, b)| (a - b) * (a - b)).sum();
+                    tree.nearest_n_within::<SquaredEuclidean>(&q, r, one, true)
+                        .first()
+                        .map_or(j, |nb| nb.item as usize)
+                }
+                None => tree.nearest_one::<SquaredEuclidean>(&q).item as usize,
+            }
         })
         .collect()
 }
@@ -79,6 +92,23 @@ pub fn nearest_rows(
     m: usize,
     d: usize,
 ) -> Result<Vec<usize>, CorrespondenceError> {
+    nearest_rows_hinted(points, n, queries, m, d, None)
+}
+
+/// [`nearest_rows`] with a guess for each query (`m` indices `< n`, e.g. the previous
+/// ZoomOut iteration's map): the same answer up to ties, found faster when the guesses
+/// are close.
+pub fn nearest_rows_hinted(
+    points: &[f64],
+    n: usize,
+    queries: &[f64],
+    m: usize,
+    d: usize,
+    hint: Option<&[usize]>,
+) -> Result<Vec<usize>, CorrespondenceError> {
+    if let Some(h) = hint {
+        check_p2p(h, m, n)?;
+    }
     if points.len() != n * d || queries.len() != m * d {
         return Err(CorrespondenceError::SizeMismatch(format!(
             "{} point values for {n} x {d}, {} query values for {m} x {d}",
@@ -97,15 +127,15 @@ pub fn nearest_rows(
         ));
     }
     Ok(match d {
-        0..=8 => nearest_kd::<8>(points, n, queries, m, d),
-        9..=16 => nearest_kd::<16>(points, n, queries, m, d),
-        17..=32 => nearest_kd::<32>(points, n, queries, m, d),
-        33..=48 => nearest_kd::<48>(points, n, queries, m, d),
-        49..=64 => nearest_kd::<64>(points, n, queries, m, d),
-        65..=96 => nearest_kd::<96>(points, n, queries, m, d),
-        97..=128 => nearest_kd::<128>(points, n, queries, m, d),
-        129..=192 => nearest_kd::<192>(points, n, queries, m, d),
-        193..=KD_TREE_MAX_DIM => nearest_kd::<KD_TREE_MAX_DIM>(points, n, queries, m, d),
+        0..=8 => nearest_kd::<8>(points, n, queries, m, d, hint),
+        9..=16 => nearest_kd::<16>(points, n, queries, m, d, hint),
+        17..=32 => nearest_kd::<32>(points, n, queries, m, d, hint),
+        33..=48 => nearest_kd::<48>(points, n, queries, m, d, hint),
+        49..=64 => nearest_kd::<64>(points, n, queries, m, d, hint),
+        65..=96 => nearest_kd::<96>(points, n, queries, m, d, hint),
+        97..=128 => nearest_kd::<128>(points, n, queries, m, d, hint),
+        129..=192 => nearest_kd::<192>(points, n, queries, m, d, hint),
+        193..=KD_TREE_MAX_DIM => nearest_kd::<KD_TREE_MAX_DIM>(points, n, queries, m, d, hint),
         _ => nearest_exhaustive(points, n, queries, m, d),
     })
 }
@@ -133,16 +163,27 @@ pub fn fmap_to_p2p(
     basis2: BasisView<'_>,
     adjoint: bool,
 ) -> Result<Vec<usize>, CorrespondenceError> {
+    fmap_to_p2p_hinted(c, basis1, basis2, adjoint, None)
+}
+
+/// [`fmap_to_p2p`] with a guess `p2p_21` (see [`nearest_rows_hinted`]).
+pub fn fmap_to_p2p_hinted(
+    c: &FunctionalMap,
+    basis1: BasisView<'_>,
+    basis2: BasisView<'_>,
+    adjoint: bool,
+    hint: Option<&[usize]>,
+) -> Result<Vec<usize>, CorrespondenceError> {
     let (b1, b2) = check_fmap(c, basis1, basis2)?;
     let (n1, n2) = (b1.n, b2.n);
     if adjoint {
         // Phi_2 C: n2 x k1.
         let emb2 = product(b2.vectors, &c.c, n2, c.k2, c.k1);
-        nearest_rows(b1.vectors, n1, &emb2, n2, c.k1)
+        nearest_rows_hinted(b1.vectors, n1, &emb2, n2, c.k1, hint)
     } else {
         // Phi_1 C^T: n1 x k2.
         let emb1 = product_transposed(b1.vectors, &c.c, n1, c.k1, c.k2);
-        nearest_rows(&emb1, n1, b2.vectors, n2, c.k2)
+        nearest_rows_hinted(&emb1, n1, b2.vectors, n2, c.k2, hint)
     }
 }
 

@@ -7,7 +7,7 @@
 //! shapes swapped, started from `C^T` ([`FunctionalMap::transpose`], the inverse of an
 //! orthogonal map).
 
-use super::pointwise::{fmap_to_p2p, p2p_to_fmap};
+use super::pointwise::{fmap_to_p2p_hinted, p2p_to_fmap};
 use super::{CorrespondenceError, FunctionalMap, truncate};
 use crate::spectral::BasisView;
 
@@ -42,13 +42,16 @@ pub fn zoomout_with(
     let basis1 = truncate(basis1, k1_final, 1)?;
     let basis2 = truncate(basis2, k2_final, 2)?;
     let mut cur = c.clone();
+    // Each iteration's map is the next one's guess: the search is exact either way.
+    let mut prev: Option<Vec<usize>> = None;
     while cur.k1 < k1_final || cur.k2 < k2_final {
-        let p2p = fmap_to_p2p(&cur, basis1, basis2, false)?;
+        let p2p = fmap_to_p2p_hinted(&cur, basis1, basis2, false, prev.as_deref())?;
         let k1 = (cur.k1 + step).min(k1_final);
         let k2 = (cur.k2 + step).min(k2_final);
         cur = p2p_to_fmap(&p2p, basis1, basis2, k1, k2)?;
+        prev = Some(p2p);
         progress(k1, k2);
     }
-    let p2p = fmap_to_p2p(&cur, basis1, basis2, false)?;
+    let p2p = fmap_to_p2p_hinted(&cur, basis1, basis2, false, prev.as_deref())?;
     Ok((cur, p2p))
 }
