@@ -102,6 +102,26 @@ fn library_values() -> BTreeMap<String, Vec<String>> {
     );
     assert_eq!(truncation.reference, TruncationReference::Auto);
     put("study truncation/reference", s("auto"));
+    // `match`: the library's correspondence defaults.
+    {
+        use spectral_mesh::correspondence as c;
+        put("match/k", s(c::DEFAULT_K));
+        put("match/zoomout", s(c::DEFAULT_ZOOMOUT_K));
+        put("match/step", s(c::DEFAULT_ZOOMOUT_STEP));
+        put(
+            "match/descriptor",
+            s(c::descriptors::DescriptorKind::default()),
+        );
+        put(
+            "match/descriptors",
+            s(c::descriptors::DEFAULT_DESCRIPTOR_COUNT),
+        );
+        put("match/subsample", s(c::descriptors::DEFAULT_SUBSAMPLE_STEP));
+        put("match/w_descr", s(c::energy::DEFAULT_W_DESCRIPTORS));
+        put("match/w_lap", s(c::energy::DEFAULT_W_LAPLACIAN));
+        put("match/w_dcomm", s(c::energy::DEFAULT_W_COMMUTATIVITY));
+        put("match/w_orient", s(c::energy::DEFAULT_W_ORIENTATION));
+    }
     // `serve`: the library's server limits.
     put("host", s(server::HOST));
     put("port", s(server::PORT));
