@@ -117,7 +117,7 @@ pub struct GeodesicParams {
 impl Default for GeodesicParams {
     fn default() -> Self {
         Self {
-            time_factor: 1.0,
+            time_factor: crate::analysis::request::DEFAULT_GEODESIC_TIME_FACTOR,
             convention: Convention::Crane,
             robust: RobustParams::default(),
         }
