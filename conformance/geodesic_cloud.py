@@ -3,7 +3,7 @@
 potpourri3d's PointCloudHeatSolver.
 
   python conformance/geodesic_cloud.py --cli target/release/spectral-mesh \
-      [--densities 2000,8000,32000] [--cloud sphere_20k.xyz] [--source 0]
+      [--densities 2000,8000,32000] [--cloud sphere_20k.xyz] [--source 0] [--time-factor 1]
 
 1. Uniform random samples of the unit sphere (NumPy, seed 0) at each density, written as
    .xyz: `spectral-mesh geodesic cloud.xyz --source 0 -o d.npy` (point-cloud Laplacian,
@@ -26,8 +26,8 @@ import numpy as np
 import potpourri3d as pp3d
 
 
-def ours(cli, path, source, out):
-    text = subprocess.run([cli, "geodesic", path, "--source", str(source), "-o", out, "--force"],
+def ours(cli, path, source, out, m):
+    text = subprocess.run([cli, "geodesic", path, "--source", str(source), "--time-factor", str(m), "-o", out, "--force"],
                           check=True, capture_output=True, text=True).stdout
     h = float(re.search(r"h = ([0-9.e+-]+)", text).group(1))
     return np.load(out), h
@@ -44,6 +44,7 @@ def main():
     ap.add_argument("--densities", default="2000,8000,32000")
     ap.add_argument("--cloud")
     ap.add_argument("--source", type=int, default=0)
+    ap.add_argument("--time-factor", type=float, default=1.0, help="m in t = m h^2 (both tools)")
     a = ap.parse_args()
     ok = True
     with tempfile.TemporaryDirectory() as tmp:
@@ -57,8 +58,8 @@ def main():
             path = os.path.join(tmp, f"sphere{n}.xyz")
             np.savetxt(path, P, fmt="%.17g")
             exact = np.arccos(np.clip(P @ P[0], -1.0, 1.0))
-            d, h = ours(a.cli, path, 0, out)
-            theirs = pp3d.PointCloudHeatSolver(P, t_coef=1.0).compute_distance(0)
+            d, h = ours(a.cli, path, 0, out, a.time_factor)
+            theirs = pp3d.PointCloudHeatSolver(P, t_coef=a.time_factor).compute_distance(0)
             m, x = errors(d, exact)
             pm, px = errors(theirs, exact)
             order = "" if prev is None else f"{np.log(prev[1] / m) / np.log(prev[0] / h):.2f}"
@@ -68,8 +69,8 @@ def main():
             print(f"| {n:,} | {h:.4f} | {m:.2e} | {x:.2e} | {order} | {pm:.2e} | {px:.2e} |")
         if a.cloud:
             P = np.loadtxt(a.cloud, usecols=(0, 1, 2))
-            d, h = ours(a.cli, a.cloud, a.source, out)
-            theirs = pp3d.PointCloudHeatSolver(P, t_coef=1.0).compute_distance(a.source)
+            d, h = ours(a.cli, a.cloud, a.source, out, a.time_factor)
+            theirs = pp3d.PointCloudHeatSolver(P, t_coef=a.time_factor).compute_distance(a.source)
             u = P / np.linalg.norm(P, axis=1, keepdims=True)
             exact = np.arccos(np.clip(u @ u[a.source], -1.0, 1.0))
             m, x = errors(d, exact)

@@ -104,6 +104,7 @@ impl PyGeodesicSolver {
         let cp = CloudGeodesicParams {
             laplacian: cloud_params(neighbors, mollify_factor, normals.is_some()),
             gradient_neighbors: gradient_neighbors.unwrap_or(d.gradient_neighbors),
+            ..d
         };
         let solver = run(py, move |_| {
             Ok(GeodesicSolver::from_point_cloud(&cloud, &cp, &params)?)

@@ -119,6 +119,7 @@ pub fn run(args: Args) -> Result<()> {
             let cp = CloudGeodesicParams {
                 laplacian: *lp,
                 gradient_neighbors: args.gradient_neighbors.unwrap_or(d.gradient_neighbors),
+                ..d
             };
             let solver = GeodesicSolver::from_point_cloud(cloud, &cp, &params)?;
             let drawn = args

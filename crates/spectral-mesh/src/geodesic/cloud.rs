@@ -4,6 +4,7 @@
 
 use rayon::prelude::*;
 
+use crate::linalg::SparseMatrix;
 use crate::mesh::{PointCloud, cross, dot, norm, normalize, sub};
 use crate::operators::point_cloud::{NormalSource, nearest_neighbors, pca_normal};
 
@@ -84,6 +85,98 @@ impl TangentGradient {
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
         8 * (self.start.len() + self.nbr.len() + self.mass.len()) + 16 * self.coef.len()
+    }
+
+    /// The Dirichlet energy of the gradient, `G^T B G` (`n x n`, symmetric positive
+    /// semi-definite, `G^T B G 1 = 0`): entry `(r, c)` is the sum over the points `i`
+    /// whose stencil (the point and its gradient neighbours) holds both `r` and `c` of
+    /// `b_i a_ir . a_ic`, with `a_ij = c_ij` for a neighbour and `a_ii = -sum_j c_ij`.
+    /// Summed in the order of `i` in every entry, so it is symmetric to the last bit.
+    pub fn energy(&self) -> SparseMatrix {
+        let n = self.mass.len();
+        // Where each point appears: (stencil owner i, position in its stencil).
+        let mut appear: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
+        for i in 0..n {
+            let len = self.start[i + 1] - self.start[i];
+            for p in 0..=len {
+                appear[self.stencil_point(i, p)].push((i, p));
+            }
+        }
+        let cols: Vec<(Vec<usize>, Vec<f64>)> = appear
+            .par_iter()
+            .map(|app| {
+                let mut e: Vec<(usize, f64)> = Vec::new();
+                for &(i, p) in app {
+                    let ap = self.stencil_coef(i, p);
+                    let len = self.start[i + 1] - self.start[i];
+                    for q in 0..=len {
+                        let aq = self.stencil_coef(i, q);
+                        e.push((
+                            self.stencil_point(i, q),
+                            self.mass[i] * (ap[0] * aq[0] + ap[1] * aq[1]),
+                        ));
+                    }
+                }
+                // Stable: the order of i among equal rows is kept.
+                e.sort_by_key(|x| x.0);
+                let mut rows = Vec::with_capacity(e.len());
+                let mut vals: Vec<f64> = Vec::with_capacity(e.len());
+                for (r, v) in e {
+                    if rows.last() == Some(&r) {
+                        if let Some(x) = vals.last_mut() {
+                            *x += v;
+                        }
+                    } else {
+                        rows.push(r);
+                        vals.push(v);
+                    }
+                }
+                (rows, vals)
+            })
+            .collect();
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        col_ptr.push(0);
+        let mut row_idx = Vec::new();
+        let mut values = Vec::new();
+        for (r, v) in cols {
+            row_idx.extend(r);
+            values.extend(v);
+            col_ptr.push(row_idx.len());
+        }
+        SparseMatrix::from_csc(n, n, col_ptr, row_idx, values).unwrap_or_else(|| {
+            // Unreachable: every column is sorted and in range.
+            SparseMatrix::from_triplets(n, n, &[])
+        })
+    }
+
+    /// Point `p` of the stencil of `i`: its neighbours in order, then `i` itself.
+    fn stencil_point(&self, i: usize, p: usize) -> usize {
+        let q = self.start[i] + p;
+        if q < self.start[i + 1] {
+            self.nbr[q]
+        } else {
+            i
+        }
+    }
+
+    /// The gradient coefficient of stencil point `p` of `i` (`-sum_j c_ij` for `i`).
+    fn stencil_coef(&self, i: usize, p: usize) -> [f64; 2] {
+        let q = self.start[i] + p;
+        if q < self.start[i + 1] {
+            self.coef[q]
+        } else {
+            let mut s = [0.0; 2];
+            for c in &self.coef[self.start[i]..self.start[i + 1]] {
+                s[0] -= c[0];
+                s[1] -= c[1];
+            }
+            s
+        }
+    }
+
+    /// The gradient neighbours of point `i`.
+    pub fn neighbors(&self, i: usize) -> &[usize] {
+        &self.nbr[self.start[i]..self.start[i + 1]]
     }
 
     /// The gradient of `u` at point `i` in its tangent basis.
