@@ -6,7 +6,7 @@ pub mod cholesky;
 pub mod eigen;
 mod scratch;
 pub mod sparse;
-mod timing;
+pub mod timing;
 
 pub use cholesky::{CholeskyError, Inertia, SparseCholesky, inertia};
 pub use eigen::{
