@@ -117,7 +117,7 @@ def render_table(records, a, command):
         cells.setdefault((rec["mesh"], rec["k"]), {}).setdefault(rec["route"], []).append(rec)
     lines = eg.table_head(
         records,
-        "# End-to-end: each spectral command against SciPy + CHOLMOD writing the same .npz",
+        "# End-to-end: each spectral command against SciPy + CHOLMOD and SLEPc writing the same .npz",
         command, f"Laplacian: {a.laplacian}; SciPy's OpenBLAS threads: "
         + ", ".join(sorted({str(r.get("scipy_blas_threads") or "default") for r in records})))
     lines += [
