@@ -16,9 +16,8 @@ use numpy::{PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use serde_json::{Value, json};
-use spectral_mesh::analysis::request::KINDS;
 use spectral_mesh::analysis::{AnalysisOptions, Signal, SignatureSpec};
-use spectral_mesh::operators::{Laplacian, Operators, PointCloudParams};
+use spectral_mesh::operators::{Laplacian, Operators};
 use spectral_mesh::spectral::eigenbasis::{
     CertifyReport, EigenMethod, EigenParams, EigenSolver, certify_eigenbasis,
 };
@@ -29,8 +28,10 @@ use spectral_mesh_render::{Colormap, Figure, FigureOptions, View};
 mod analysis;
 mod arrays;
 mod batch;
+mod correspondence;
 mod errors;
 mod geodesic;
+mod learning;
 mod pyjson;
 mod run;
 
@@ -186,10 +187,7 @@ fn laplacian<'py>(
     let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
     let (s, b, total) = run(py, move |_| {
         let mut ops = Operators::new(&mesh, lap);
-        let total: f64 = ops.mass.values().iter().sum();
-        if normalize && total > 0.0 && total.is_finite() {
-            ops.mass = ops.mass.add_scaled(1.0 / total, &ops.mass, 0.0);
-        }
+        let total = ops.normalize_mass(normalize);
         Ok((csc_parts(&ops.stiffness), csc_parts(&ops.mass), total))
     })?;
     Ok((csc_to_py(py, s)?, csc_to_py(py, b)?, total))
@@ -243,10 +241,7 @@ fn point_laplacian<'py>(
     let (s, b, total) = run(py, move |_| {
         let mut ops =
             Operators::from_points(&cloud, &params).map_err(|e| Failure::value(e.to_string()))?;
-        let total: f64 = ops.mass.values().iter().sum();
-        if normalize && total > 0.0 && total.is_finite() {
-            ops.mass = ops.mass.add_scaled(1.0 / total, &ops.mass, 0.0);
-        }
+        let total = ops.normalize_mass(normalize);
         Ok((csc_parts(&ops.stiffness), csc_parts(&ops.mass), total))
     })?;
     Ok((csc_to_py(py, s)?, csc_to_py(py, b)?, total))
@@ -514,29 +509,39 @@ fn load_basis<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Archive<'py>> {
     ))
 }
 
-/// Figure options from the Python keywords.
-pub(crate) fn figure_options(
+/// The picture options as the Python layer passes them to both `render`s: a dict of
+/// these keys, checked and converted there (`_render_args`).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub(crate) struct FigureArgs {
     levels: usize,
-    colormap: &str,
-    view: &str,
+    colormap: String,
+    view: String,
     size: u32,
     transparent: bool,
     critical_points: bool,
     colorbar: bool,
-) -> Result<FigureOptions, Failure> {
-    Ok(FigureOptions {
-        levels,
-        colormap: colormap
-            .parse::<Colormap>()
-            .map_err(|e| Failure::value(e.to_string()))?,
-        view: view
-            .parse::<View>()
-            .map_err(|e| Failure::value(format!("view: {e}")))?,
-        size,
-        transparent,
-        critical_points,
-        colorbar,
-    })
+}
+
+impl FigureArgs {
+    /// The render crate's options; an unknown colour map or view is a `ValueError`.
+    pub(crate) fn options(&self) -> Result<FigureOptions, Failure> {
+        Ok(FigureOptions {
+            levels: self.levels,
+            colormap: self
+                .colormap
+                .parse::<Colormap>()
+                .map_err(|e| Failure::value(e.to_string()))?,
+            view: self
+                .view
+                .parse::<View>()
+                .map_err(|e| Failure::value(format!("view: {e}")))?,
+            size: self.size,
+            transparent: self.transparent,
+            critical_points: self.critical_points,
+            colorbar: self.colorbar,
+        })
+    }
 }
 
 /// Draws `values` on `mesh`: writes `path` (format from its extension) and returns
@@ -601,7 +606,7 @@ pub(crate) fn draw(
 /// Draws a field on `(V, F)` (see [`draw`]).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v, f, values, marks, labels, levels, colormap, view, size, transparent, critical_points, colorbar, path))]
+#[pyo3(signature = (v, f, values, marks, labels, figure, path))]
 fn render(
     py: Python<'_>,
     v: PyReadonlyArray2<'_, f64>,
@@ -609,28 +614,14 @@ fn render(
     values: PyReadonlyArray1<'_, f64>,
     marks: Vec<usize>,
     labels: Option<Vec<usize>>,
-    levels: usize,
-    colormap: &str,
-    view: &str,
-    size: u32,
-    transparent: bool,
-    critical_points: bool,
-    colorbar: bool,
+    figure: FigureArgs,
     path: Option<PathBuf>,
 ) -> PyResult<Py<PyAny>> {
     let prepare = || -> Result<(Mesh, Vec<f64>, FigureOptions), Failure> {
         Ok((
             mesh_from(&v, &f)?,
             arrays::values(&values, "values")?,
-            figure_options(
-                levels,
-                colormap,
-                view,
-                size,
-                transparent,
-                critical_points,
-                colorbar,
-            )?,
+            figure.options()?,
         ))
     };
     let (mesh, values, options) = prepare().map_err(|e| e.into_pyerr(py))?;
@@ -646,81 +637,13 @@ fn render(
     )
 }
 
-/// The library's defaults as a dict: every request kind's keys (from [`FieldRequest`]'s
-/// serde form), the analysis and eigensolver options and the figure options.
+/// Every default as a dict: the library's ([`spectral_mesh::defaults::to_json`]: every
+/// request kind's keys, the analysis, eigensolver, point-cloud, batch and picture
+/// defaults, the server limits) with the render crate's figure options
+/// ([`spectral_mesh_render::defaults::to_json`]).
 #[pyfunction]
 fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
-    let mut kinds = serde_json::Map::new();
-    for kind in KINDS {
-        let mut j = json!({ "kind": kind });
-        match kind {
-            "diffusion" => j["signal"] = json!({ "impulse": 0 }),
-            "wks" => j["energy"] = json!(0.0),
-            _ => {}
-        }
-        let internal = |e: serde_json::Error| {
-            Failure::Internal(format!("defaults of {kind}: {e}")).into_pyerr(py)
-        };
-        let req: FieldRequest = serde_json::from_value(j).map_err(internal)?;
-        let mut v = serde_json::to_value(&req).map_err(internal)?;
-        if let Some(o) = v.as_object_mut() {
-            o.remove("kind");
-            o.remove("signal");
-            o.remove("energy");
-        }
-        kinds.insert(kind.to_string(), v);
-    }
-    let a = AnalysisOptions::default();
-    let fig = FigureOptions::default();
-    let pc = PointCloudParams::default();
-    let bp = spectral_mesh::batch::BatchParams::default();
-    let all = json!({
-        "requests": kinds,
-        "analysis": {
-            "kind": a.laplacian.name(),
-            "normalize": a.normalize,
-            "k": spectral_mesh::analysis::request::DEFAULT_K,
-            "tol": a.eigen.tolerance,
-            "seed": a.eigen.seed,
-            "method": "auto",
-        },
-        "figure": {
-            "levels": fig.levels,
-            "colormap": fig.colormap.name(),
-            "view": spectral_mesh_render::figure::view_name(fig.view),
-            "size": fig.size,
-            "transparent": fig.transparent,
-            "critical_points": fig.critical_points,
-            "colorbar": fig.colorbar,
-        },
-        "point_cloud": {
-            "n_neighbors": pc.neighbors,
-            "mollify_factor": pc.mollify_factor,
-            "delaunay_tolerance": pc.delaunay_tolerance,
-            "normals": pc.normals,
-            "union": pc.union,
-        },
-        // `spectral_mesh.batch`'s keywords (Python names) from the library's batch
-        // parameters.
-        "batch": {
-            "k": bp.k,
-            "laplacian": bp.laplacian.name(),
-            "tol": bp.tolerance,
-            "normalize": bp.normalize,
-            "eigenvectors": bp.basis,
-            "hks": bp.hks.as_ref().map(ToString::to_string),
-            "wks": bp.wks.as_ref().map(ToString::to_string),
-            "wks_sigma": bp.wks_sigma,
-            "adf": bp.adf.as_ref().map(ToString::to_string),
-            "scaled": bp.scaled,
-            "thumbnail": bp.thumbnail,
-        },
-        "zero_eigenvalue_eps": spectral_mesh::spectral::filters::ZERO_EIGENVALUE_EPS,
-        "shape": spectral_mesh::shapes::DEFAULT_SHAPE,
-        "laplacians": Laplacian::ALL.iter().map(|l| l.name()).collect::<Vec<_>>(),
-        "colormaps": Colormap::ALL.iter().map(|c| c.name()).collect::<Vec<_>>(),
-    });
-    pyjson::to_py(py, &all)
+    pyjson::to_py(py, &spectral_mesh_render::defaults::to_json())
 }
 
 /// Threads the computations use (the library's rayon pool).
@@ -785,6 +708,13 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(defaults, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(
+        correspondence::correspondence_defaults,
+        m
+    )?)?;
+    m.add_function(wrap_pyfunction!(correspondence::functional_map, m)?)?;
+    m.add_function(wrap_pyfunction!(correspondence::zoomout_refine, m)?)?;
+    m.add_function(wrap_pyfunction!(correspondence::point_map, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_params, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_inputs, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_prepare, m)?)?;
@@ -793,6 +723,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(batch::batch_summary, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     m.add_function(wrap_pyfunction!(_work_for_tests, m)?)?;
+    m.add_function(wrap_pyfunction!(learning::learning_operators, m)?)?;
+    m.add_function(wrap_pyfunction!(learning::learning_defaults, m)?)?;
     m.add_class::<analysis::PyAnalysis>()?;
     m.add_class::<geodesic::PyGeodesicSolver>()?;
     Ok(())

@@ -20,13 +20,15 @@ use crate::{Colormap, Image, RenderError, extract_level_sets, level_values, writ
 /// How to draw a field. `Default` is what every face draws unless told otherwise.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FigureOptions {
-    /// Number of evenly spaced level sets drawn over the surface (0 = none). Default 20.
+    /// Number of evenly spaced level sets drawn over the surface (0 = none). Default the
+    /// library's `spectral_mesh::defaults::LEVELS`.
     pub levels: usize,
     /// Colour map. Default the paper's hue.
     pub colormap: Colormap,
     /// View. Default iso.
     pub view: View,
-    /// Picture width and height in pixels. Default 800.
+    /// Picture width and height in pixels. Default the library's
+    /// `spectral_mesh::defaults::PICTURE_SIZE`.
     pub size: u32,
     /// Transparent background instead of white.
     pub transparent: bool,
@@ -39,10 +41,10 @@ pub struct FigureOptions {
 impl Default for FigureOptions {
     fn default() -> Self {
         Self {
-            levels: 20,
+            levels: spectral_mesh::defaults::LEVELS,
             colormap: Colormap::Hue,
             view: View::Iso,
-            size: 800,
+            size: spectral_mesh::defaults::PICTURE_SIZE,
             transparent: false,
             critical_points: true,
             colorbar: true,

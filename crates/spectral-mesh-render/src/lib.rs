@@ -13,7 +13,9 @@
 //! [`spectral_mesh::fields::level_sets`].
 
 pub mod colormap;
+pub mod defaults;
 pub mod figure;
+pub mod pair;
 pub mod plots;
 pub mod raster;
 mod text;

@@ -8,7 +8,7 @@ use serde::Deserialize;
 use serde_json::{Map, Value};
 use spectral_mesh::Laplacian;
 use spectral_mesh::analysis::FieldRequest;
-use spectral_mesh::analysis::request::DEFAULT_K;
+use spectral_mesh::defaults::{DEFAULT_K, LEVELS, MAX_LEVELS, MAX_PICTURE, NORMALIZE};
 use spectral_mesh::experiments::file::FigureFile;
 use spectral_mesh::shapes::ShapeSpec;
 use spectral_mesh_render::figure::FigureOptions;
@@ -27,13 +27,6 @@ pub const FACE_KEYS: [&str; 10] = [
     "format",
 ];
 
-/// Default number of level sets the page draws.
-pub const DEFAULT_LEVELS: usize = 10;
-/// Most level sets a request may ask for (as experiment files).
-pub const MAX_LEVELS: usize = 1000;
-/// Largest picture the server draws, in pixels per side.
-pub const MAX_PICTURE: u32 = 4096;
-
 /// A parsed field or download body.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FieldBody {
@@ -42,9 +35,9 @@ pub struct FieldBody {
     /// Discretization as given (`None`: the input's default, fem for a mesh and robust
     /// for a point cloud).
     pub laplacian: Option<Laplacian>,
-    /// Unit-area normalisation (default true).
+    /// Unit-area normalisation (default the library's [`NORMALIZE`]).
     pub normalize: bool,
-    /// Level sets drawn (default 10).
+    /// Level sets drawn (default the library's [`LEVELS`]).
     pub levels: usize,
     /// Picture options of downloads (`levels` included); the page colours the binary
     /// field itself.
@@ -102,14 +95,12 @@ impl FieldBody {
             .map(|s| s.parse::<Laplacian>())
             .transpose()
             .map_err(|e| bad(format!("laplacian: {e}")))?;
-        let normalize = take_bool(&mut m, "normalize")?.unwrap_or(true);
-        let levels =
-            take_uint(&mut m, "levels", MAX_LEVELS as u64)?.map_or(DEFAULT_LEVELS, |l| l as usize);
+        let normalize = take_bool(&mut m, "normalize")?.unwrap_or(NORMALIZE);
+        let levels = take_uint(&mut m, "levels", MAX_LEVELS as u64)?.map_or(LEVELS, |l| l as usize);
         let size = take_uint(&mut m, "size", MAX_PICTURE as u64)?.map(|s| s as u32);
-        if let Some(s) = size
-            && s < 16
-        {
-            return Err(bad(format!("size: {s}: at least 16 pixels")));
+        if let Some(s) = size {
+            spectral_mesh::defaults::check_picture_size(s)
+                .map_err(|e| bad(format!("size: {e}")))?;
         }
         let figure = FigureFile {
             levels: Some(levels),
@@ -167,9 +158,9 @@ pub struct BasisBody {
     /// Discretization as given (`None`: the input's default, fem for a mesh and robust
     /// for a point cloud).
     pub laplacian: Option<Laplacian>,
-    /// Unit-area normalisation (default true).
+    /// Unit-area normalisation (default the library's [`NORMALIZE`]).
     pub normalize: bool,
-    /// Pairs (default 100).
+    /// Pairs (default the library's [`DEFAULT_K`]).
     pub k: usize,
 }
 
@@ -187,7 +178,7 @@ pub fn parse_basis(bytes: &[u8]) -> Result<BasisBody, BodyError> {
         .map_err(|e| bad(format!("laplacian: {e}")))?;
     Ok(BasisBody {
         laplacian,
-        normalize: j.normalize.unwrap_or(true),
+        normalize: j.normalize.unwrap_or(NORMALIZE),
         k: j.k.unwrap_or(DEFAULT_K),
     })
 }
@@ -369,7 +360,10 @@ mod tests {
         assert_eq!(b.figure_options().unwrap().levels, 7);
         let d = FieldBody::from_value(serde_json::json!({"kind": "distance"})).unwrap();
         assert_eq!(d.request, FieldRequest::default());
-        assert_eq!((d.laplacian, d.normalize, d.levels), (None, true, 10));
+        assert_eq!(
+            (d.laplacian, d.normalize, d.levels),
+            (None, NORMALIZE, LEVELS)
+        );
         for (body, key) in [
             (serde_json::json!({"t": 1}), "kind"),
             (serde_json::json!({"kind": "heat", "filter": "x"}), "filter"),

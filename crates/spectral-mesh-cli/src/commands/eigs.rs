@@ -37,11 +37,11 @@ pub struct Args {
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Relative gap below which consecutive eigenvalues count as one cluster.
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = spectral_mesh::defaults::CLUSTER_TOLERANCE)]
     pub cluster_tolerance: f64,
     /// Floating-point type of the eigenvalues and eigenvectors in the .npz (float64 or
     /// float32): computed in double precision either way and rounded once when written.
-    #[arg(long, default_value = "float64")]
+    #[arg(long, default_value = BasisDtype::default().name())]
     pub dtype: String,
     /// Certify that no eigenvalue was skipped, multiplicities included: count the
     /// eigenvalues below a shift just above lambda_k from the negative pivots of an

@@ -559,6 +559,26 @@ def _marks(marks: int | Sequence[int] | None) -> list[int]:
     return [_arrays.count(m, "mark") for m in marks]
 
 
+def _render_args(values: Any, n: int, marks: Any, labels: Any, levels: Any, colormap: Any,
+                 view: Any, size: Any, transparent: Any, critical_points: Any,
+                 colorbar: Any, path: Any) -> tuple[Any, ...]:
+    """The native render's arguments after the mesh (values, marks, labels, the picture
+    options as one dict, path), checked and converted: the one way of :func:`render` and
+    :meth:`Analysis.render` (``n`` vertices)."""
+    vals = _arrays.per_vertex(values, n)
+    marks, labels = _marks(marks), _labels(labels, n)
+    figure = {
+        "levels": _arrays.count(levels, "levels"),
+        "colormap": str(colormap),
+        "view": _view_text(view),
+        "size": _arrays.count(size, "size", 1),
+        "transparent": bool(transparent),
+        "critical_points": bool(critical_points),
+        "colorbar": bool(colorbar),
+    }
+    return vals, marks, labels, figure, None if path is None else os.fspath(path)
+
+
 def render(
     V: npt.ArrayLike,
     F: npt.ArrayLike,
@@ -591,22 +611,9 @@ def render(
     ``critical_points``: mark minima (blue), maxima (red) and saddles (green).
     """
     V, F = _arrays.mesh(V, F)
-    vals = _arrays.per_vertex(values, V.shape[0])
-    return _native.render(
-        V,
-        F,
-        vals,
-        _marks(marks),
-        _labels(labels, V.shape[0]),
-        _arrays.count(levels, "levels"),
-        str(colormap),
-        _view_text(view),
-        _arrays.count(size, "size", 1),
-        bool(transparent),
-        bool(critical_points),
-        bool(colorbar),
-        None if path is None else os.fspath(path),
-    )
+    args = _render_args(values, V.shape[0], marks, labels, levels, colormap, view, size,
+                        transparent, critical_points, colorbar, path)
+    return _native.render(V, F, *args)
 
 
 def num_threads() -> int:

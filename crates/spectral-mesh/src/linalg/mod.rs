@@ -3,6 +3,7 @@
 //! This is the only module that names `faer`.
 
 pub mod cholesky;
+pub mod dense_ops;
 pub mod eigen;
 mod scratch;
 pub mod sparse;

@@ -170,24 +170,15 @@ pub fn sparse_generalized_eigen_with(
             )));
         }
         let bs = if opts.block_size > 0 {
-            opts.block_size
+            opts.block_size.min(dim)
         } else {
-            // Measured on a 38k-vertex mesh: 8 for k = 50, 16 for k = 200 (larger blocks
-            // need more solves, smaller ones give thin, slow matrix products).
-            (k / 12).clamp(8, 16)
-        }
-        .min(dim);
+            default_block_size(dim, k)
+        };
         let max_basis = if opts.max_basis > 0 {
-            opts.max_basis.max(k + 2 * bs)
+            opts.max_basis.max(k + 2 * bs).min(dim)
         } else {
-            // 2k up to k = 300, then k + 300: measured at k = 500 on 26k vertices, a
-            // basis of 750-850 needed fewer solves and less time than 1000 (6.5-6.8 s
-            // against 8.1 s) and less memory. At least k + 70: for k = 50 a basis of
-            // 120 took the same time as 150 (256 solves against 248, at 38k to 411k
-            // vertices) and 130 MiB less at 411k.
-            (2 * k).min(k + 300).max(k + 70).max(k + 4 * bs)
-        }
-        .min(dim);
+            columns_with_block(dim, k, bs)
+        };
         let pb = krylov_schur::Problem {
             s,
             b,
@@ -273,6 +264,30 @@ fn indicators_only(
         progress,
         cancel,
     )
+}
+
+/// The block size of the sparse solver for `k` pairs of a problem of dimension `dim`
+/// (when the options leave it to the solver). Measured on a 38k-vertex mesh: 8 for
+/// k = 50, 16 for k = 200 (larger blocks need more solves, smaller ones give thin, slow
+/// matrix products).
+pub fn default_block_size(dim: usize, k: usize) -> usize {
+    (k / 12).clamp(8, 16).min(dim)
+}
+
+/// Columns of the sparse solver's search space for `k` pairs of a problem of dimension
+/// `dim` (when the options leave it to the solver): `min(2k, k + 300)`, at least `k + 70`
+/// and `k` plus four blocks, at most `dim`. 2k up to k = 300, then k + 300: measured at
+/// k = 500 on 26k vertices, a basis of 750-850 needed fewer solves and less time than
+/// 1000 (6.5-6.8 s against 8.1 s) and less memory. At least k + 70: for k = 50 a basis
+/// of 120 took the same time as 150 (256 solves against 248, at 38k to 411k vertices)
+/// and 130 MiB less at 411k. The web server's memory estimate reads the same rule.
+pub fn search_columns(dim: usize, k: usize) -> usize {
+    columns_with_block(dim, k, default_block_size(dim, k))
+}
+
+/// [`search_columns`] with blocks of `bs` columns.
+fn columns_with_block(dim: usize, k: usize, bs: usize) -> usize {
+    (2 * k).min(k + 300).max(k + 70).max(k + 4 * bs).min(dim)
 }
 
 #[cfg(test)]
