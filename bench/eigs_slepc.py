@@ -65,7 +65,7 @@ def main():
         print(f"slepc4py is not importable ({e}); run bench/setup-slepc.sh", file=sys.stderr)
         sys.exit(3)
     import numpy as np
-    from eigs_scipy import operators, read_off
+    from eigs_scipy import operators, read_off, save_basis
 
     v, f = read_off(a.mesh)
     t0 = time.perf_counter()
@@ -135,17 +135,7 @@ def main():
           f"lambda_k={lam[-1]:.12e} peak_rss_mib={peak:.0f} nconv={nconv} "
           f"iterations={eps.getIterationNumber()}")
     if a.save:
-        # The arrays of spectral-mesh's .npz, as bench/eigs_scipy.py --save writes them.
-        import json
-        Bc = B.tocsc()
-        meta = json.dumps({"format_version": 1, "laplacian": a.mass, "n": n, "k": a.k,
-                           "mesh_hash": "", "generator": route}).encode()
-        np.savez(a.save, eigenvalues=lam, eigenvectors=X,
-                 mass_data=Bc.data, mass_indices=Bc.indices.astype(np.int64),
-                 mass_indptr=Bc.indptr.astype(np.int64),
-                 mass_shape=np.array(Bc.shape, dtype=np.int64), residuals=res,
-                 meta=np.frombuffer(meta, dtype=np.uint8))
-
+        save_basis(a.save, lam, X, B, res, a.mass, route)
 
 if __name__ == "__main__":
     main()
