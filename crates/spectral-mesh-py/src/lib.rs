@@ -18,8 +18,10 @@ use pyo3::types::PyTuple;
 use serde_json::{Value, json};
 use spectral_mesh::analysis::{AnalysisOptions, Signal, SignatureSpec};
 use spectral_mesh::operators::{Laplacian, Operators};
-use spectral_mesh::spectral::eigenbasis::{EigenMethod, EigenParams, EigenSolver};
-use spectral_mesh::spectral::store::{BasisMeta, load_npz, save_npz};
+use spectral_mesh::spectral::eigenbasis::{
+    CertifyReport, EigenMethod, EigenParams, EigenSolver, certify_eigenbasis,
+};
+use spectral_mesh::spectral::store::{BasisDtype, BasisMeta, load_npz, save_npz};
 use spectral_mesh::{Analysis, Eigenbasis, FieldRequest, Mesh, SparseMatrix};
 use spectral_mesh_render::{Colormap, Figure, FigureOptions, View};
 
@@ -245,11 +247,22 @@ fn point_laplacian<'py>(
     Ok((csc_to_py(py, s)?, csc_to_py(py, b)?, total))
 }
 
-/// The `k` smallest pairs of a mesh's `(S, B)`: `(evals (k,), evecs (n, k))`, the vectors
-/// moved into NumPy without a copy.
+/// `(evals, evecs, certificate or None)` of [`eigenbasis`]: float64 or float32 arrays.
+type CertifiedPairs<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Option<Bound<'py, PyAny>>,
+);
+
+/// The `k` smallest pairs of a mesh's `(S, B)`: `(evals (k,), evecs (n, k), certificate)`,
+/// the vectors moved into NumPy without a copy. `certify`: the library's inertia
+/// certificate ([`certify_eigenbasis`]) is run on the pairs, the completed basis returned
+/// when pairs were missing, and its report is the third item (else `None`); a count that
+/// still disagrees is a `SolverError`. `dtype`: `"float64"` or `"float32"` (computed in
+/// double precision, rounded once); `None`: the library's default.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v, f, k, kind, normalize, tol, seed, dirichlet, method, progress=None))]
+#[pyo3(signature = (v, f, k, kind, normalize, tol, seed, dirichlet, method, progress=None, certify=false, dtype=None))]
 fn eigenbasis<'py>(
     py: Python<'py>,
     v: PyReadonlyArray2<'_, f64>,
@@ -262,22 +275,87 @@ fn eigenbasis<'py>(
     dirichlet: Option<Vec<usize>>,
     method: &str,
     progress: Option<Py<PyAny>>,
-) -> PyResult<Pairs<'py>> {
+    certify: bool,
+    dtype: Option<&str>,
+) -> PyResult<CertifiedPairs<'py>> {
     let progress = run::Progress::new(progress);
     let mesh = mesh_from(&v, &f).map_err(|e| e.into_pyerr(py))?;
+    let dtype = match dtype {
+        None => BasisDtype::default(),
+        Some(d) => BasisDtype::parse(d)
+            .map_err(|e| Failure::value(format!("dtype = '{d}': {e}")).into_pyerr(py))?,
+    };
     let options = AnalysisOptions {
         laplacian: laplacian_of(kind).map_err(|e| e.into_pyerr(py))?,
         normalize,
         eigen: eigen_params(tol, seed, dirichlet, method).map_err(|e| e.into_pyerr(py))?,
     };
-    let (n, values, vectors) = run(py, move |token| {
+    let (n, values, vectors, report) = run(py, move |token| {
         let an = Analysis::new(mesh, options);
         let basis = an.basis(k, &mut |p| progress.report(&p, token), token);
         let basis = progress.finish(basis.map_err(Failure::from))?;
+        let mut report = None;
+        let basis = if certify {
+            let params = EigenParams {
+                k,
+                ..an.options().eigen.clone()
+            };
+            let (n, values, vectors) = take_pairs(basis, k);
+            let given = Eigenbasis {
+                laplacian: an.operators().laplacian,
+                n,
+                values,
+                vectors,
+                mass: an.operators().mass.clone(),
+                residuals: Vec::new(),
+            };
+            let (completed, r) = certify_eigenbasis(an.operators(), &params, &given, token)
+                .map_err(Failure::from)?;
+            if !r.certified() {
+                return Err(Failure::Solver(format!(
+                    "certify: the eigenvalue count disagrees: {}",
+                    r.lines().join("; ")
+                )));
+            }
+            report = Some(certificate_json(&r));
+            Arc::new(completed.unwrap_or(given))
+        } else {
+            basis
+        };
         drop(an);
-        Ok(take_pairs(basis, k))
+        let (n, values, vectors) = take_pairs(basis, k);
+        Ok((n, values, vectors, report))
     })?;
-    Ok((to_vector(py, values), to_columns(py, n, k, vectors)?))
+    let (evals, evecs) = match dtype {
+        BasisDtype::Float64 => (
+            to_vector(py, values).into_any(),
+            to_columns(py, n, k, vectors)?.into_any(),
+        ),
+        BasisDtype::Float32 => (
+            to_vector(py, values.iter().map(|&x| x as f32).collect()).into_any(),
+            to_columns(py, n, k, vectors.iter().map(|&x| x as f32).collect())?.into_any(),
+        ),
+    };
+    let report = match report {
+        Some(r) => Some(pyjson::to_py(py, &r)?),
+        None => None,
+    };
+    Ok((evals, evecs, report))
+}
+
+/// The certificate's report as the dictionary the Python call returns.
+fn certificate_json(r: &CertifyReport) -> Value {
+    let cert = |c: &spectral_mesh::linalg::Certificate| json!({"shift": c.shift, "below": c.below, "found": c.found});
+    json!({
+        "certified": r.certified(),
+        "k": r.k,
+        "first": cert(&r.first),
+        "last": cert(&r.last),
+        "added": r.added,
+        "searches": r.searches,
+        "values_changed": r.values_changed,
+        "lines": r.lines(),
+    })
 }
 
 /// The first `k` pairs of a basis, moved out when nobody else holds it.

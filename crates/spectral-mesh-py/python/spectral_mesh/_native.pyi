@@ -66,9 +66,12 @@ def eigenbasis(
     dirichlet: list[int] | None,
     method: str,
     progress: Callable[[dict], object] | None = None,
-) -> tuple[F64, F64]:
-    """``(evals (k,), evecs (n, k) Fortran order)``, ``evecs.T @ B @ evecs = I``;
-    ``progress`` is called with a dict per solver event."""
+    certify: bool = False,
+    dtype: str | None = None,
+) -> tuple[NDArray[np.floating[Any]], NDArray[np.floating[Any]], dict | None]:
+    """``(evals (k,), evecs (n, k) Fortran order, certificate or None)``,
+    ``evecs.T @ B @ evecs = I``; ``progress`` is called with a dict per solver event;
+    ``dtype``: ``"float64"`` or ``"float32"`` (``None``: the library's default)."""
 
 def eigsh(
     n: int,

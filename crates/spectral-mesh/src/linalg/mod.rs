@@ -7,7 +7,7 @@ pub mod dense_ops;
 pub mod eigen;
 mod scratch;
 pub mod sparse;
-mod timing;
+pub mod timing;
 
 pub use cholesky::{CholeskyError, Inertia, SparseCholesky, inertia};
 pub use eigen::{

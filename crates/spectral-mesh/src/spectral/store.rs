@@ -231,7 +231,7 @@ pub(crate) fn npy_u8(data: &[u8]) -> std::io::Result<Vec<u8>> {
     Ok(buf)
 }
 
-/// Writes `basis` to `path` as an `.npz` archive (the eigenvectors stored, the small
+/// Writes `basis` to `path` as an `.npz` archive (the eigenvectors and the mass stored, the small
 /// arrays deflated; see the module documentation for the arrays). The file is written to a temporary name and renamed,
 /// so a crash never leaves a truncated archive under `path`.
 ///
@@ -278,8 +278,11 @@ fn save_npz_as(
     let mut values_npy = Vec::new();
     write_npy(&mut values_npy, &basis.values, &[k as u64], false, dtype).map_err(&e)?;
     let mut small: Vec<(&str, Vec<u8>)> = vec![("eigenvalues", values_npy)];
+    // The mass arrays (about 7n values and indices) are stored, as NumPy stores them:
+    // deflating them took 11% of a whole `eigs` command (26k vertices, k = 50).
+    let mut mass: Vec<(&str, Vec<u8>)> = Vec::new();
     if vectors {
-        small.extend([
+        mass.extend([
             (
                 "mass_data",
                 npy_f64(m.values(), &[m.nnz() as u64], false).map_err(&e)?,
@@ -326,6 +329,11 @@ fn save_npz_as(
                 true,
                 dtype,
             )?;
+        }
+        for (name, bytes) in &mass {
+            zip.start_file(format!("{name}.npy"), stored)
+                .map_err(std::io::Error::other)?;
+            zip.write_all(bytes)?;
         }
         let rest = rest.iter().map(|(name, b)| (*name, b.as_slice()));
         let extra = extra.iter().map(|(name, b)| (name.as_str(), b.as_slice()));
