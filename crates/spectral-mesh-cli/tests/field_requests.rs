@@ -59,6 +59,7 @@ fn every_request_kind_written_by_the_cli_equals_the_librarys_field() {
     let signal_json = serde_json::to_string(&signal).unwrap();
 
     for (name, kind) in [
+        ("geo", "geodesic"),
         ("emb", "embedding"),
         ("eig", "eigenfunction"),
         ("green", "green"),
@@ -91,6 +92,7 @@ fn every_request_kind_written_by_the_cli_equals_the_librarys_field() {
         ("segment sphere:res=2 -o seg.txt", "seg.txt", r#"{"kind": "segmentation"}"#.into()),
         ("experiment harmonic sphere:res=2 --constraints 2 --size 32 -o harm",
          "harm/harmonic-field-1.txt", r#"{"kind": "harmonic"}"#.into()),
+        ("run geo.toml -o geo", "geo/geodesic.txt", r#"{"kind": "geodesic"}"#.into()),
         ("run emb.toml -o emb", "emb/embedding.txt", r#"{"kind": "embedding"}"#.into()),
         ("run eig.toml -o eig", "eig/eigenfunction.txt", r#"{"kind": "eigenfunction"}"#.into()),
         ("run green.toml -o green", "green/green.txt", r#"{"kind": "green"}"#.into()),

@@ -248,8 +248,9 @@ NOT_LIBRARY = {
     # command line's `eigs` and `operators`); an analysis normalizes.
     "laplacian": {"normalize"},
     "point_cloud_laplacian": {"normalize"},
-    "eigenbasis": {"normalize"},
-    # How the Python face runs and reports (no effect on any number).
+    "eigenbasis": {"normalize", "certify"},
+    # How the Python face runs and reports (no effect on any number); `certify` is an
+    # opt-in check that adds a third item to the result, as `eigs --certify` is a flag.
     "batch": {"retries", "retry_failed", "force"},
     "load_basis": {"with_mass"},
     "Analysis.field": {"return_info"},

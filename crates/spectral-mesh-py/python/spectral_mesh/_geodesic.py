@@ -93,6 +93,11 @@ class GeodesicSolver:
         return self
 
     @property
+    def n(self) -> int:
+        """The number of vertices (or points)."""
+        return self._native.n
+
+    @property
     def t(self) -> float:
         """The time step ``t = m h^2``."""
         return self._native.t

@@ -8,20 +8,22 @@
 //! - [`p2p_to_fmap`]: the functional map of a point map `p2p_21`,
 //!   `C = Phi_2^T M_2 Phi_1[p2p_21, :]` (`k2 x k1`).
 //!
-//! Nearest neighbours come from a k-d tree (`kiddo`, exact) over the rows, padded with
-//! zeros to the next supported width (padding changes no distance); beyond
-//! [`KD_TREE_MAX_DIM`] columns, a parallel exhaustive search.
+//! Nearest neighbours: up to [`KD_TREE_MAX_DIM`] columns from a k-d tree (`kiddo`, exact)
+//! over the rows, padded with zeros to the next supported width (padding changes no
+//! distance); wider embeddings (the usual 30-100 eigenfunctions, where a tree prunes
+//! almost nothing) from blocked matrix products
+//! ([`crate::linalg::dense_ops::nearest_rows_by_products`]).
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use super::{CorrespondenceError, FunctionalMap, truncate};
-use crate::linalg::dense_ops::{gram, product, product_transposed};
+use crate::linalg::dense_ops::{gram, nearest_rows_by_products, product, product_transposed};
 use crate::linalg::sym_spmm;
 use crate::spectral::BasisView;
 
 /// Widest embedding searched with the k-d tree.
-pub const KD_TREE_MAX_DIM: usize = 256;
+pub const KD_TREE_MAX_DIM: usize = 16;
 
 fn row<const K: usize>(x: &[f64], n: usize, d: usize, i: usize) -> [f64; K] {
     let mut r = [0.0; K];
@@ -59,26 +61,6 @@ fn nearest_kd<const K: usize>(
                 }
                 None => tree.nearest_one::<SquaredEuclidean>(&q).item as usize,
             }
-        })
-        .collect()
-}
-
-fn nearest_exhaustive(points: &[f64], n: usize, queries: &[f64], m: usize, d: usize) -> Vec<usize> {
-    let pts: Vec<Vec<f64>> = (0..n)
-        .map(|i| (0..d).map(|q| points[q * n + i]).collect())
-        .collect();
-    (0..m)
-        .into_par_iter()
-        .map(|i| {
-            let q: Vec<f64> = (0..d).map(|c| queries[c * m + i]).collect();
-            let mut best = (f64::INFINITY, 0);
-            for (j, p) in pts.iter().enumerate() {
-                let dist: f64 = p.iter().zip(&q).map(|(a, b)| (a - b).powi(2)).sum();
-                if dist < best.0 {
-                    best = (dist, j);
-                }
-            }
-            best.1
         })
         .collect()
 }
@@ -128,15 +110,8 @@ pub fn nearest_rows_hinted(
     }
     Ok(match d {
         0..=8 => nearest_kd::<8>(points, n, queries, m, d, hint),
-        9..=16 => nearest_kd::<16>(points, n, queries, m, d, hint),
-        17..=32 => nearest_kd::<32>(points, n, queries, m, d, hint),
-        33..=48 => nearest_kd::<48>(points, n, queries, m, d, hint),
-        49..=64 => nearest_kd::<64>(points, n, queries, m, d, hint),
-        65..=96 => nearest_kd::<96>(points, n, queries, m, d, hint),
-        97..=128 => nearest_kd::<128>(points, n, queries, m, d, hint),
-        129..=192 => nearest_kd::<192>(points, n, queries, m, d, hint),
-        193..=KD_TREE_MAX_DIM => nearest_kd::<KD_TREE_MAX_DIM>(points, n, queries, m, d, hint),
-        _ => nearest_exhaustive(points, n, queries, m, d),
+        9..=KD_TREE_MAX_DIM => nearest_kd::<KD_TREE_MAX_DIM>(points, n, queries, m, d, hint),
+        _ => nearest_rows_by_products(points, n, queries, m, d),
     })
 }
 

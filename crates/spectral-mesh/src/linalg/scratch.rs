@@ -125,30 +125,39 @@ mod tests {
         // Every pool thread keeps a buffer with a capacity no other buffer has: `take`
         // hands out the smallest kept buffer that is large enough, and a fresh buffer
         // has exactly the capacity asked for...
-        const ODD: usize = 12_345;
-        let marked = |b: &Vec<f64>| b.capacity() == ODD + 7;
-        rayon::broadcast(|_| {
-            let mut b = Vec::with_capacity(ODD + 7);
-            b.resize(ODD, 1.0);
-            give(b)
-        });
-        assert!(
+        // ...on a pool of its own: the tests run side by side, and another test's solve
+        // on the global pool calls `release_all` there.
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .expect("a thread pool");
+        pool.install(|| {
+            const ODD: usize = 12_345;
+            let marked = |b: &Vec<f64>| b.capacity() == ODD + 7;
             rayon::broadcast(|_| {
-                let b = take(ODD);
-                let kept = marked(&b);
-                give(b);
-                kept
-            })
-            .iter()
-            .all(|&kept| kept)
-        );
-        // ...until release_all.
-        release_all();
-        assert!(
-            rayon::broadcast(|_| !marked(&take(ODD)))
+                let mut b = Vec::with_capacity(ODD + 7);
+                b.resize(ODD, 1.0);
+                give(b)
+            });
+            assert!(
+                rayon::broadcast(|_| {
+                    let b = take(ODD);
+                    let kept = marked(&b);
+                    give(b);
+                    kept
+                })
                 .iter()
-                .all(|&fresh| fresh)
-        );
+                .all(|&kept| kept)
+            );
+            // ...until release_all.
+            release_all();
+            assert!(
+                rayon::broadcast(|_| !marked(&take(ODD)))
+                    .iter()
+                    .all(|&fresh| fresh)
+            );
+    
+        });
     }
 
     /// Another solve's `release_all` can reach a thread inside a sparse product, which
