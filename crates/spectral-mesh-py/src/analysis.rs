@@ -789,7 +789,7 @@ impl PyAnalysis {
 
     /// Draws a field on this mesh (see the module-level `render`).
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (values, marks, labels, levels, colormap, view, size, transparent, critical_points, colorbar, path))]
+    #[pyo3(signature = (values, marks, labels, levels, colormap, view, size, transparent, critical_points, colorbar, path, *, legend=true, height=None, scale=None, dpi=None))]
     fn render(
         &self,
         py: Python<'_>,
@@ -804,7 +804,17 @@ impl PyAnalysis {
         critical_points: bool,
         colorbar: bool,
         path: Option<PathBuf>,
+        legend: bool,
+        height: Option<u32>,
+        scale: Option<f64>,
+        dpi: Option<u32>,
     ) -> PyResult<Py<PyAny>> {
+        let extra = crate::FigureExtra {
+            legend,
+            height,
+            scale,
+            dpi,
+        };
         let prepare = || -> Result<_, Failure> {
             Ok((
                 arrays::values(&values, "values")?,
@@ -816,6 +826,7 @@ impl PyAnalysis {
                     transparent,
                     critical_points,
                     colorbar,
+                    extra,
                 )?,
             ))
         };

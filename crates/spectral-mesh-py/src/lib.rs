@@ -436,6 +436,19 @@ fn load_basis<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Archive<'py>> {
     ))
 }
 
+/// The figure keywords added after the first ones (keyword-only in the native calls).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct FigureExtra {
+    /// Draw the legend.
+    pub legend: bool,
+    /// Picture height.
+    pub height: Option<u32>,
+    /// Picture pixels per screen pixel.
+    pub scale: Option<f64>,
+    /// Print resolution.
+    pub dpi: Option<u32>,
+}
+
 /// Figure options from the Python keywords.
 pub(crate) fn figure_options(
     levels: usize,
@@ -445,8 +458,18 @@ pub(crate) fn figure_options(
     transparent: bool,
     critical_points: bool,
     colorbar: bool,
+    extra: FigureExtra,
 ) -> Result<FigureOptions, Failure> {
+    if let Some(s) = extra.scale
+        && !(s.is_finite() && s > 0.0)
+    {
+        return Err(Failure::value(format!("scale must be positive, got {s}")));
+    }
     Ok(FigureOptions {
+        height: extra.height,
+        scale: extra.scale,
+        dpi: extra.dpi,
+        legend: extra.legend,
         levels,
         colormap: colormap
             .parse::<Colormap>()
@@ -523,7 +546,7 @@ pub(crate) fn draw(
 /// Draws a field on `(V, F)` (see [`draw`]).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v, f, values, marks, labels, levels, colormap, view, size, transparent, critical_points, colorbar, path))]
+#[pyo3(signature = (v, f, values, marks, labels, levels, colormap, view, size, transparent, critical_points, colorbar, path, *, legend=true, height=None, scale=None, dpi=None))]
 fn render(
     py: Python<'_>,
     v: PyReadonlyArray2<'_, f64>,
@@ -539,7 +562,17 @@ fn render(
     critical_points: bool,
     colorbar: bool,
     path: Option<PathBuf>,
+    legend: bool,
+    height: Option<u32>,
+    scale: Option<f64>,
+    dpi: Option<u32>,
 ) -> PyResult<Py<PyAny>> {
+    let extra = FigureExtra {
+        legend,
+        height,
+        scale,
+        dpi,
+    };
     let prepare = || -> Result<(Mesh, Vec<f64>, FigureOptions), Failure> {
         Ok((
             mesh_from(&v, &f)?,
@@ -552,6 +585,7 @@ fn render(
                 transparent,
                 critical_points,
                 colorbar,
+                extra,
             )?,
         ))
     };
@@ -614,6 +648,7 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
             "transparent": fig.transparent,
             "critical_points": fig.critical_points,
             "colorbar": fig.colorbar,
+            "legend": fig.legend,
         },
         "point_cloud": {
             "n_neighbors": pc.neighbors,

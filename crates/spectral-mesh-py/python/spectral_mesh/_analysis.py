@@ -812,6 +812,10 @@ class Analysis:
         transparent: bool = FIGURE["transparent"],
         critical_points: bool = FIGURE["critical_points"],
         colorbar: bool = FIGURE["colorbar"],
+        legend: bool = FIGURE["legend"],
+        height: int | None = None,
+        scale: float | None = None,
+        dpi: int | None = None,
     ) -> npt.NDArray[np.uint8] | None:
         """Draw a field on this mesh; see :func:`spectral_mesh.render`. ``marks=None``
         marks the vertices of the last field request (its source, anchor or constraints)
@@ -830,4 +834,8 @@ class Analysis:
             bool(critical_points),
             bool(colorbar),
             None if path is None else os.fspath(path),
+            legend=bool(legend),
+            height=None if height is None else _arrays.count(height, "height", 1),
+            scale=None if scale is None else _arrays.real(scale, "scale"),
+            dpi=None if dpi is None else _arrays.count(dpi, "dpi", 1),
         )

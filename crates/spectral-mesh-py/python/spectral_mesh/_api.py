@@ -514,6 +514,10 @@ def render(
     transparent: bool = FIGURE["transparent"],
     critical_points: bool = FIGURE["critical_points"],
     colorbar: bool = FIGURE["colorbar"],
+    legend: bool = FIGURE["legend"],
+    height: int | None = None,
+    scale: float | None = None,
+    dpi: int | None = None,
 ):
     """Draw a per-vertex field on the mesh, the way the CLI and the web app draw it.
 
@@ -522,13 +526,20 @@ def render(
     returned; without it the picture is returned as a ``(size, size, 4)`` uint8 RGBA
     array (``matplotlib.pyplot.imshow`` shows it).
 
-    ``values``: ``(n,)`` real. ``marks``: vertices drawn as yellow dots (a source, an
-    anchor, constraints). ``labels``: ``(n,)`` non-negative integers (a segmentation):
+    ``values``: ``(n,)`` real. ``marks``: vertices drawn as stars (a source, an
+    anchor). ``labels``: ``(n,)`` non-negative integers (a segmentation):
     one colour per label instead of the colour map, no level sets. ``levels``: number of
     evenly spaced level sets drawn (0 = none). ``colormap``: ``"hue"`` (the paper's, red
     through magenta), ``"viridis"``, ``"turbo"``, ``"diverging"``, ``"grey"``. ``view``:
-    ``"front"``, ``"side"``, ``"top"``, ``"iso"`` or ``(azimuth, elevation)`` in degrees.
-    ``critical_points``: mark minima (blue), maxima (red) and saddles (green).
+    ``"front"``, ``"side"``, ``"top"``, ``"iso"``, ``(azimuth, elevation)`` in degrees, or
+    a camera ``"camera:EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV"`` (eye, target, up, vertical field of
+    view in degrees; the web page's download sends its camera so). ``size`` is the width,
+    ``height`` the height (default ``size``); ``scale``: picture pixels per screen pixel of
+    the markers, lines and text (default the smaller side / 800); ``dpi``: print
+    resolution written into the PNG. ``critical_points``: mark minima (blue triangles
+    down), maxima (red triangles up) and saddles (green diamonds). ``legend``: draw the
+    legend (top right; the colour bar is at the bottom left). The same options as the
+    command line's ``render`` give the same picture.
     """
     V, F = _arrays.mesh(V, F)
     vals = _arrays.per_vertex(values, V.shape[0])
@@ -546,6 +557,10 @@ def render(
         bool(critical_points),
         bool(colorbar),
         None if path is None else os.fspath(path),
+        legend=bool(legend),
+        height=None if height is None else _arrays.count(height, "height", 1),
+        scale=None if scale is None else _arrays.real(scale, "scale"),
+        dpi=None if dpi is None else _arrays.count(dpi, "dpi", 1),
     )
 
 

@@ -38,6 +38,7 @@ type St = State<Arc<AppState>>;
 mod basis;
 mod downloads;
 mod fields;
+mod figure;
 mod meshes;
 mod reading;
 mod static_files;
@@ -45,6 +46,7 @@ mod static_files;
 use basis::*;
 use downloads::*;
 use fields::*;
+use figure::*;
 use meshes::*;
 use reading::*;
 use static_files::*;
@@ -121,6 +123,7 @@ pub fn router(state: Arc<AppState>) -> Router {
         .route("/favicon.ico", get(|| async { StatusCode::NO_CONTENT }))
         .route("/api/health", get(health))
         .route("/api/shapes", get(shapes))
+        .route("/api/figure", post(figure))
         .route("/api/mesh", post(load_mesh))
         .route("/api/mesh/{id}", get(mesh_info))
         .route("/api/mesh/{id}/geometry", get(geometry))
