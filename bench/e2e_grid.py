@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """End-to-end benchmark: every spectral command of the `spectral-mesh` CLI, whole process
-(mesh file in, outputs written), against the SciPy + CHOLMOD script that reads the same OFF
-file, computes the same eigenpairs and writes the same .npz (bench/eigs_scipy.py --cholmod
---save). Also the share of each command's process that is not its eigensolve.
+(mesh file in, outputs written), against two peers that read the same OFF file, compute
+the same eigenpairs and write the same .npz: the SciPy + CHOLMOD script
+(bench/eigs_scipy.py --cholmod --save) and the SLEPc one (bench/eigs_slepc.py --save:
+Krylov-Schur, shift-invert, CHOLMOD, the same tolerance as ours). Also the share of each
+command's process that is not its eigensolve.
 
 Standard library only; reuses bench/eigs_grid.py's helpers. Every run is one process, in a
 fresh output folder; within a cell (mesh, k) the routes alternate (scipy, eigs, heat, ...,
@@ -40,7 +42,8 @@ COMMANDS = {
     "embed": ["embed", "MESH", "-k", "K", "-o", "OUT/embedded.off", "--coords", "OUT/c.txt"],
     "experiment": ["experiment", "spectral-distance", "MESH", "-k", "K", "-o", "OUT/exp"],
 }
-ROUTES = ("scipy",) + tuple(COMMANDS)
+PEERS = ("scipy", "slepc")
+ROUTES = PEERS + tuple(COMMANDS)
 SOLVE = re.compile(r"eigenpairs in ([0-9.]+) s")
 PHASES = re.compile(r"eig timings \(s\): (.*)")
 
@@ -49,6 +52,9 @@ def route_command(route, mesh, k, out, a):
     if route == "scipy":
         return [str(a.python), str(ROOT / "bench" / "eigs_scipy.py"), str(mesh), str(k),
                 "--mass", a.laplacian, "--cholmod", "--save", str(out / "basis.npz")]
+    if route == "slepc":
+        return [str(a.slepc_python), str(ROOT / "bench" / "eigs_slepc.py"), str(mesh), str(k),
+                "--mass", a.laplacian, "--tol", repr(a.tol), "--save", str(out / "basis.npz")]
     subst = {"MESH": str(mesh), "K": str(k)}
     args = [subst.get(x, x.replace("OUT", str(out))) for x in COMMANDS[route]]
     return [str(a.cli)] + args + ["--laplacian", a.laplacian]
@@ -69,7 +75,7 @@ def measure(route, label, mesh, vertices, k, run, a):
     shutil.rmtree(out, ignore_errors=True)
     status, reason = eg.failure(status, code, stderr, a.timeout)
     solve = None
-    if route == "scipy":
+    if route in PEERS:
         keys = eg.parse_line(stdout)
         solve = keys.get("seconds")
     else:
@@ -105,20 +111,22 @@ def median_of(records, key):
 
 def render_table(records, a, command):
     routes = [r for r in ROUTES if any(rec["route"] == r for rec in records)]
-    ours = [r for r in routes if r != "scipy"]
+    ours = [r for r in routes if r not in PEERS]
     cells = {}
     for rec in records:
         cells.setdefault((rec["mesh"], rec["k"]), {}).setdefault(rec["route"], []).append(rec)
     lines = eg.table_head(
         records,
-        "# End-to-end: each spectral command against SciPy + CHOLMOD writing the same .npz",
+        "# End-to-end: each spectral command against SciPy + CHOLMOD and SLEPc writing the same .npz",
         command, f"Laplacian: {a.laplacian}; SciPy's OpenBLAS threads: "
         + ", ".join(sorted({str(r.get("scipy_blas_threads") or "default") for r in records})))
     lines += [
         "- whole process, wall seconds (mesh file in, outputs written), median "
-        "(number of runs), and in brackets SciPy's median over the command's; commands: "
+        "(number of runs), and in brackets each peer's median over the command's (SciPy, "
+        "then SLEPc); commands: "
         + "; ".join(f"{r} = `spectral-mesh {' '.join(COMMANDS[r])}`" for r in ours)
-        + "; scipy = `eigs_scipy.py MESH K --cholmod --save OUT/basis.npz`",
+        + "; scipy = `eigs_scipy.py MESH K --cholmod --save OUT/basis.npz`"
+        + f"; slepc = `eigs_slepc.py MESH K --tol {a.tol:g} --save OUT/basis.npz`",
         "",
     ]
     head = ["mesh", "n", "k"] + [f"{r} (s)" for r in routes]
@@ -126,7 +134,7 @@ def render_table(records, a, command):
     lines.append("| " + " | ".join(["---"] + ["---:"] * (len(head) - 1)) + " |")
     for (mesh, k), by in cells.items():
         n = next(rec.get("vertices") for recs in by.values() for rec in recs)
-        scipy = median_of(by.get("scipy", []), "wall_seconds")
+        peers = [median_of(by.get(p, []), "wall_seconds") for p in PEERS]
         row = [f"`{mesh}`", str(n), str(k)]
         for r in routes:
             recs = by.get(r, [])
@@ -136,8 +144,9 @@ def render_table(records, a, command):
                 row.append("failed" if recs else "-")
                 continue
             text = f"{eg.fmt_seconds(med)} ({count})"
-            if r != "scipy" and scipy:
-                text += f" **[{scipy / med:.2f}x]**"
+            ratios = [f"{p / med:.2f}x" for p in peers if p]
+            if r not in PEERS and ratios:
+                text += f" **[{', '.join(ratios)}]**"
             row.append(text)
         lines.append("| " + " | ".join(row) + " |")
     lines += ["", "Peak RSS (MiB, whole process, largest over the runs):", ""]
@@ -177,6 +186,10 @@ def parse_args(argv):
     ap.add_argument("--runs-large", type=int, default=1)
     ap.add_argument("--routes", default=",".join(ROUTES))
     ap.add_argument("--laplacian", default="fem", choices=["fem", "voronoi-cot", "cot"])
+    ap.add_argument("--tol", type=float, default=1e-10,
+                    help="SLEPc's tolerance (the default of ours; SciPy runs with tol = 0)")
+    ap.add_argument("--slepc-python", type=Path, default=Path("/usr/bin/python3"),
+                    help="the python with Debian's slepc4py (bench/setup-slepc.sh)")
     ap.add_argument("--timeout", type=float, default=3600.0)
     ap.add_argument("--slow-seconds", type=float, default=300.0,
                     help="a route whose run took longer runs only once in its cell")

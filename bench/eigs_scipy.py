@@ -86,6 +86,21 @@ def operators(v, f, mass="fem"):
     return S, B
 
 
+def save_basis(path, lam, X, B, res, mass, generator):
+    """The arrays of spectral-mesh's .npz (spectral::store): eigenvalues, eigenvectors
+    (n x k, Fortran order), the mass in CSC form, residuals and a JSON meta."""
+    import json
+    Bc = B.tocsc()
+    n, k = X.shape
+    meta = json.dumps({"format_version": 1, "laplacian": mass, "n": n, "k": k,
+                       "mesh_hash": "", "generator": generator}).encode()
+    np.savez(path, eigenvalues=lam, eigenvectors=np.asfortranarray(X),
+             mass_data=Bc.data, mass_indices=Bc.indices.astype(np.int64),
+             mass_indptr=Bc.indptr.astype(np.int64),
+             mass_shape=np.array(Bc.shape, dtype=np.int64), residuals=res,
+             meta=np.frombuffer(meta, dtype=np.uint8))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("mesh")
@@ -129,18 +144,7 @@ def main():
     print(f"mesh={a.mesh} n={len(v)} k={a.k} route=scipy-{route} tol={a.tol:g} seconds={secs:.3f} assembly={t_ops:.3f} "
           f"max_residual={res.max():.2e} orth_error={orth:.2e} lambda_k={lam[-1]:.12e} peak_rss_mib={peak:.0f}")
     if a.save:
-        # The arrays of spectral-mesh's .npz (spectral::store): eigenvalues, eigenvectors
-        # (n x k, Fortran order), the mass in CSC form, residuals and a JSON meta.
-        import json
-        Bc = B.tocsc()
-        meta = json.dumps({"format_version": 1, "laplacian": a.mass, "n": len(v), "k": a.k,
-                           "mesh_hash": "", "generator": f"scipy {route}"}).encode()
-        np.savez(a.save, eigenvalues=lam, eigenvectors=np.asfortranarray(X),
-                 mass_data=Bc.data, mass_indices=Bc.indices.astype(np.int64),
-                 mass_indptr=Bc.indptr.astype(np.int64),
-                 mass_shape=np.array(Bc.shape, dtype=np.int64), residuals=res,
-                 meta=np.frombuffer(meta, dtype=np.uint8))
-
+        save_basis(a.save, lam, X, B, res, a.mass, f"scipy {route}")
 
 if __name__ == "__main__":
     main()

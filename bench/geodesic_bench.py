@@ -1,21 +1,21 @@
 #!/usr/bin/env python3
-"""Heat-method geodesics, whole process: our CLI against potpourri3d's solver.
+"""Heat-method geodesics, whole process: our CLI against potpourri3d's and libigl's solvers.
 
   python bench/geodesic_bench.py --cli target/release/spectral-mesh --python .venv/bin/python \
-      --mesh MESH.off [--levels 1,2] [--runs 3] [--sources 100]
+      --mesh fandisk.off [--levels 1,2,3] [--runs 3] [--sources 100]
 
-Inputs: Loop subdivisions of MESH (levels 1 and 2 of a 6.5k-vertex mesh: about 26k and
-104k vertices), written once to bench/meshes/geodesic-L*.off (git-ignored). For each input,
-each Laplacian pair (voronoi-cot / use_robust=False, robust / use_robust=True) and each task
-(one source; SOURCES sources each on its own), ours and the peer run alternately RUNS
-times as whole processes:
+Inputs: Loop subdivisions of MESH (levels 1, 2 and 3 of fandisk's 6,475 vertices: 25,894,
+103,570 and 414,274 vertices), written once to bench/meshes/geodesic-NAME-L*.off
+(git-ignored). For each input, each Laplacian pair and each task (one source; SOURCES
+sources each on its own), ours and the peers run in turn RUNS times as whole processes:
 
 - ours: `spectral-mesh geodesic FILE --laplacian L --source 0 -o d.npy` (one source) or
-  `... --each --source 0 --source s1 ... -o d.npy` (many, block right-hand sides);
-- peer: bench/geodesic_peer.py FILE (reads the OFF with NumPy, builds
-  `MeshHeatMethodDistanceSolver(V, F, t_coef=1, use_robust=...)`, one
-  `compute_distance` per source, np.save).
+  `... --each --source 0 --source s1 ... -o d.npy` (many: block right-hand sides);
+- peers: bench/geodesic_peer.py FILE OUT --peer potpourri3d|libigl (the peer's own mesh
+  reader, its solver with t = h^2, one solve per source, np.save).
 
+Pairs: `voronoi-cot` against potpourri3d `use_robust=False` and libigl (cotangent Laplacian);
+`robust` against potpourri3d `use_robust=True` and libigl `use_intrinsic_delaunay=True`.
 Wall time and the child's peak RSS (ru_maxrss) per run; medians are printed as a Markdown
 table and every run is appended to bench/results/geodesic.jsonl with the load average.
 """
@@ -109,10 +109,11 @@ def main():
     ap.add_argument("--cli", required=True)
     ap.add_argument("--python", required=True)
     ap.add_argument("--mesh", required=True)
-    ap.add_argument("--levels", default="1,2")
+    ap.add_argument("--levels", default="1,2,3")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--sources", type=int, default=100)
     ap.add_argument("--laplacians", default="voronoi-cot,robust")
+    ap.add_argument("--peers", default="potpourri3d,libigl")
     a = ap.parse_args()
     os.makedirs(os.path.join(HERE, "meshes"), exist_ok=True)
     os.makedirs(os.path.join(HERE, "results"), exist_ok=True)
@@ -144,11 +145,14 @@ def main():
                         ours_cmd.append("--each")
                     for s in srcs:
                         ours_cmd += ["--source", str(s)]
-                    peer_cmd = [a.python, os.path.join(HERE, "geodesic_peer.py"), path, out,
-                                "--robust" if robust else "--no-robust", "--sources", ",".join(map(str, srcs))]
-                    res = {"ours": [], "peer": []}
+                    cmds = [("ours", ours_cmd)]
+                    for peer in a.peers.split(","):
+                        cmds.append((peer, [a.python, os.path.join(HERE, "geodesic_peer.py"), path, out,
+                                            "--peer", peer] + (["--robust"] if robust else [])
+                                     + ["--sources", ",".join(map(str, srcs))]))
+                    res = {who: [] for who, _ in cmds}
                     for r in range(a.runs):
-                        for who, cmd in [("ours", ours_cmd), ("peer", peer_cmd)]:
+                        for who, cmd in cmds:
                             wall, peak, text = run(cmd)
                             res[who].append((wall, peak))
                             rec = {"input": os.path.basename(path), "n": nv, "laplacian": lap, "task": task,
@@ -159,12 +163,12 @@ def main():
                             print(f"{os.path.basename(path)} {lap} {task} {who}: {wall:.2f} s, {peak:.0f} MiB", flush=True)
                     med = {w: (statistics.median(x[0] for x in v), max(x[1] for x in v)) for w, v in res.items()}
                     rows.append((nv, lap, task, med, os.getloadavg()[0]))
-    print("\n| n | Laplacian (ours / potpourri3d) | task | ours: whole | ours: peak | potpourri3d: whole | potpourri3d: peak | ratio | load |")
-    print("| ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+    print("\n| n | Laplacian | task | who | whole (median) | peak | peer / ours | load |")
+    print("| ---: | --- | --- | --- | ---: | ---: | ---: | ---: |")
     for nv, lap, task, med, load in rows:
-        peer_name = "use_robust=True" if lap == "robust" else "use_robust=False"
-        print(f"| {nv:,} | {lap} / {peer_name} | {task} | {med['ours'][0]:.2f} s | {med['ours'][1]:.0f} MiB | "
-              f"{med['peer'][0]:.2f} s | {med['peer'][1]:.0f} MiB | {med['peer'][0] / med['ours'][0]:.1f}x | {load:.1f} |")
+        for who, (wall, peak) in med.items():
+            ratio = "" if who == "ours" else f"{wall / med['ours'][0]:.1f}x"
+            print(f"| {nv:,} | {lap} | {task} | {who} | {wall:.2f} s | {peak:.0f} MiB | {ratio} | {load:.1f} |")
 
 
 if __name__ == "__main__":

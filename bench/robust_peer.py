@@ -13,26 +13,13 @@ import time
 
 t_start = time.perf_counter()
 import numpy as np  # noqa: E402
+from off_text import read_off  # noqa: E402  (this folder, before it leaves sys.path)
 
 _here = os.path.dirname(os.path.abspath(__file__))
 sys.path = [p for p in sys.path if os.path.abspath(p or ".") != _here]
 import robust_laplacian  # noqa: E402
 
 t_import = time.perf_counter() - t_start
-
-
-def read_off(path):
-    with open(path) as f:
-        head = f.readline().split()
-        assert head[0] == "OFF"
-        line = f.readline()
-        while line.startswith("#") or not line.strip():
-            line = f.readline()
-        nv, nf = (int(x) for x in line.split()[:2])
-        rest = np.array(f.read().split(), dtype=np.float64)
-    V = rest[: 3 * nv].reshape(nv, 3)
-    F = rest[3 * nv : 3 * nv + 4 * nf].reshape(nf, 4)[:, 1:].astype(np.int64)
-    return V, F
 
 
 def main():

@@ -41,6 +41,17 @@ def put(target, name, data):
         f.write(data)
 
 
+def put_each(target, cases, prefix="", head=b""):
+    """put() every case of `cases`: a dict under its keys, a list as PREFIX00, PREFIX01, ...;
+    `head` (a selector byte) before each."""
+    if isinstance(cases, dict):
+        named = cases.items()
+    else:
+        named = ((f"{prefix}{k:02}", t) for k, t in enumerate(cases))
+    for name, t in named:
+        put(target, name, head + t.encode() if head else t)
+
+
 def parse_off(text):
     """Vertices (list of float triples), colours (or None) and faces of an OFF file."""
     toks = []
@@ -661,23 +672,20 @@ def main():
         "negative": "-1 0\n",
         "unicode": "0\u00a01\n",
     }
-    for k, t in constraints.items():
-        put("constraints", k, t)
+    put_each("constraints", constraints)
     filters = ["diffusion:t=0.5", "heat", "heat:t=1e-300", "commute", "commute-time",
                "biharmonic", "bi-harmonic", "mix:a=0.3,t=0.7", "mix", "poly:p=2",
                "polynomial:p=-1", "band:1,4,5", "band-suppression:0", "band:",
                "custom-w:exp(-s*t)/s;t=0.1", "custom-phi:s^2", "custom-w:1/(s-1)",
                "custom-w:max(s,1);a=1,b=2", "custom-phi:sin(s)+2", "diffusion:t=-1",
                "mix:a=2", "poly:p=nan", "custom-w:s;t=inf", "custom-w:pow(s,-t)^2;t=3"]
-    for k, t in enumerate(filters):
-        put("filter", f"f{k:02}", t)
+    put_each("filter", filters, "f")
     exprs = ["1 + 2 * 3", "-s^2", "2^3^2", "(1+2)*3", "2*-s", "exp(-s*t)/s",
              "max(s, 1) + min(s, 1) + pow(2, 3)", "1e-3 * 1E3", "sqrt(abs(-4)) + log(exp(1))",
              "tanh(0) + sin(0) + cos(pi)", "a*s + t", "ln(s)", "1.", ".5e+3", "((s))",
              "- - s", "s ^ -a", "1e400", "(" * 30 + "s" + ")" * 30, "-" * 40 + "s",
              "s+" * 40 + "s"]
-    for k, t in enumerate(exprs):
-        put("filter_expr", f"e{k:02}", t)
+    put_each("filter_expr", exprs, "e")
     shapes = ["3torus", "3torus:res=0", "torus:res=1,R=2,r=0.5", "sphere:res=2",
               "uv-sphere:res=0", "double-torus:res=0", "disk:res=1", "cylinder:res=0,r=1,h=3",
               "irregular-sphere:res=2", "irregular-torus:res=1", "sphere:res=1,irregular=1",
@@ -685,8 +693,7 @@ def main():
               "IRREGULAR-DISK:res=0", "torus:r=2,R=1", "sphere:res=99", "torus:res=8",
               "sphere:res=1,res=2", "cylinder:h=-1", "torus:R=1e300,r=1e-300,res=0",
               "sphere:foo=1", "sphere:", ":", "sphere:res=1,,"]
-    for k, t in enumerate(shapes):
-        put("shape", f"s{k:02}", t)
+    put_each("shape", shapes, "s")
     fields = {
         "basic": "1\n2.5\n-3e-7\n",
         "numpy-savetxt": "1.000000000000000000e+00\n-2.500000000000000000e-01\n",
@@ -700,16 +707,14 @@ def main():
         "comma": "1,2\n",
         "plus": "+1\n+.5\n",
     }
-    for k, t in fields.items():
-        put("field_text", k, t)
+    put_each("field_text", fields)
     perturbs = ["noise:0.1", "noise:0.1,seed=3", "scale:2", "localscale:0,0,0,0.5,2",
                 "localscale:v=3,0.5,2", "rotate:axis=x,angle=30", "rotate:45",
                 "rotate:axis=1/1/0,angle=10,t=1/2/3", "translate:1,2,3", "resample:2",
                 "resample:1.5,seed=2,mode=irregular", "refine:0,0,0,0.3,2", "refine:v=0,0.3,1",
                 "hole:0,0,0,0.2", "hole:v=1,0.2", "tiny:3", "missing:2,seed=1", "bend:30",
                 "bend:30,axis=y", "noise:nan", "scale:1e400", "resample:1e9", "noise:,"]
-    for k, t in enumerate(perturbs):
-        put("perturb_spec", f"p{k:02}", t)
+    put_each("perturb_spec", perturbs, "p")
     import io
     import zipfile
     names = ["eigenvalues", "eigenvectors", "mass_data", "mass_indices", "mass_indptr",
@@ -754,8 +759,7 @@ def main():
         '{"kind": "heat", "extra": 1}',
         '{"kind": "eigenfunction", "index": 10, "k": 10}',
     ]
-    for k, t in enumerate(requests_json):
-        put("field_request", f"json-{k:02}", b"\x00" + t.encode())
+    put_each("field_request", requests_json, "json-", b"\x00")
     requests_toml = [
         'kind = "heat"\nanchor = 40\nt = 0.05\nkernel = "wfem"\nk = 20\n',
         'kind = "harmonic"\nconstraints = [{ vertex = 12, value = 0.0 }, { vertex = 873, value = 1.0 }]\n',
@@ -765,8 +769,7 @@ def main():
         'kind = "segmentation"\nsignature = "hks:t=0.1"\npersistence = 0.0\n',
         'kind = "distance"\nsource = 9223372036854775807\n',
     ]
-    for k, t in enumerate(requests_toml):
-        put("field_request", f"toml-{k:02}", b"\x01" + t.encode())
+    put_each("field_request", requests_toml, "toml-", b"\x01")
     h = "b65de4a870692d7b6461dff27d69139c2c29876bb9eadf3decb9bb25d108d3fc"
     experiments = {
         "diffusion-basis": f'experiment = "diffusion-basis"\nmesh = "sphere:res=2"\nmesh_hash = "{h}"\n'
@@ -794,8 +797,7 @@ def main():
         "figure-size": 'experiment = "field"\nmesh = "x"\n[field]\nkind = "hks"\n[figure]\nsize = 1\n',
         "syntax": 'experiment = "field\nmesh = \n',
     }
-    for k, t in experiments.items():
-        put("experiment_file", k, t)
+    put_each("experiment_file", experiments)
     web_body_seeds()
     total = 0
     for root, _, files in os.walk(OUT):

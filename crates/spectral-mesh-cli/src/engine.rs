@@ -10,7 +10,9 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use spectral_mesh::analysis::request::DEFAULT_K;
-use spectral_mesh::analysis::{Analysis, AnalysisInput, AnalysisOptions, Field, FieldRequest};
+use spectral_mesh::analysis::{
+    Analysis, AnalysisError, AnalysisInput, AnalysisOptions, Field, FieldRequest,
+};
 use spectral_mesh::experiments::file::{ExperimentFile, PointCloudFile};
 use spectral_mesh::linalg::EigenProgress;
 use spectral_mesh::operators::{NormalSource, PointCloudParams};
@@ -153,16 +155,16 @@ Point clouds (.xyz/.pts/.txt/.csv, PLY without faces) take only robust: their
 point-cloud Laplacian (k nearest neighbours, local Delaunay, tufted union; see the
 'Point clouds' options); it is their default.";
 
-/// The discretization for `input`: `given`, or fem for a mesh and robust for a point
-/// cloud; refuses a discretization that does not apply to a point cloud, by name.
+/// The discretization for `input`: the library's rule
+/// ([`spectral_mesh::defaults::laplacian_for`]: `given`, or fem for a mesh and robust for a
+/// point cloud); refuses a discretization that does not apply to a point cloud, by name.
 pub fn resolve_laplacian(given: Option<Laplacian>, input: &AnalysisInput) -> Result<Laplacian> {
-    match (input.is_points(), given) {
-        (true, None | Some(Laplacian::Robust)) => Ok(Laplacian::Robust),
-        (true, Some(l)) => bail!(
-            "--laplacian {l} does not apply to a point cloud: it needs triangles; a point cloud has only its point-cloud Laplacian, --laplacian robust (the default for point files)"
+    spectral_mesh::defaults::laplacian_for(given, input.is_points()).map_err(|e| match e {
+        AnalysisError::NotForPoints { laplacian } => anyhow::anyhow!(
+            "--laplacian {laplacian} does not apply to a point cloud: it needs triangles; a point cloud has only its point-cloud Laplacian, --laplacian robust (the default for point files)"
         ),
-        (false, l) => Ok(l.unwrap_or(AnalysisOptions::default().laplacian)),
-    }
+        e => e.into(),
+    })
 }
 
 impl BasisArgs {

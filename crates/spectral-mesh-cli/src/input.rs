@@ -219,44 +219,9 @@ pub fn load_repaired(spec: Option<&str>, do_repair: bool) -> Result<Input> {
     Ok(input)
 }
 
-/// Reads a per-vertex field: numbers separated by white space or commas, one or more a
-/// line (blank lines and `#` comments allowed). Refuses a wrong length or a non-finite
-/// value, naming the file and line.
-///
-/// Kept here until the library has its own reader of field files
-/// (`spectral_mesh::io::read_field_text` is planned); then this becomes a call to it.
+/// Reads a per-vertex field file of `n` values: the library's reader
+/// ([`spectral_mesh::io::read_field`]: one value per line, `#` comments; a wrong count or a
+/// value that is not a finite number is refused, naming the file and line).
 pub fn read_field(path: &Path, n: usize) -> Result<Vec<f64>> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
-    let mut values = Vec::with_capacity(n);
-    for (i, line) in text.lines().enumerate() {
-        let t = line.split('#').next().unwrap_or("").trim();
-        if t.is_empty() {
-            continue;
-        }
-        for tok in t
-            .split(|c: char| c.is_whitespace() || c == ',')
-            .filter(|s| !s.is_empty())
-        {
-            let v: f64 = tok.parse().map_err(|_| {
-                anyhow::anyhow!("{}:{}: '{tok}' is not a number", path.display(), i + 1)
-            })?;
-            if !v.is_finite() {
-                bail!(
-                    "{}:{}: value {tok} is not finite (NaN or infinite)",
-                    path.display(),
-                    i + 1
-                );
-            }
-            values.push(v);
-        }
-    }
-    if values.len() != n {
-        bail!(
-            "{}: has {} values but the mesh has {n} vertices",
-            path.display(),
-            values.len()
-        );
-    }
-    Ok(values)
+    Ok(spectral_mesh::io::read_field(path, Some(n))?)
 }

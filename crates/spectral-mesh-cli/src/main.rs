@@ -2,6 +2,8 @@
 //! meshes, from the command line. See `spectral-mesh --help`.
 
 mod commands;
+#[cfg(test)]
+mod defaults_test;
 mod engine;
 mod figure;
 mod input;
@@ -56,6 +58,9 @@ enum Command {
     Segment(commands::segment::Args),
     /// Spectral embedding as a mesh with the same triangles, and its coordinates.
     Embed(commands::embed::Args),
+    /// Match two shapes: functional map, ZoomOut, point map (one target vertex per
+    /// source vertex).
+    Match(commands::matching::Args),
     /// Perturb a mesh (noise, scaling, resampling, holes, ...) and map it to the original.
     Perturb(commands::perturb::Args),
     /// Run one of the paper's experiments with its defaults and outputs.
@@ -102,6 +107,7 @@ fn main() -> std::process::ExitCode {
         Command::Signature(a) => commands::signature::run(a),
         Command::Segment(a) => commands::segment::run(a),
         Command::Embed(a) => commands::embed::run(a),
+        Command::Match(a) => commands::matching::run(a),
         Command::Perturb(a) => commands::perturb::run(a),
         Command::Experiment(e) => commands::experiment::run(e),
         Command::Run(a) => commands::run::run(a),

@@ -142,3 +142,112 @@ fn a_web_download_replays_to_the_same_bytes() {
         );
     }
 }
+
+/// The values of a text download or a `.txt` output, one per line.
+fn values(bytes: &[u8]) -> Vec<f64> {
+    String::from_utf8_lossy(bytes)
+        .lines()
+        .map(|l| l.trim().parse().unwrap())
+        .collect()
+}
+
+/// A geodesic distance from the web app equals the command line's `geodesic` for the
+/// same source (to 1e-12: the same library call), on a closed shape and on one with
+/// boundary (Crane's averaged heat), for both conventions and the robust Laplacian; the
+/// web's experiment file replays it byte for byte.
+#[test]
+fn a_web_geodesic_equals_the_command_line() {
+    let server = spawn(ServeConfig {
+        port: 0,
+        limits: spectral_mesh_web::Limits {
+            cache_bytes: 256 << 20,
+            ..Default::default()
+        },
+        ..Default::default()
+    })
+    .unwrap();
+    let addr = server.addr;
+    let dir = tempfile::tempdir().unwrap();
+    for (shape, source, extra) in [
+        ("3torus", 17usize, json!({})),
+        ("disk", 3, json!({})),
+        (
+            "disk",
+            10,
+            json!({"convention": "potpourri3d", "time_factor": 2.0}),
+        ),
+        ("3torus", 5, json!({"laplacian": "robust"})),
+    ] {
+        let mesh = json_of(addr, "POST", "/api/mesh", &json!({ "shape": shape }));
+        let id = mesh["mesh_id"].as_str().unwrap().to_string();
+        let mut body = json!({"kind": "geodesic", "source": source});
+        for (k, v) in extra.as_object().unwrap() {
+            body[k] = v.clone();
+        }
+        let label = format!("{shape} {body}");
+        let download = |format: &str| {
+            let mut b = body.clone();
+            b["format"] = json!(format);
+            let (status, bytes) = http(addr, "POST", &format!("/api/mesh/{id}/download"), &b);
+            assert_eq!(
+                status,
+                200,
+                "{label} {format}: {}",
+                String::from_utf8_lossy(&bytes)
+            );
+            bytes
+        };
+        let web = download("txt");
+        let web_values = values(&web);
+        assert_eq!(web_values[source], 0.0, "{label}");
+        let out = dir.path().join(format!("cli-{shape}-{source}.txt"));
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_spectral-mesh"));
+        cmd.args(["geodesic", shape, "--source", &source.to_string(), "-o"])
+            .arg(&out);
+        if let Some(l) = extra.get("laplacian") {
+            cmd.args(["--laplacian", l.as_str().unwrap()]);
+        }
+        if let Some(c) = extra.get("convention") {
+            cmd.args(["--convention", c.as_str().unwrap()]);
+        }
+        if let Some(m) = extra.get("time_factor") {
+            cmd.args(["--time-factor", &m.to_string()]);
+        }
+        let run = cmd.output().unwrap();
+        assert!(
+            run.status.success(),
+            "{label}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let cli_values = values(&std::fs::read(&out).unwrap());
+        assert_eq!(cli_values.len(), web_values.len(), "{label}");
+        let err = cli_values
+            .iter()
+            .zip(&web_values)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(err <= 1e-12, "{label}: web and CLI differ by {err}");
+        // The experiment file replays to the same bytes.
+        let toml = download("toml");
+        let toml_text = String::from_utf8(toml.clone()).unwrap();
+        assert!(toml_text.contains("kind = \"geodesic\""), "{toml_text}");
+        let file = dir.path().join(format!("geo-{shape}-{source}.toml"));
+        std::fs::write(&file, &toml).unwrap();
+        let replay = dir.path().join(format!("run-{shape}-{source}"));
+        let run = Command::new(env!("CARGO_BIN_EXE_spectral-mesh"))
+            .arg("run")
+            .arg(&file)
+            .arg("-o")
+            .arg(&replay)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "run {label}: {}\n{toml_text}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        assert!(
+            std::fs::read(replay.join("geodesic.txt")).unwrap() == web,
+            "{label}: the replay differs from the download"
+        );
+    }
+}

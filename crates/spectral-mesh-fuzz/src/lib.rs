@@ -20,6 +20,13 @@ use arbitrary::{Arbitrary, Unstructured};
 use spectral_mesh::Mesh;
 use spectral_mesh::io::{IoError, LoadedMesh, MeshFormat, WriteOptions};
 
+/// The file name picked by the first byte of `data` among `names`, and the rest of the
+/// bytes (the file's content); `None` for empty input.
+pub fn named<'a>(data: &'a [u8], names: &[&'static str]) -> Option<(&'static str, &'a [u8])> {
+    let (&b, rest) = data.split_first()?;
+    Some((names[usize::from(b) % names.len()], rest))
+}
+
 /// Asserts the invariants [`Mesh::new`] promises (a reader must never hand out a mesh
 /// that breaks them).
 pub fn check_mesh(m: &Mesh) {

@@ -32,7 +32,7 @@ use crate::arrays::{
 use crate::errors::Failure;
 use crate::pyjson;
 use crate::run::{Progress, run};
-use crate::{draw, eigen_params, figure_options, laplacian_of, with_values};
+use crate::{FigureArgs, draw, eigen_params, laplacian_of, with_values};
 
 /// The `k` weights of a Python weight function from its values at the eigenvalues of
 /// [`weighted_pairs`] (the library's checks: strictly positive and finite).
@@ -258,11 +258,7 @@ impl PyAnalysis {
                     (mesh, None)
                 }
             };
-            let laplacian = match (kind, cloud.is_some()) {
-                (Some(l), _) => l,
-                (None, true) => Laplacian::Robust,
-                (None, false) => AnalysisOptions::default().laplacian,
-            };
+            let laplacian = spectral_mesh::defaults::laplacian_for(kind, cloud.is_some())?;
             let options = AnalysisOptions {
                 laplacian,
                 normalize,
@@ -394,6 +390,7 @@ impl PyAnalysis {
         let an = self.inner.clone();
         let (values, labels, info) = run(py, move |token| {
             let mut field = an.field_with(&req, &mut |_| {}, token)?;
+            let unreachable = field.unreachable_message();
             let values = std::mem::take(&mut field.values);
             let labels = field.labels.take();
             // Per-vertex payloads stay out of the info.
@@ -408,8 +405,11 @@ impl PyAnalysis {
                 }
                 _ => {}
             }
-            let info =
+            let mut info =
                 serde_json::to_value(&field).map_err(|e| Failure::Internal(e.to_string()))?;
+            if let (Some(m), Some(o)) = (unreachable, info.as_object_mut()) {
+                o.insert("unreachable_message".into(), m.into());
+            }
             Ok((values, labels, info))
         })?;
         let labels = labels.map(|l| to_vector(py, l.into_iter().map(|x| x as i64).collect()));
@@ -788,21 +788,14 @@ impl PyAnalysis {
     }
 
     /// Draws a field on this mesh (see the module-level `render`).
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (values, marks, labels, levels, colormap, view, size, transparent, critical_points, colorbar, path, *, legend=true, height=None, scale=None, dpi=None))]
+    #[pyo3(signature = (values, marks, labels, figure, path))]
     fn render(
         &self,
         py: Python<'_>,
         values: PyReadonlyArray1<'_, f64>,
         marks: Vec<usize>,
         labels: Option<Vec<usize>>,
-        levels: usize,
-        colormap: &str,
-        view: &str,
-        size: u32,
-        transparent: bool,
-        critical_points: bool,
-        colorbar: bool,
+        figure: FigureArgs,
         path: Option<PathBuf>,
         legend: bool,
         height: Option<u32>,
@@ -816,19 +809,7 @@ impl PyAnalysis {
             dpi,
         };
         let prepare = || -> Result<_, Failure> {
-            Ok((
-                arrays::values(&values, "values")?,
-                figure_options(
-                    levels,
-                    colormap,
-                    view,
-                    size,
-                    transparent,
-                    critical_points,
-                    colorbar,
-                    extra,
-                )?,
-            ))
+            Ok((arrays::values(&values, "values")?, figure.options()?))
         };
         let (values, options) = prepare().map_err(|e| e.into_pyerr(py))?;
         draw(

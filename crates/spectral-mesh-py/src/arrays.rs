@@ -144,12 +144,12 @@ pub fn columns(
 }
 
 /// An `(n, k)` Fortran-ordered array owning `data` (`n x k` column-major), without a copy.
-pub fn to_columns<'py>(
+pub fn to_columns<'py, T: numpy::Element>(
     py: Python<'py>,
     n: usize,
     k: usize,
-    data: Vec<f64>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    data: Vec<T>,
+) -> PyResult<Bound<'py, PyArray2<T>>> {
     let a = Array2::from_shape_vec((n, k).f(), data)
         .map_err(|e| Failure::Internal(format!("array shape: {e}")).into_pyerr(py))?;
     Ok(PyArray2::from_owned_array(py, a))

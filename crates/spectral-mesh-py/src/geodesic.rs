@@ -6,10 +6,12 @@ use std::sync::Arc;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
 use spectral_mesh::geodesic::{
-    Convention, GeodesicError, GeodesicParams, GeodesicSolver, Source, farthest_point_sampling,
+    CloudGeodesicParams, Convention, GeodesicError, GeodesicParams, GeodesicSolver, Source,
+    farthest_point_sampling,
 };
 
-use crate::arrays::{mesh_from, to_rows, to_vector};
+use crate::analysis::cloud_params;
+use crate::arrays::{cloud_from, mesh_from, to_rows, to_vector};
 use crate::errors::Failure;
 use crate::laplacian_of;
 use crate::run::run;
@@ -33,7 +35,27 @@ fn sources(vertices: Vec<usize>, points: Vec<(usize, f64, f64, f64)>) -> Vec<Sou
     s
 }
 
-/// The heat-method solver of one mesh (factored once).
+/// The heat-method parameters from the Python keywords (`None`: the library's default).
+fn geodesic_params(
+    py: Python<'_>,
+    time_factor: Option<f64>,
+    convention: Option<&str>,
+) -> PyResult<GeodesicParams> {
+    let d = GeodesicParams::default();
+    let convention: Convention = match convention {
+        Some(c) => c
+            .parse()
+            .map_err(|e: String| Failure::Value(e).into_pyerr(py))?,
+        None => d.convention,
+    };
+    Ok(GeodesicParams {
+        time_factor: time_factor.unwrap_or(d.time_factor),
+        convention,
+        ..d
+    })
+}
+
+/// The heat-method solver of one mesh or point cloud (factored once).
 #[pyclass(frozen, name = "GeodesicSolver", module = "spectral_mesh._native")]
 pub struct PyGeodesicSolver {
     solver: Arc<GeodesicSolver>,
@@ -54,19 +76,39 @@ impl PyGeodesicSolver {
     ) -> PyResult<Self> {
         let mesh = mesh_from(&v, &f).map_err(|e| e.into_pyerr(py))?;
         let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
-        let d = GeodesicParams::default();
-        let convention: Convention = match convention {
-            Some(c) => c
-                .parse()
-                .map_err(|e: String| Failure::Value(e).into_pyerr(py))?,
-            None => d.convention,
-        };
-        let params = GeodesicParams {
-            time_factor: time_factor.unwrap_or(d.time_factor),
-            convention,
+        let params = geodesic_params(py, time_factor, convention)?;
+        let solver = run(py, move |_| Ok(GeodesicSolver::new(&mesh, lap, &params)?))?;
+        Ok(Self {
+            solver: Arc::new(solver),
+        })
+    }
+
+    /// Builds and factors the solver of a point cloud (point-cloud Laplacian, gradient in
+    /// each point's tangent plane); `None` takes the library's default.
+    #[staticmethod]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (p, normals=None, neighbors=None, mollify_factor=None, gradient_neighbors=None, time_factor=None, convention=None))]
+    fn from_points(
+        py: Python<'_>,
+        p: PyReadonlyArray2<'_, f64>,
+        normals: Option<PyReadonlyArray2<'_, f64>>,
+        neighbors: Option<usize>,
+        mollify_factor: Option<f64>,
+        gradient_neighbors: Option<usize>,
+        time_factor: Option<f64>,
+        convention: Option<&str>,
+    ) -> PyResult<Self> {
+        let cloud = cloud_from(&p, normals.as_ref()).map_err(|e| e.into_pyerr(py))?;
+        let params = geodesic_params(py, time_factor, convention)?;
+        let d = CloudGeodesicParams::default();
+        let cp = CloudGeodesicParams {
+            laplacian: cloud_params(neighbors, mollify_factor, normals.is_some()),
+            gradient_neighbors: gradient_neighbors.unwrap_or(d.gradient_neighbors),
             ..d
         };
-        let solver = run(py, move |_| Ok(GeodesicSolver::new(&mesh, lap, &params)?))?;
+        let solver = run(py, move |_| {
+            Ok(GeodesicSolver::from_point_cloud(&cloud, &cp, &params)?)
+        })?;
         Ok(Self {
             solver: Arc::new(solver),
         })

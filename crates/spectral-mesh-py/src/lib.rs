@@ -16,19 +16,22 @@ use numpy::{PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use serde_json::{Value, json};
-use spectral_mesh::analysis::request::KINDS;
 use spectral_mesh::analysis::{AnalysisOptions, Signal, SignatureSpec};
-use spectral_mesh::operators::{Laplacian, Operators, PointCloudParams};
-use spectral_mesh::spectral::eigenbasis::{EigenMethod, EigenParams, EigenSolver};
-use spectral_mesh::spectral::store::{BasisMeta, load_npz, save_npz};
+use spectral_mesh::operators::{Laplacian, Operators};
+use spectral_mesh::spectral::eigenbasis::{
+    CertifyReport, EigenMethod, EigenParams, EigenSolver, certify_eigenbasis,
+};
+use spectral_mesh::spectral::store::{BasisDtype, BasisMeta, load_npz, save_npz};
 use spectral_mesh::{Analysis, Eigenbasis, FieldRequest, Mesh, SparseMatrix};
 use spectral_mesh_render::{Colormap, Figure, FigureOptions, View};
 
 mod analysis;
 mod arrays;
 mod batch;
+mod correspondence;
 mod errors;
 mod geodesic;
+mod learning;
 mod pyjson;
 mod run;
 
@@ -184,10 +187,7 @@ fn laplacian<'py>(
     let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
     let (s, b, total) = run(py, move |_| {
         let mut ops = Operators::new(&mesh, lap);
-        let total: f64 = ops.mass.values().iter().sum();
-        if normalize && total > 0.0 && total.is_finite() {
-            ops.mass = ops.mass.add_scaled(1.0 / total, &ops.mass, 0.0);
-        }
+        let total = ops.normalize_mass(normalize);
         Ok((csc_parts(&ops.stiffness), csc_parts(&ops.mass), total))
     })?;
     Ok((csc_to_py(py, s)?, csc_to_py(py, b)?, total))
@@ -241,20 +241,28 @@ fn point_laplacian<'py>(
     let (s, b, total) = run(py, move |_| {
         let mut ops =
             Operators::from_points(&cloud, &params).map_err(|e| Failure::value(e.to_string()))?;
-        let total: f64 = ops.mass.values().iter().sum();
-        if normalize && total > 0.0 && total.is_finite() {
-            ops.mass = ops.mass.add_scaled(1.0 / total, &ops.mass, 0.0);
-        }
+        let total = ops.normalize_mass(normalize);
         Ok((csc_parts(&ops.stiffness), csc_parts(&ops.mass), total))
     })?;
     Ok((csc_to_py(py, s)?, csc_to_py(py, b)?, total))
 }
 
-/// The `k` smallest pairs of a mesh's `(S, B)`: `(evals (k,), evecs (n, k))`, the vectors
-/// moved into NumPy without a copy.
+/// `(evals, evecs, certificate or None)` of [`eigenbasis`]: float64 or float32 arrays.
+type CertifiedPairs<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Option<Bound<'py, PyAny>>,
+);
+
+/// The `k` smallest pairs of a mesh's `(S, B)`: `(evals (k,), evecs (n, k), certificate)`,
+/// the vectors moved into NumPy without a copy. `certify`: the library's inertia
+/// certificate ([`certify_eigenbasis`]) is run on the pairs, the completed basis returned
+/// when pairs were missing, and its report is the third item (else `None`); a count that
+/// still disagrees is a `SolverError`. `dtype`: `"float64"` or `"float32"` (computed in
+/// double precision, rounded once); `None`: the library's default.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v, f, k, kind, normalize, tol, seed, dirichlet, method, progress=None))]
+#[pyo3(signature = (v, f, k, kind, normalize, tol, seed, dirichlet, method, progress=None, certify=false, dtype=None))]
 fn eigenbasis<'py>(
     py: Python<'py>,
     v: PyReadonlyArray2<'_, f64>,
@@ -267,22 +275,87 @@ fn eigenbasis<'py>(
     dirichlet: Option<Vec<usize>>,
     method: &str,
     progress: Option<Py<PyAny>>,
-) -> PyResult<Pairs<'py>> {
+    certify: bool,
+    dtype: Option<&str>,
+) -> PyResult<CertifiedPairs<'py>> {
     let progress = run::Progress::new(progress);
     let mesh = mesh_from(&v, &f).map_err(|e| e.into_pyerr(py))?;
+    let dtype = match dtype {
+        None => BasisDtype::default(),
+        Some(d) => BasisDtype::parse(d)
+            .map_err(|e| Failure::value(format!("dtype = '{d}': {e}")).into_pyerr(py))?,
+    };
     let options = AnalysisOptions {
         laplacian: laplacian_of(kind).map_err(|e| e.into_pyerr(py))?,
         normalize,
         eigen: eigen_params(tol, seed, dirichlet, method).map_err(|e| e.into_pyerr(py))?,
     };
-    let (n, values, vectors) = run(py, move |token| {
+    let (n, values, vectors, report) = run(py, move |token| {
         let an = Analysis::new(mesh, options);
         let basis = an.basis(k, &mut |p| progress.report(&p, token), token);
         let basis = progress.finish(basis.map_err(Failure::from))?;
+        let mut report = None;
+        let basis = if certify {
+            let params = EigenParams {
+                k,
+                ..an.options().eigen.clone()
+            };
+            let (n, values, vectors) = take_pairs(basis, k);
+            let given = Eigenbasis {
+                laplacian: an.operators().laplacian,
+                n,
+                values,
+                vectors,
+                mass: an.operators().mass.clone(),
+                residuals: Vec::new(),
+            };
+            let (completed, r) = certify_eigenbasis(an.operators(), &params, &given, token)
+                .map_err(Failure::from)?;
+            if !r.certified() {
+                return Err(Failure::Solver(format!(
+                    "certify: the eigenvalue count disagrees: {}",
+                    r.lines().join("; ")
+                )));
+            }
+            report = Some(certificate_json(&r));
+            Arc::new(completed.unwrap_or(given))
+        } else {
+            basis
+        };
         drop(an);
-        Ok(take_pairs(basis, k))
+        let (n, values, vectors) = take_pairs(basis, k);
+        Ok((n, values, vectors, report))
     })?;
-    Ok((to_vector(py, values), to_columns(py, n, k, vectors)?))
+    let (evals, evecs) = match dtype {
+        BasisDtype::Float64 => (
+            to_vector(py, values).into_any(),
+            to_columns(py, n, k, vectors)?.into_any(),
+        ),
+        BasisDtype::Float32 => (
+            to_vector(py, values.iter().map(|&x| x as f32).collect()).into_any(),
+            to_columns(py, n, k, vectors.iter().map(|&x| x as f32).collect())?.into_any(),
+        ),
+    };
+    let report = match report {
+        Some(r) => Some(pyjson::to_py(py, &r)?),
+        None => None,
+    };
+    Ok((evals, evecs, report))
+}
+
+/// The certificate's report as the dictionary the Python call returns.
+fn certificate_json(r: &CertifyReport) -> Value {
+    let cert = |c: &spectral_mesh::linalg::Certificate| json!({"shift": c.shift, "below": c.below, "found": c.found});
+    json!({
+        "certified": r.certified(),
+        "k": r.k,
+        "first": cert(&r.first),
+        "last": cert(&r.last),
+        "added": r.added,
+        "searches": r.searches,
+        "values_changed": r.values_changed,
+        "lines": r.lines(),
+    })
 }
 
 /// The first `k` pairs of a basis, moved out when nobody else holds it.
@@ -436,52 +509,53 @@ fn load_basis<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Archive<'py>> {
     ))
 }
 
-/// The figure keywords added after the first ones (keyword-only in the native calls).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct FigureExtra {
-    /// Draw the legend.
-    pub legend: bool,
-    /// Picture height.
-    pub height: Option<u32>,
-    /// Picture pixels per screen pixel.
-    pub scale: Option<f64>,
-    /// Print resolution.
-    pub dpi: Option<u32>,
-}
-
-/// Figure options from the Python keywords.
-pub(crate) fn figure_options(
+/// The picture options as the Python layer passes them to both `render`s: a dict of
+/// these keys, checked and converted there (`_render_args`).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub(crate) struct FigureArgs {
     levels: usize,
-    colormap: &str,
-    view: &str,
+    colormap: String,
+    view: String,
     size: u32,
     transparent: bool,
     critical_points: bool,
     colorbar: bool,
-    extra: FigureExtra,
-) -> Result<FigureOptions, Failure> {
-    if let Some(s) = extra.scale
-        && !(s.is_finite() && s > 0.0)
-    {
-        return Err(Failure::value(format!("scale must be positive, got {s}")));
+    legend: bool,
+    height: Option<u32>,
+    scale: Option<f64>,
+    dpi: Option<u32>,
+}
+
+impl FigureArgs {
+    /// The render crate's options; an unknown colour map or view, or a scale that is not
+    /// positive, is a `ValueError`.
+    pub(crate) fn options(&self) -> Result<FigureOptions, Failure> {
+        if let Some(s) = self.scale
+            && !(s.is_finite() && s > 0.0)
+        {
+            return Err(Failure::value(format!("scale must be positive, got {s}")));
+        }
+        Ok(FigureOptions {
+            levels: self.levels,
+            colormap: self
+                .colormap
+                .parse::<Colormap>()
+                .map_err(|e| Failure::value(e.to_string()))?,
+            view: self
+                .view
+                .parse::<View>()
+                .map_err(|e| Failure::value(format!("view: {e}")))?,
+            size: self.size,
+            height: self.height,
+            scale: self.scale,
+            dpi: self.dpi,
+            legend: self.legend,
+            transparent: self.transparent,
+            critical_points: self.critical_points,
+            colorbar: self.colorbar,
+        })
     }
-    Ok(FigureOptions {
-        height: extra.height,
-        scale: extra.scale,
-        dpi: extra.dpi,
-        legend: extra.legend,
-        levels,
-        colormap: colormap
-            .parse::<Colormap>()
-            .map_err(|e| Failure::value(e.to_string()))?,
-        view: view
-            .parse::<View>()
-            .map_err(|e| Failure::value(format!("view: {e}")))?,
-        size,
-        transparent,
-        critical_points,
-        colorbar,
-    })
 }
 
 /// Draws `values` on `mesh`: writes `path` (format from its extension) and returns
@@ -546,7 +620,7 @@ pub(crate) fn draw(
 /// Draws a field on `(V, F)` (see [`draw`]).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v, f, values, marks, labels, levels, colormap, view, size, transparent, critical_points, colorbar, path, *, legend=true, height=None, scale=None, dpi=None))]
+#[pyo3(signature = (v, f, values, marks, labels, figure, path))]
 fn render(
     py: Python<'_>,
     v: PyReadonlyArray2<'_, f64>,
@@ -554,13 +628,7 @@ fn render(
     values: PyReadonlyArray1<'_, f64>,
     marks: Vec<usize>,
     labels: Option<Vec<usize>>,
-    levels: usize,
-    colormap: &str,
-    view: &str,
-    size: u32,
-    transparent: bool,
-    critical_points: bool,
-    colorbar: bool,
+    figure: FigureArgs,
     path: Option<PathBuf>,
     legend: bool,
     height: Option<u32>,
@@ -577,16 +645,7 @@ fn render(
         Ok((
             mesh_from(&v, &f)?,
             arrays::values(&values, "values")?,
-            figure_options(
-                levels,
-                colormap,
-                view,
-                size,
-                transparent,
-                critical_points,
-                colorbar,
-                extra,
-            )?,
+            figure.options()?,
         ))
     };
     let (mesh, values, options) = prepare().map_err(|e| e.into_pyerr(py))?;
@@ -602,82 +661,13 @@ fn render(
     )
 }
 
-/// The library's defaults as a dict: every request kind's keys (from [`FieldRequest`]'s
-/// serde form), the analysis and eigensolver options and the figure options.
+/// Every default as a dict: the library's ([`spectral_mesh::defaults::to_json`]: every
+/// request kind's keys, the analysis, eigensolver, point-cloud, batch and picture
+/// defaults, the server limits) with the render crate's figure options
+/// ([`spectral_mesh_render::defaults::to_json`]).
 #[pyfunction]
 fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
-    let mut kinds = serde_json::Map::new();
-    for kind in KINDS {
-        let mut j = json!({ "kind": kind });
-        match kind {
-            "diffusion" => j["signal"] = json!({ "impulse": 0 }),
-            "wks" => j["energy"] = json!(0.0),
-            _ => {}
-        }
-        let internal = |e: serde_json::Error| {
-            Failure::Internal(format!("defaults of {kind}: {e}")).into_pyerr(py)
-        };
-        let req: FieldRequest = serde_json::from_value(j).map_err(internal)?;
-        let mut v = serde_json::to_value(&req).map_err(internal)?;
-        if let Some(o) = v.as_object_mut() {
-            o.remove("kind");
-            o.remove("signal");
-            o.remove("energy");
-        }
-        kinds.insert(kind.to_string(), v);
-    }
-    let a = AnalysisOptions::default();
-    let fig = FigureOptions::default();
-    let pc = PointCloudParams::default();
-    let bp = spectral_mesh::batch::BatchParams::default();
-    let all = json!({
-        "requests": kinds,
-        "analysis": {
-            "kind": a.laplacian.name(),
-            "normalize": a.normalize,
-            "k": spectral_mesh::analysis::request::DEFAULT_K,
-            "tol": a.eigen.tolerance,
-            "seed": a.eigen.seed,
-            "method": "auto",
-        },
-        "figure": {
-            "levels": fig.levels,
-            "colormap": fig.colormap.name(),
-            "view": spectral_mesh_render::figure::view_name(fig.view),
-            "size": fig.size,
-            "transparent": fig.transparent,
-            "critical_points": fig.critical_points,
-            "colorbar": fig.colorbar,
-            "legend": fig.legend,
-        },
-        "point_cloud": {
-            "n_neighbors": pc.neighbors,
-            "mollify_factor": pc.mollify_factor,
-            "delaunay_tolerance": pc.delaunay_tolerance,
-            "normals": pc.normals,
-            "union": pc.union,
-        },
-        // `spectral_mesh.batch`'s keywords (Python names) from the library's batch
-        // parameters.
-        "batch": {
-            "k": bp.k,
-            "laplacian": bp.laplacian.name(),
-            "tol": bp.tolerance,
-            "normalize": bp.normalize,
-            "eigenvectors": bp.basis,
-            "hks": bp.hks.as_ref().map(ToString::to_string),
-            "wks": bp.wks.as_ref().map(ToString::to_string),
-            "wks_sigma": bp.wks_sigma,
-            "adf": bp.adf.as_ref().map(ToString::to_string),
-            "scaled": bp.scaled,
-            "thumbnail": bp.thumbnail,
-        },
-        "zero_eigenvalue_eps": spectral_mesh::spectral::filters::ZERO_EIGENVALUE_EPS,
-        "shape": spectral_mesh::shapes::DEFAULT_SHAPE,
-        "laplacians": Laplacian::ALL.iter().map(|l| l.name()).collect::<Vec<_>>(),
-        "colormaps": Colormap::ALL.iter().map(|c| c.name()).collect::<Vec<_>>(),
-    });
-    pyjson::to_py(py, &all)
+    pyjson::to_py(py, &spectral_mesh_render::defaults::to_json())
 }
 
 /// Threads the computations use (the library's rayon pool).
@@ -742,6 +732,13 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(defaults, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(
+        correspondence::correspondence_defaults,
+        m
+    )?)?;
+    m.add_function(wrap_pyfunction!(correspondence::functional_map, m)?)?;
+    m.add_function(wrap_pyfunction!(correspondence::zoomout_refine, m)?)?;
+    m.add_function(wrap_pyfunction!(correspondence::point_map, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_params, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_inputs, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_prepare, m)?)?;
@@ -750,6 +747,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(batch::batch_summary, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     m.add_function(wrap_pyfunction!(_work_for_tests, m)?)?;
+    m.add_function(wrap_pyfunction!(learning::learning_operators, m)?)?;
+    m.add_function(wrap_pyfunction!(learning::learning_defaults, m)?)?;
     m.add_class::<analysis::PyAnalysis>()?;
     m.add_class::<geodesic::PyGeodesicSolver>()?;
     Ok(())

@@ -178,7 +178,9 @@ def test_bad_field_requests(mesh):
             lambda: an.segmentation(persistence=-1.0),
             "persistence: -1: must be a finite number >= 0",
         ),
-        (lambda: an.field("geodesic"), "unknown variant `geodesic`"),
+        (lambda: an.field("geodesics"), "unknown variant `geodesics`"),
+        (lambda: an.field("geodesic", source=n), f"source {n} is out of range"),
+        (lambda: an.field("geodesic", time_factor=0.0), "time_factor: 0"),
         (lambda: an.field("distance", filter="biharmonic"), "unknown field `filter`"),
         (
             lambda: an.critical_points(np.zeros(3)),

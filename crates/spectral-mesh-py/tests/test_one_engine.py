@@ -297,6 +297,19 @@ def test_every_signature_default_is_the_library_s():
     assert d["point_cloud"]["normals"] == "estimate"
 
 
+
+def test_the_defaults_are_the_ones_every_face_reads():
+    # One object for every face: the web page's GET /api/defaults answers the same
+    # (spectral_mesh_render::defaults::to_json); the figure options read the library's
+    # picture defaults, and a point cloud's default discretization is the robust one.
+    d = _native.defaults()
+    assert d["figure"]["levels"] == d["pictures"]["levels"]
+    assert d["figure"]["size"] == d["pictures"]["size"]
+    assert d["pictures"]["min_size"] <= d["figure"]["size"] <= d["pictures"]["max_size"]
+    assert d["default_laplacian"] == {"mesh": d["analysis"]["kind"], "point cloud": "robust"}
+    assert d["batch"]["normalize"] == d["analysis"]["normalize"]
+    assert d["server"]["max_k"] >= d["analysis"]["k"]
+
 # ------------------------------------------------------------------ keyword rules
 
 

@@ -22,13 +22,15 @@ use crate::{Colormap, Image, RenderError, extract_level_sets, write_vrml};
 /// How to draw a field. `Default` is what every face draws unless told otherwise.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FigureOptions {
-    /// Number of evenly spaced level sets drawn over the surface (0 = none). Default 20.
+    /// Number of evenly spaced level sets drawn over the surface (0 = none). Default the
+    /// library's `spectral_mesh::defaults::LEVELS`.
     pub levels: usize,
     /// Colour map. Default the paper's hue.
     pub colormap: Colormap,
     /// View. Default iso.
     pub view: View,
-    /// Picture width in pixels (and height unless `height` is given). Default 800.
+    /// Picture width in pixels (and height unless `height` is given). Default the
+    /// library's `spectral_mesh::defaults::PICTURE_SIZE`.
     pub size: u32,
     /// Picture height in pixels (default: `size`, a square).
     pub height: Option<u32>,
@@ -50,10 +52,10 @@ pub struct FigureOptions {
 impl Default for FigureOptions {
     fn default() -> Self {
         Self {
-            levels: 20,
+            levels: spectral_mesh::defaults::LEVELS,
             colormap: Colormap::Hue,
             view: View::Iso,
-            size: 800,
+            size: spectral_mesh::defaults::PICTURE_SIZE,
             height: None,
             scale: None,
             dpi: None,

@@ -13,9 +13,11 @@
 //! [`spectral_mesh::fields::level_sets`].
 
 pub mod colormap;
+pub mod defaults;
 pub mod description;
 pub mod figure;
 mod overlay;
+pub mod pair;
 pub mod plots;
 pub mod raster;
 mod text;

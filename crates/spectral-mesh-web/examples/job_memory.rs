@@ -1,5 +1,5 @@
 //! Peak memory of one eigenbasis job, as the server runs it, to fit the memory-admission
-//! estimate (`spectral_mesh_web::jobs::estimate`): one (mesh, k) per process.
+//! estimate (the library's `Analysis::basis_peak_bytes`): one (mesh, k) per process.
 //!
 //! `cargo run --release -p spectral-mesh-web --example job_memory -- MESH K [LAPLACIAN]`
 //! prints one line of JSON: `n`, `m`, `k`, the resident memory before the job (mesh and
@@ -50,7 +50,7 @@ fn main() {
         },
     ));
     let held_before = analysis.memory_bytes();
-    let estimate = spectral_mesh_web::jobs::estimate(n, k, &analysis);
+    let estimate = analysis.basis_peak_bytes(k);
     let rss0 = status("VmRSS:");
     std::fs::write("/proc/self/clear_refs", "5").unwrap();
     let t = Instant::now();
@@ -67,7 +67,7 @@ fn main() {
             "held_before": held_before,
             "held_after": analysis.memory_bytes(),
             "factor_len": analysis.factor_len(),
-            "columns": spectral_mesh_web::jobs::search_columns(n, k),
+            "columns": spectral_mesh::linalg::eigen::search_columns(n, k),
             "estimate": estimate,
         })
     );

@@ -8,7 +8,7 @@ use serde::Deserialize;
 use serde_json::{Map, Value};
 use spectral_mesh::Laplacian;
 use spectral_mesh::analysis::FieldRequest;
-use spectral_mesh::analysis::request::DEFAULT_K;
+use spectral_mesh::defaults::{DEFAULT_K, LEVELS, MAX_LEVELS, MAX_PICTURE, NORMALIZE};
 use spectral_mesh::experiments::file::FigureFile;
 use spectral_mesh::shapes::ShapeSpec;
 use spectral_mesh_render::figure::FigureOptions;
@@ -32,13 +32,6 @@ pub const FACE_KEYS: [&str; 15] = [
     "segments",
 ];
 
-/// Default number of level sets the page draws.
-pub const DEFAULT_LEVELS: usize = 10;
-/// Most level sets a request may ask for (as experiment files).
-pub const MAX_LEVELS: usize = 1000;
-/// Largest picture the server draws, in pixels per side.
-pub const MAX_PICTURE: u32 = 4096;
-
 /// A parsed field or download body.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FieldBody {
@@ -47,9 +40,9 @@ pub struct FieldBody {
     /// Discretization as given (`None`: the input's default, fem for a mesh and robust
     /// for a point cloud).
     pub laplacian: Option<Laplacian>,
-    /// Unit-area normalisation (default true).
+    /// Unit-area normalisation (default the library's [`NORMALIZE`]).
     pub normalize: bool,
-    /// Level sets drawn (default 10).
+    /// Level sets drawn (default the library's [`LEVELS`]).
     pub levels: usize,
     /// Picture options of downloads (`levels` included); the page colours the binary
     /// field itself.
@@ -110,16 +103,14 @@ impl FieldBody {
             .map(|s| s.parse::<Laplacian>())
             .transpose()
             .map_err(|e| bad(format!("laplacian: {e}")))?;
-        let normalize = take_bool(&mut m, "normalize")?.unwrap_or(true);
-        let levels =
-            take_uint(&mut m, "levels", MAX_LEVELS as u64)?.map_or(DEFAULT_LEVELS, |l| l as usize);
+        let normalize = take_bool(&mut m, "normalize")?.unwrap_or(NORMALIZE);
+        let levels = take_uint(&mut m, "levels", MAX_LEVELS as u64)?.map_or(LEVELS, |l| l as usize);
         let size = take_uint(&mut m, "size", MAX_PICTURE as u64)?.map(|s| s as u32);
         let height = take_uint(&mut m, "height", MAX_PICTURE as u64)?.map(|s| s as u32);
         for (key, v) in [("size", size), ("height", height)] {
-            if let Some(s) = v
-                && s < 16
-            {
-                return Err(bad(format!("{key}: {s}: at least 16 pixels")));
+            if let Some(s) = v {
+                spectral_mesh::defaults::check_picture_size(s)
+                    .map_err(|e| bad(format!("{key}: {e}")))?;
             }
         }
         let scale = match m.remove("scale") {
@@ -142,7 +133,7 @@ impl FieldBody {
             dpi: take_uint(&mut m, "dpi", 100_000)?.map(|d| d as u32),
             legend: take_bool(&mut m, "legend")?,
         };
-        let segments = take_bool(&mut m, "segments")?.unwrap_or(true);
+        let segments = !matches!(take_bool(&mut m, "segments")?, Some(false));
         let format = take_str(&mut m, "format")?;
         if !m.contains_key("kind") {
             return Err(bad(format!(
@@ -191,9 +182,9 @@ pub struct BasisBody {
     /// Discretization as given (`None`: the input's default, fem for a mesh and robust
     /// for a point cloud).
     pub laplacian: Option<Laplacian>,
-    /// Unit-area normalisation (default true).
+    /// Unit-area normalisation (default the library's [`NORMALIZE`]).
     pub normalize: bool,
-    /// Pairs (default 100).
+    /// Pairs (default the library's [`DEFAULT_K`]).
     pub k: usize,
 }
 
@@ -211,7 +202,7 @@ pub fn parse_basis(bytes: &[u8]) -> Result<BasisBody, BodyError> {
         .map_err(|e| bad(format!("laplacian: {e}")))?;
     Ok(BasisBody {
         laplacian,
-        normalize: j.normalize.unwrap_or(true),
+        normalize: j.normalize.unwrap_or(NORMALIZE),
         k: j.k.unwrap_or(DEFAULT_K),
     })
 }
@@ -393,7 +384,10 @@ mod tests {
         assert_eq!(b.figure_options().unwrap().levels, 7);
         let d = FieldBody::from_value(serde_json::json!({"kind": "distance"})).unwrap();
         assert_eq!(d.request, FieldRequest::default());
-        assert_eq!((d.laplacian, d.normalize, d.levels), (None, true, 10));
+        assert_eq!(
+            (d.laplacian, d.normalize, d.levels),
+            (None, NORMALIZE, LEVELS)
+        );
         for (body, key) in [
             (serde_json::json!({"t": 1}), "kind"),
             (serde_json::json!({"kind": "heat", "filter": "x"}), "filter"),

@@ -64,10 +64,16 @@ pub struct FieldHeader {
     /// True when the values are patch labels (segmentation): no level sets, no critical
     /// points.
     pub categorical: bool,
-    /// Smallest value.
+    /// Smallest finite value.
     pub min: f64,
-    /// Largest value.
+    /// Largest finite value.
     pub max: f64,
+    /// Components a geodesic distance cannot reach (its values there are `+inf`: no
+    /// level sets, no critical points); empty otherwise.
+    pub unreachable: Vec<usize>,
+    /// The library's sentence about them ([`Field::unreachable_message`]), `null` when
+    /// every value is finite.
+    pub unreachable_message: Option<String>,
     /// The iso-values of the level sets whose segments follow, ascending (those of the
     /// figure's description: [`spectral_mesh_render::description`], over its colour
     /// range).
@@ -114,12 +120,7 @@ pub fn field_reply(
         return Ok(None);
     };
     let t_field = start.elapsed();
-    let (min, max) = field
-        .values
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-            (lo.min(v), hi.max(v))
-        });
+    let (min, max) = field.finite_range().unwrap_or((0.0, 0.0));
     let categorical = field.labels.is_some();
     let critical = if categorical {
         None
@@ -170,6 +171,8 @@ pub fn field_reply(
         categorical,
         min,
         max,
+        unreachable: field.unreachable.clone(),
+        unreachable_message: field.unreachable_message(),
         levels: isos,
         level_counts,
         critical,

@@ -10,7 +10,8 @@
 //!   itself is not interrupted) and is queued.
 //!
 //! The queue is first come, first served. Its head starts when fewer than `max_jobs`
-//! run and its estimated peak memory ([`estimate`]) can be reserved from the server's
+//! run and its estimated peak memory (the library's
+//! [`spectral_mesh::analysis::Analysis::basis_peak_bytes`]) can be reserved from the server's
 //! budget (least recently used cache entries not in use are evicted for it); otherwise
 //! it waits. A request whose estimate alone exceeds the budget, or whose result could
 //! not stay in the cache, is refused (422) with the figures.
@@ -32,75 +33,11 @@ use serde::Serialize;
 use spectral_mesh::analysis::{Analysis, AnalysisError};
 use spectral_mesh::cancel::CancelToken;
 use spectral_mesh::linalg::EigenProgress;
-use spectral_mesh::spectral::eigenbasis::{DENSE_MAX_N, DENSE_MAX_N_LARGE_K, EigenError};
+use spectral_mesh::spectral::eigenbasis::EigenError;
 
+use crate::cache::Shortfall;
+use crate::entries::{AnalysisKey, Reservation};
 use crate::limits::mib;
-use crate::state::{AnalysisKey, AppState, Reservation};
-
-// ---------- the memory estimate ----------
-
-/// Columns of the eigensolver's search space for `k` pairs on `n` vertices (the
-/// library's default rule: `min(2k, k + 300)`, at least `k + 70` and `k + 4` blocks,
-/// at most `n`).
-pub fn search_columns(n: usize, k: usize) -> usize {
-    let bs = (k / 12).clamp(8, 16).min(n);
-    (2 * k).min(k + 300).max(k + 70).max(k + 4 * bs).min(n)
-}
-
-/// True when the eigensolver takes its dense path (`n <= 300`, or `3k > n` and
-/// `n <= 1500`).
-pub fn uses_dense(n: usize, k: usize) -> bool {
-    n <= DENSE_MAX_N || (3 * k > n && n <= DENSE_MAX_N_LARGE_K)
-}
-
-/// Predicted values of the factor of `S - sigma B` on `n` vertices before it is made:
-/// `n (7.5 log2 n - 35)`, at least `20 n`. Measured (values per vertex): 47 at 2.5k
-/// (icosphere), 42-44 at 6-25k (3-torus, torus), 41 at 38k (bunny), 75 at 41k
-/// (icosphere), 53 at 100k (torus), 97 at 411k; the formula gives 50, 60-74, 79, 80,
-/// 90, 105.
-pub fn predicted_factor_len(n: usize) -> usize {
-    let per_vertex = (7.5 * (n.max(2) as f64).log2() - 35.0).max(20.0);
-    (n as f64 * per_vertex) as usize
-}
-
-/// Estimated peak of the memory a basis of `k` pairs on `n` vertices adds to what
-/// `analysis` holds, in bytes (see RELIABILITY.md for the measurements):
-///
-/// - dense path: `8 * 12 n^2`;
-/// - iterative path, with `c` = [`search_columns`] and `f` the factor's values (the
-///   held factorization's, else [`predicted_factor_len`]; a held one adds nothing):
-///   `8 * (1.6 n c + 1.6 f + 15 c^2) + 6 MiB` (the basis it returns included).
-///
-/// Measured with `examples/job_memory.rs` (VmHWM over the resident memory before the
-/// solve) on 2.5k to 100k vertices, k = 50 to 500: the estimate is 0.99x to 1.87x the
-/// measured increase, 1.2x at the median (RELIABILITY.md, "Web server").
-pub fn estimate(n: usize, k: usize, analysis: &Analysis) -> usize {
-    let k = k.min(n);
-    if uses_dense(n, k) {
-        return 8 * 12 * n * n + (6 << 20);
-    }
-    let c = search_columns(n, k);
-    let factor = if analysis.factor_len() > 0 {
-        0
-    } else {
-        predicted_factor_len(n)
-    };
-    let doubles = 1.6 * (n * c) as f64 + 1.6 * factor as f64 + 15.0 * (c * c) as f64;
-    (8.0 * doubles) as usize + (6 << 20)
-}
-
-/// What the analysis will hold once it has `k` pairs: what it holds now, the new basis
-/// instead of the old one, and the factorization (held, else predicted).
-pub fn held_after(n: usize, k: usize, analysis: &Analysis) -> usize {
-    let now = analysis.memory_bytes();
-    let old_basis = analysis.held_k() * n * 8;
-    let factor = if uses_dense(n, k) || analysis.factor_len() > 0 {
-        0
-    } else {
-        predicted_factor_len(n) * 8
-    };
-    now.saturating_sub(old_basis) + 8 * n * k + factor
-}
 
 // ---------- jobs ----------
 
@@ -219,7 +156,7 @@ pub struct Submit {
     pub k: usize,
     /// The analysis (created if need be).
     pub analysis: Arc<Analysis>,
-    /// [`estimate`].
+    /// [`Analysis::basis_peak_bytes`].
     pub estimate: usize,
     /// `X-Client-Id`, if sent.
     pub client: Option<String>,
@@ -367,8 +304,9 @@ impl Jobs {
         g.report(id)
     }
 
-    /// Handles a basis request (see the module documentation); call [`pump`] after.
-    pub fn submit(&self, s: &AppState, req: Submit) -> Submitted {
+    /// Handles a basis request (see the module documentation) with at most `max_queued`
+    /// requests waiting; call [`pump`] after.
+    pub fn submit(&self, max_queued: usize, req: Submit) -> Submitted {
         let mut g = self.lock();
         let held = req.analysis.held_k();
         let now = Instant::now();
@@ -429,12 +367,10 @@ impl Jobs {
             g.superseded += u64::from(stopped);
             g.cancelled += u64::from(stopped);
         }
-        let limits = &s.config.limits;
-        if g.queued() >= limits.max_queued {
+        if g.queued() >= max_queued {
             return Submitted::QueueFull(format!(
-                "{} eigenbasis requests are waiting, the limit is {} (--max-queued); try again later",
+                "{} eigenbasis requests are waiting, the limit is {max_queued} (--max-queued); try again later",
                 g.queued(),
-                limits.max_queued
             ));
         }
         // The same client moved on to another mesh: its earlier job goes.
@@ -519,11 +455,24 @@ impl Jobs {
     }
 }
 
+/// What the queue needs of the server that runs it: the jobs, how many may run at once,
+/// the memory budget and the cache an analysis re-enters when its job ends.
+pub trait Host: Send + Sync + 'static {
+    /// The jobs.
+    fn jobs(&self) -> &Jobs;
+    /// Eigenbasis computations running at once.
+    fn max_jobs(&self) -> usize;
+    /// Reserves `bytes` of the memory budget (evicting what may go), or says what is short.
+    fn try_reserve(&self, bytes: usize) -> Result<Reservation, Shortfall>;
+    /// (Re-)enters an analysis into the cache with its current size.
+    fn remember(&self, key: &AnalysisKey, a: &Arc<Analysis>);
+}
+
 /// Starts queued jobs while fewer than `max_jobs` run and the head of the queue fits the
 /// memory budget.
-pub fn pump(s: &Arc<AppState>) {
-    let mut g = s.jobs.lock();
-    while g.running < s.config.limits.max_jobs {
+pub fn pump<H: Host>(s: &Arc<H>) {
+    let mut g = s.jobs().lock();
+    while g.running < s.max_jobs() {
         let Some((id, serial)) = g.queue.front().cloned() else {
             break;
         };
@@ -540,7 +489,7 @@ pub fn pump(s: &Arc<AppState>) {
             continue;
         };
         let estimate = slot.job.estimate_bytes;
-        let reservation = match s.cache.try_reserve(estimate) {
+        let reservation = match s.try_reserve(estimate) {
             Ok(r) => r,
             Err(short) => {
                 let message = format!(
@@ -605,8 +554,8 @@ fn progress_of(p: &EigenProgress) -> (f64, String) {
 /// The body of a job's thread: computes, reports progress into the job (while it is
 /// still the mesh's current one), re-enters the analysis into the cache with its new
 /// size, releases the reservation and starts what waits.
-fn run(
-    s: &Arc<AppState>,
+fn run<H: Host>(
+    s: &Arc<H>,
     key: &AnalysisKey,
     analysis: &Arc<Analysis>,
     k: usize,
@@ -617,7 +566,7 @@ fn run(
     let start = Instant::now();
     let mut progress = |p: EigenProgress| {
         let (frac, msg) = progress_of(&p);
-        let mut g = s.jobs.lock();
+        let mut g = s.jobs().lock();
         if let Some(slot) = g.slots.get_mut(&key.id)
             && slot.serial == serial
             && slot.stop.is_none()
@@ -645,7 +594,7 @@ fn run(
     // reservation that covered the growth goes.
     s.remember(key, analysis);
     {
-        let mut g = s.jobs.lock();
+        let mut g = s.jobs().lock();
         g.running -= 1;
         if let Some(slot) = g.slots.get_mut(&key.id)
             && slot.serial == serial
@@ -666,36 +615,4 @@ fn run(
     }
     drop(reservation);
     pump(s);
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn search_space_follows_the_solver_rule() {
-        assert_eq!(search_columns(100_000, 50), 120);
-        assert_eq!(search_columns(100_000, 100), 200);
-        assert_eq!(search_columns(100_000, 500), 800);
-        assert_eq!(search_columns(6396, 6396), 6396);
-        assert!(uses_dense(300, 1) && uses_dense(1500, 501) && !uses_dense(1500, 500));
-        assert!(!uses_dense(1501, 1501));
-    }
-
-    #[test]
-    fn factor_prediction_is_within_the_measured_range() {
-        // (n, measured values per vertex): the prediction is at most 2x above (the
-        // bunny: 1.94x) and never more than 15% below.
-        for (n, measured) in [
-            (2562, 47.0),
-            (6396, 42.4),
-            (25088, 44.3),
-            (37706, 40.7),
-            (40962, 74.7),
-            (100_352, 52.5),
-        ] {
-            let p = predicted_factor_len(n) as f64 / n as f64;
-            assert!(p > 0.85 * measured && p < 2.0 * measured, "n = {n}: {p}");
-        }
-    }
 }

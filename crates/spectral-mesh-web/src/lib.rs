@@ -15,6 +15,10 @@
 //!
 //! ## API (all under `/api`)
 //!
+//! - `GET  /api/defaults` -> every default and limit of the library (request keys,
+//!   analysis, pictures, point clouds, batch: [`spectral_mesh_render::defaults::to_json`])
+//!   and this server's `limits`; the page reads its defaults from it.
+//!
 //! Meshes and point clouds:
 //! - `GET  /api/shapes` -> `{shapes: [{name, description, default_vertices, vertex_formula}]}`
 //! - `POST /api/mesh` with JSON `{"shape": "sphere:res=3"}` (built with
@@ -69,7 +73,8 @@
 //!   `{"kind": "distance", "distance": "wfem-diffusion:t=0.1"}`, `{"kind": "harmonic",
 //!   "constraints": [{"vertex": 3, "value": 0}, {"vertex": 9, "value": 1}]}`, ...) plus the
 //!   analysis keys `laplacian` (default `fem`, `robust` for a point cloud) and `normalize` (default `true`) and the
-//!   picture key `levels` (level sets, default 10, at most 1000). Answered from the held
+//!   picture key `levels` (level sets, default the library's
+//!   [`spectral_mesh::defaults::LEVELS`], at most [`spectral_mesh::defaults::MAX_LEVELS`]). Answered from the held
 //!   basis only: 409 with a message when the analysis holds fewer than the request's `k`
 //!   pairs (compute the basis first). The reply is binary, little-endian:
 //!   `u32 header_len`, the JSON header (padded with spaces to a multiple of 4 bytes),
@@ -94,7 +99,7 @@
 //! Downloads:
 //! - `POST /api/mesh/{id}/download` with the body of a field request plus `format` (`png`,
 //!   `wrl`, `ply`, `txt`, `toml`; default `txt`) and the picture keys `colormap`, `view`,
-//!   `size` (16..=4096), `transparent`, `critical_points`, `colorbar` (as the `[figure]`
+//!   `size` ([`spectral_mesh::defaults::MIN_PICTURE`] to [`spectral_mesh::defaults::MAX_PICTURE`]), `transparent`, `critical_points`, `colorbar` (as the `[figure]`
 //!   table of experiment files), or `GET /api/mesh/{id}/download?format=F&body=JSON`
 //!   with the same object URL-encoded. `png`, `wrl`, `ply` and `txt` are the render
 //!   crate's [`spectral_mesh_render::figure::Figure::of_analysis`] of the field (`txt`: one
@@ -125,45 +130,19 @@
 pub mod api;
 pub mod body;
 pub mod cache;
+pub mod config;
+pub mod entries;
+pub mod error;
 pub mod field;
 pub mod jobs;
 pub mod limits;
 pub mod state;
 
+pub use config::ServeConfig;
 pub use limits::Limits;
 
-use std::net::{IpAddr, Ipv4Addr, SocketAddr};
-use std::path::PathBuf;
+use std::net::SocketAddr;
 use std::sync::Arc;
-
-/// Configuration of the server.
-#[derive(Debug, Clone)]
-pub struct ServeConfig {
-    /// Address to listen on (default 127.0.0.1: another one must be asked for explicitly).
-    pub host: IpAddr,
-    /// Port (default 8000; 0 = any free port).
-    pub port: u16,
-    /// Memory, size, count and time limits (see [`Limits`]).
-    pub limits: Limits,
-    /// Serve `index.html`, `app.js`, `style.css` from this folder instead of the built-in copies.
-    pub static_dir: Option<PathBuf>,
-    /// Folder holding `three/` (npm's `node_modules`) to serve the page's 3D library from
-    /// instead of the copy embedded at build time (`SPECTRAL_MESH_WEB_NODE_MODULES` does
-    /// the same); default: the embedded copy, else `web/node_modules` of the source tree.
-    pub node_modules: Option<PathBuf>,
-}
-
-impl Default for ServeConfig {
-    fn default() -> Self {
-        Self {
-            host: IpAddr::V4(Ipv4Addr::LOCALHOST),
-            port: 8000,
-            limits: Limits::default(),
-            static_dir: None,
-            node_modules: None,
-        }
-    }
-}
 
 /// Errors that stop the server from starting.
 #[derive(Debug, thiserror::Error)]
@@ -236,7 +215,7 @@ async fn watchdog(state: std::sync::Weak<state::AppState>) {
                 .expire(std::time::Duration::from_secs(l.idle_seconds));
         }
         s.jobs
-            .forget(|id| s.cache.peek(&state::Key::Mesh(id.to_string())).is_some());
+            .forget(|id| s.cache.peek(&entries::Key::Mesh(id.to_string())).is_some());
         jobs::pump(&s);
     }
 }

@@ -1,26 +1,19 @@
-//! The server's limits, and the layer every request passes first: the host and origin
-//! checks, the cap on requests in progress and the request deadline.
+//! The server's limits, the count of requests in progress, the request deadline and
+//! the host and origin checks (the layer that applies them is `api::guard`).
 //!
 //! Every limit is answered with a 4xx or a 503 and `{"error": message}` naming the
 //! limit, the figure and the option that sets it (see [`Limits`] for the list).
 
 use std::net::IpAddr;
 use std::path::Path;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
-use axum::extract::{Request, State};
-use axum::http::{HeaderValue, StatusCode, header};
-use axum::middleware::Next;
-use axum::response::{IntoResponse, Response};
 use serde::Serialize;
 
-use crate::api::ApiError;
-use crate::state::AppState;
-
-/// Every limit of the server, with its default. The `serve` option that sets each is
-/// named in brackets.
+/// Every limit of the server. The defaults are the library's
+/// ([`spectral_mesh::defaults::server`]); the `serve` option that sets each is named in
+/// brackets.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Limits {
     /// Total memory budget in bytes (`--memory-mib`, default 2 GiB): what the cache holds
@@ -69,22 +62,24 @@ pub struct Limits {
 }
 
 impl Default for Limits {
+    /// The library's server limits ([`spectral_mesh::defaults::server`]).
     fn default() -> Self {
+        use spectral_mesh::defaults::server as d;
         Self {
-            memory_bytes: 2 << 30,
-            cache_bytes: 1 << 30,
-            max_upload_bytes: 64 << 20,
-            max_json_bytes: 1 << 20,
-            max_vertices: 1_000_000,
-            max_faces: 2_000_000,
-            max_k: 1000,
-            max_jobs: 2,
-            max_queued: 16,
-            job_seconds: 600,
-            job_idle_seconds: 60,
-            request_seconds: 120,
-            max_requests: 64,
-            idle_seconds: 3600,
+            memory_bytes: d::MEMORY_MIB << 20,
+            cache_bytes: d::CACHE_MIB << 20,
+            max_upload_bytes: d::MAX_UPLOAD_MIB << 20,
+            max_json_bytes: d::MAX_JSON_BYTES,
+            max_vertices: d::MAX_VERTICES,
+            max_faces: d::MAX_FACES,
+            max_k: d::MAX_K,
+            max_jobs: d::MAX_JOBS,
+            max_queued: d::MAX_QUEUED,
+            job_seconds: d::JOB_SECONDS,
+            job_idle_seconds: d::JOB_IDLE_SECONDS,
+            request_seconds: d::REQUEST_SECONDS,
+            max_requests: d::MAX_REQUESTS,
+            idle_seconds: d::IDLE_SECONDS,
         }
     }
 }
@@ -120,23 +115,22 @@ impl InFlight {
     pub fn get(&self) -> usize {
         self.0.load(Ordering::Relaxed)
     }
+
+    /// Counts one more request in progress until the ticket is dropped; returns the
+    /// count with it.
+    pub fn enter(&self) -> (usize, Ticket<'_>) {
+        let now = self.0.fetch_add(1, Ordering::Relaxed) + 1;
+        (now, Ticket(self))
+    }
 }
 
-struct Ticket<'a>(&'a InFlight);
+/// One request in progress: counted by [`InFlight::enter`] until dropped.
+pub struct Ticket<'a>(&'a InFlight);
 
 impl Drop for Ticket<'_> {
     fn drop(&mut self) {
         self.0.0.fetch_sub(1, Ordering::Relaxed);
     }
-}
-
-/// A 503 with `Retry-After`.
-pub fn busy(msg: impl Into<String>, retry_after: u64) -> Response {
-    let mut r = ApiError(StatusCode::SERVICE_UNAVAILABLE, msg.into()).into_response();
-    if let Ok(v) = HeaderValue::from_str(&retry_after.to_string()) {
-        r.headers_mut().insert(header::RETRY_AFTER, v);
-    }
-    r
 }
 
 /// The host part of a `Host` header or of an origin's authority (`[::1]:8000` ->
@@ -234,45 +228,6 @@ pub async fn read_inside(dir: &Path, rel: &str) -> Result<Vec<u8>, String> {
     tokio::fs::read(&real)
         .await
         .map_err(|e| format!("{rel}: {e}"))
-}
-
-/// The layer every request passes first: host and origin checks (403), the cap on
-/// requests in progress (503), and the request deadline (a [`Deadline`] extension for
-/// the handlers, which answer 408 or 503 themselves; past it plus two seconds the
-/// request is answered 503 here).
-pub async fn guard(State(s): State<Arc<AppState>>, mut req: Request, next: Next) -> Response {
-    let headers = req.headers();
-    let text = |name: header::HeaderName| headers.get(name).and_then(|v| v.to_str().ok());
-    if let Err(msg) = check_host_and_origin(s.config.host, text(header::HOST), text(header::ORIGIN))
-    {
-        return ApiError(StatusCode::FORBIDDEN, msg).into_response();
-    }
-    let limits = &s.config.limits;
-    let now = s.in_flight.0.fetch_add(1, Ordering::Relaxed) + 1;
-    let _ticket = Ticket(&s.in_flight);
-    if now > limits.max_requests {
-        return busy(
-            format!(
-                "the server is busy: {} requests in progress, the limit is {} (--max-requests); try again",
-                now - 1,
-                limits.max_requests
-            ),
-            1,
-        );
-    }
-    let deadline = Deadline::after(limits.request_seconds);
-    req.extensions_mut().insert(deadline);
-    let backstop = deadline.0 + Duration::from_secs(2);
-    match tokio::time::timeout_at(backstop, next.run(req)).await {
-        Ok(r) => r,
-        Err(_) => busy(
-            format!(
-                "the request took longer than {} s (--request-seconds)",
-                limits.request_seconds
-            ),
-            5,
-        ),
-    }
 }
 
 #[cfg(test)]

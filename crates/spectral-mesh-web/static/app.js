@@ -8,7 +8,11 @@ import { OrbitControls } from '/vendor/OrbitControls.js';
 const $ = (id) => document.getElementById(id);
 // The page's experiments, each one kind of the library's field request (see fieldRequest).
 const USES_FILTER = new Set(['distance', 'signature', 'segmentation', 'embedding']);
-const HAS_SOURCE = new Set(['heat', 'diffusion', 'distance']);
+const HAS_SOURCE = new Set(['heat', 'diffusion', 'distance', 'geodesic']);
+// Kinds computed without an eigenbasis (no basis request first).
+const NO_BASIS = new Set(['harmonic', 'geodesic']);
+// Stands for +inf (a geodesic distance's unreachable parts) on the GPU: drawn grey.
+const UNREACHED = 3e38;
 
 const GUIDANCE = {
   harmonic: 'Harmonic map: the smoothest field that takes the constrained values. Click the surface to add a constraint (values alternate 0, 1); × removes one. Level sets and critical points show its structure.',
@@ -19,6 +23,7 @@ const GUIDANCE = {
   segmentation: 'Segments: the watershed of a signature, basins whose maxima differ by less than the persistence merged.',
   embedding: 'One coordinate of the spectral embedding for the filter (component 1 is the first non-constant one).',
   eigenfunction: 'One eigenfunction of the Laplacian (component 0 is the constant one); its level sets are nodal-like curves.',
+  geodesic: 'Geodesic distance along the surface from the source (the black-edged star), by the heat method, in the mesh\'s units; the level sets are evenly spaced isolines. Click the surface to move the source. Parts the source cannot reach are grey (infinite distance).',
 };
 
 const app = {
@@ -36,6 +41,7 @@ const app = {
   spacing: 0,            // a cloud's mean point spacing (the library's), sizes the splats
   splatFactor: 0,        // splat radius / spacing (the server's pictures' factor)
   meshLaplacian: null,   // the Laplacian chosen for meshes, restored after a cloud
+  defaults: null,        // GET /api/defaults: the library's defaults (the page states none)
 };
 window.__app = app;
 window.__lastField = null;
@@ -166,6 +172,8 @@ const fieldMaterial = new THREE.ShaderMaterial({
       } else {
         c *= ambient + diffuse * d;
       }
+      // A geodesic distance's unreachable parts (+inf): grey, shaded.
+      if (hasField > 0.5 && vS > 1e38) c = vec3(0.55) * (ambient + diffuse * d);
       gl_FragColor = vec4(c, 1.0);
     }`,
   side: THREE.DoubleSide,
@@ -208,6 +216,7 @@ const splatMaterial = new THREE.ShaderMaterial({
       if (hasField > 0.5) {
         float u = hi > lo ? (vS - lo) / (hi - lo) : 0.5;
         c = texture2D(cmap, vec2(clamp(u, 0.0, 1.0) * (255.0 / 256.0) + 0.5 / 256.0, 0.5)).rgb;
+        if (vS > 1e38) c = vec3(0.55);
       }
       gl_FragColor = vec4(c * (0.55 + 0.45 * sqrt(1.0 - r2)), 1.0);
     }`,
@@ -445,9 +454,10 @@ function fieldRequest(p) {
     case 'signature': r = { kind: 'spectral-function', filter: filterText(p), k: p.k }; break;
     case 'segmentation': r = { kind: 'segmentation', signature: p.filter === 'diffusion' ? `hks:t=${p.t}` : `spectral-function:${filterText(p)}`, persistence: p.persistence, k: p.k }; break;
     case 'embedding': r = { kind: 'embedding', filter: filterText(p), component: p.component, k: p.k }; break;
+    case 'geodesic': r = withSource('source', { kind: 'geodesic' }); break;
     default: r = { kind: 'eigenfunction', index: p.component, k: p.k };
   }
-  return { ...r, laplacian: p.laplacian, normalize: true, ...figureOptions() };
+  return { ...r, laplacian: p.laplacian, normalize: app.defaults.analysis.normalize, ...figureOptions() };
 }
 
 // Why a harmonic request cannot be sent yet (null when it can).
@@ -707,8 +717,9 @@ async function ensureBasis(p) {
   const key = `${p.laplacian}:${p.k}`;
   if (app.basisKey === key) return true;
   const id = app.meshId;
-  const want = { laplacian: p.laplacian, normalize: true, k: p.k };
-  const mine = (st) => st.laplacian === p.laplacian && st.normalize === true && st.held_k >= p.k;
+  const normalize = app.defaults.analysis.normalize;
+  const want = { laplacian: p.laplacian, normalize, k: p.k };
+  const mine = (st) => st.laplacian === p.laplacian && st.normalize === normalize && st.held_k >= p.k;
   const moved = () => app.pending || app.meshId !== id;
   let st = await api('POST', `/api/mesh/${id}/basis`, want);
   // A computation for other parameters (another tab) may cancel this one: ask again, a
@@ -791,7 +802,7 @@ async function updateOnce() {
   try {
     // A mesh's level sets are drawn in the shader; a cloud's are the library's segments.
     const body = { ...fieldRequest(p), segments: app.isCloud };
-    const needsBasis = body.kind !== 'harmonic';
+    const needsBasis = !NO_BASIS.has(body.kind);
     const id = app.meshId;
     if (needsBasis && !(await ensureBasis(p))) return; // superseded by a newer input
     let buf;
@@ -912,6 +923,9 @@ function drawField() {
   const { header, values } = app.field;
   const attr = meshObj.geometry.getAttribute('scalar');
   attr.array.set(values);
+  if (header.unreachable && header.unreachable.length) {
+    for (let i = 0; i < attr.array.length; i++) if (!Number.isFinite(attr.array[i])) attr.array[i] = UNREACHED;
+  }
   attr.needsUpdate = true;
   fieldMaterial.uniforms.hasField.value = 1;
   if (app.isCloud) setLevelLines(app.field.segments);
@@ -936,8 +950,8 @@ function drawField() {
   }
   const tr = header.truncation;
   const te = $('truncation');
-  te.textContent = tr ? tr.message : '';
-  te.className = tr && tr.warning ? 'small warn' : 'small';
+  te.textContent = tr ? tr.message : (header.unreachable_message || '');
+  te.className = (tr && tr.warning) || header.unreachable_message ? 'small warn' : 'small';
   render();
 }
 
@@ -1135,7 +1149,24 @@ $('shape-select').addEventListener('change', () => {
 });
 $('file-input').addEventListener('change', (e) => { const f = e.target.files[0]; if (f) loadFile(f); });
 
+// The controls' starting values, from the library's defaults (GET /api/defaults).
+function applyDefaults(d) {
+  app.defaults = d;
+  const req = d.requests;
+  $('shape-spec').value = d.shape;
+  $('laplacian').value = d.default_laplacian.mesh;
+  $('k').value = String(d.analysis.k);
+  $('k').max = String(d.limits.max_k);
+  tTyped = req.heat.t; // exact; the slider shows it on its log scale
+  $('t').value = String(Math.log10(req.heat.t));
+  $('component').value = String(req.embedding.component);
+  $('persistence').value = String(req.segmentation.persistence);
+  $('levels').value = String(d.figure.levels);
+  $('levels-val').textContent = $('levels').value;
+}
+
 async function init() {
+  try { applyDefaults(await api('GET', '/api/defaults')); } catch (e) { showError('shape-spec', e.message); return; }
   resize();
   refreshParamVisibility();
   drawColorbar(null);

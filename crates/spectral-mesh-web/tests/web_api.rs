@@ -613,3 +613,134 @@ async fn a_toml_download_replays_to_the_txt_download() {
         assert!(fig.txt() == txt.body, "{request}: the replay differs");
     }
 }
+
+/// A geodesic distance needs no basis; its reply is the library's field (the text
+/// download to the last bit), with its isolines and the source at 0; a component the
+/// source cannot reach is infinite, said in the header and left out of the critical
+/// points; bad sources and Laplacians are 422s naming them.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn geodesic_fields_need_no_basis_and_say_what_they_cannot_reach() {
+    let addr = start(1 << 20).await;
+    let (id, n) = load(addr, "3torus").await;
+    let body = json!({"kind": "geodesic", "source": 5, "levels": 12});
+    let f = post_field(addr, &id, body.clone()).await.field();
+    let h = &f.header;
+    assert_eq!(h["kind"], "geodesic");
+    assert_eq!(h["source"], 5);
+    assert_eq!(h["k"], Value::Null);
+    assert_eq!(
+        h["normalized"], false,
+        "a geodesic distance is in mesh units"
+    );
+    assert_eq!(h["request"]["time_factor"], 1.0);
+    assert_eq!(h["request"]["convention"], "crane");
+    assert_eq!(h["unreachable"], json!([]));
+    assert_eq!(h["unreachable_message"], Value::Null);
+    assert_eq!(f.values.len(), n);
+    assert_eq!(f.values[5], 0.0);
+    assert_eq!(h["min"], 0.0);
+    let levels = h["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 12);
+    // Evenly spaced isolines, each one drawn.
+    let step = levels[1].as_f64().unwrap() - levels[0].as_f64().unwrap();
+    for w in levels.windows(2) {
+        let d = w[1].as_f64().unwrap() - w[0].as_f64().unwrap();
+        assert!(
+            (d - step).abs() <= 1e-12 * step.abs().max(1.0),
+            "{levels:?}"
+        );
+    }
+    assert!(
+        h["level_counts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|c| c.as_u64().unwrap() > 0),
+        "{}",
+        h["level_counts"]
+    );
+    let minima = h["critical"]["points"]["minima"].as_array().unwrap();
+    assert!(minima.contains(&json!(5)), "{minima:?}");
+    // The library's numbers.
+    let an = Analysis::new(
+        spectral_mesh::shapes::build_str("3torus").unwrap(),
+        AnalysisOptions::default(),
+    );
+    let lib = an
+        .field(
+            &serde_json::from_value::<FieldRequest>(json!({"kind": "geodesic", "source": 5}))
+                .unwrap(),
+        )
+        .unwrap();
+    for (a, b) in f.values.iter().zip(&lib.values) {
+        assert_eq!(*a, *b as f32);
+    }
+    let r = post_json(
+        addr,
+        &format!("/api/mesh/{id}/download"),
+        json!({"kind": "geodesic", "source": 5, "format": "txt"}),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", r.error());
+    assert_eq!(numbers(&r.text()), lib.values);
+
+    // Two tetrahedra: the second is out of reach of a source on the first.
+    let two = b"OFF\n8 8 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n5 0 0\n6 0 0\n5 1 0\n5 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 4 6 5\n3 4 5 7\n3 4 7 6\n3 5 6 7\n";
+    let r = common::upload(addr, "two.off", two).await;
+    assert_eq!(r.status, 200, "{}", r.error());
+    let two_id = r.json()["mesh_id"].as_str().unwrap().to_string();
+    let f = post_field(addr, &two_id, json!({"kind": "geodesic", "source": 0}))
+        .await
+        .field();
+    let h = &f.header;
+    assert_eq!(h["unreachable"], json!([1]));
+    let msg = h["unreachable_message"].as_str().unwrap();
+    assert!(
+        msg.starts_with("4 of 8 vertices cannot be reached"),
+        "{msg}"
+    );
+    assert!(msg.contains("infinite"), "{msg}");
+    assert!(f.values[..4].iter().all(|v| v.is_finite()));
+    assert!(f.values[4..].iter().all(|&v| v == f32::INFINITY));
+    assert!(h["max"].as_f64().unwrap() > 0.0, "{h}");
+    assert_eq!(h["critical"]["excluded_components"], json!([1]));
+    let cp = &h["critical"]["points"];
+    for key in ["minima", "maxima"] {
+        assert!(
+            cp[key]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|v| v.as_u64().unwrap() < 4),
+            "{cp}"
+        );
+    }
+    let r = post_json(
+        addr,
+        &format!("/api/mesh/{two_id}/download"),
+        json!({"kind": "geodesic", "source": 0, "format": "txt"}),
+    )
+    .await;
+    assert_eq!(r.status, 200, "{}", r.error());
+    assert!(r.text().lines().skip(4).all(|l| l == "inf"), "{}", r.text());
+
+    for (body, says) in [
+        (
+            json!({"kind": "geodesic", "source": 8}),
+            "source 8 is out of range",
+        ),
+        (
+            json!({"kind": "geodesic", "sources": [1, 9]}),
+            "sources 9 is out of range",
+        ),
+        (json!({"kind": "geodesic", "time_factor": 0}), "time_factor"),
+        (
+            json!({"kind": "geodesic", "laplacian": "uniform"}),
+            "cotangent Laplacian",
+        ),
+    ] {
+        let r = post_field(addr, &two_id, body.clone()).await;
+        assert_eq!(r.status, 422, "{body}: {}", r.text());
+        assert!(r.error().contains(says), "{body}: {}", r.error());
+    }
+}

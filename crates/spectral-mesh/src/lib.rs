@@ -11,16 +11,21 @@
 pub mod analysis;
 pub mod batch;
 pub mod cancel;
+pub mod correspondence;
+pub mod defaults;
 pub mod experiments;
 pub mod fields;
 pub mod geodesic;
 pub mod io;
+pub mod learning;
 pub mod linalg;
 pub mod mesh;
 pub mod operators;
 pub mod perturb;
 pub mod shapes;
 pub mod spectral;
+#[cfg(test)]
+mod test_support;
 
 pub use analysis::{Analysis, AnalysisOptions, Field, FieldRequest};
 pub use cancel::CancelToken;

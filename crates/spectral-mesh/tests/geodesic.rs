@@ -5,9 +5,10 @@
 
 use spectral_mesh::Laplacian;
 use spectral_mesh::geodesic::{
-    Convention, GeodesicError, GeodesicParams, GeodesicSolver, Source, farthest_point_sampling,
+    CloudGeodesicParams, CloudPoisson, Convention, GeodesicError, GeodesicParams, GeodesicSolver,
+    Source, farthest_point_sampling,
 };
-use spectral_mesh::mesh::{Mesh, dot, norm, normalize, sub};
+use spectral_mesh::mesh::{Mesh, PointCloud, dot, norm, normalize, sub};
 use spectral_mesh::shapes::build_str;
 
 fn great_circle(mesh: &Mesh, s: usize) -> Vec<f64> {
@@ -275,4 +276,119 @@ fn sampling_and_distance_matrix() {
             assert!((raw[i][j] - raw[j][i]).abs() < 0.02 * raw[i][j].max(1e-3));
         }
     }
+}
+
+/// `n` uniform random points on the unit sphere (normalized Gaussian triples from a fixed
+/// SplitMix64 stream and Box-Muller).
+fn sphere_samples(n: usize, seed: u64) -> Vec<[f64; 3]> {
+    let mut state = seed;
+    let mut uniform = move || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        ((z >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    };
+    let mut gauss = move || {
+        let (a, b) = (uniform(), uniform());
+        (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
+    };
+    (0..n)
+        .map(|_| {
+            loop {
+                let p = [gauss(), gauss(), gauss()];
+                if norm(p) > 1e-6 {
+                    break normalize(p);
+                }
+            }
+        })
+        .collect()
+}
+
+/// Point clouds: on uniform samples of the unit sphere at three densities, the mean error
+/// of the heat-method distance (point-cloud Laplacian, tangent-plane gradient) against
+/// great-circle distance, over five sources, falls with density. With `m = 4`
+/// (`t = 4 h^2`): at `m = 1` the error also falls but slowly (the unit field is noisier
+/// far from the source; see BENCHMARKS.md).
+#[test]
+fn cloud_sphere_error_falls_with_density() {
+    let mut errs = Vec::new();
+    let params = GeodesicParams {
+        time_factor: 4.0,
+        ..GeodesicParams::default()
+    };
+    for n in [2_000, 8_000, 32_000] {
+        let pts = sphere_samples(n, 7);
+        let cloud = PointCloud::new(pts.clone(), None).unwrap();
+        let s = GeodesicSolver::from_point_cloud(&cloud, &CloudGeodesicParams::default(), &params)
+            .unwrap();
+        assert!(s.is_point_cloud());
+        // Five sources spread over the cloud (one source alone is a noisy measure).
+        let sources: Vec<usize> = (0..5).map(|i| i * n / 5).collect();
+        let rows = s.distances_from_vertices(&sources).unwrap();
+        let (mut mean, mut max) = (0.0, 0.0f64);
+        for (&src, d) in sources.iter().zip(&rows) {
+            assert_eq!(d[src], 0.0);
+            let exact: Vec<f64> = pts
+                .iter()
+                .map(|&p| dot(pts[src], p).clamp(-1.0, 1.0).acos())
+                .collect();
+            mean += mean_abs_err(d, &exact) / sources.len() as f64;
+            max = max.max(max_abs_err(d, &exact));
+        }
+        eprintln!(
+            "cloud sphere n = {n}: h = {:.5}, mean error {mean:.3e}, max error {max:.3e}",
+            s.mean_edge_length()
+        );
+        if n == 8_000 {
+            // The Poisson solve on S instead of G^T B G (the gradient's own energy) is
+            // inconsistent with the divergence, and worse.
+            let lap = GeodesicSolver::from_point_cloud(
+                &cloud,
+                &CloudGeodesicParams {
+                    poisson: CloudPoisson::Laplacian,
+                    ..CloudGeodesicParams::default()
+                },
+                &params,
+            )
+            .unwrap();
+            let d = lap.distance_from_vertex(0).unwrap();
+            let exact: Vec<f64> = pts
+                .iter()
+                .map(|&p| dot(pts[0], p).clamp(-1.0, 1.0).acos())
+                .collect();
+            let e_lap = mean_abs_err(&d, &exact);
+            let e_own = mean_abs_err(&rows[0], &exact);
+            eprintln!("n = 8000, source 0: Poisson on S {e_lap:.3e}, on G^T B G {e_own:.3e}");
+            assert!(e_own < e_lap, "{e_own} {e_lap}");
+        }
+        errs.push((s.mean_edge_length(), mean, max));
+    }
+    for w in errs.windows(2) {
+        eprintln!(
+            "order (mean) {:.2}",
+            (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln()
+        );
+        assert!(w[1].1 < 0.9 * w[0].1, "{errs:?}");
+    }
+    assert!(errs[2].1 < 0.01, "{errs:?}");
+    // A face point has no meaning on a cloud.
+    let cloud = PointCloud::new(sphere_samples(200, 1), None).unwrap();
+    let s = GeodesicSolver::from_point_cloud(
+        &cloud,
+        &CloudGeodesicParams::default(),
+        &GeodesicParams::default(),
+    )
+    .unwrap();
+    let e = s
+        .distance(&[Source::FacePoint {
+            face: 0,
+            bary: [1.0, 0.0, 0.0],
+        }])
+        .unwrap_err();
+    assert!(
+        matches!(e, GeodesicError::FacePointOnCloud { face: 0 }),
+        "{e}"
+    );
 }

@@ -54,7 +54,7 @@ pub struct Args {
     pub k: usize,
     /// Discretization of meshes: cot, voronoi-cot, fem, mixed-voronoi, uniform (point
     /// clouds always use the robust point-cloud Laplacian).
-    #[arg(long, default_value_t = Laplacian::Fem)]
+    #[arg(long, default_value_t = spectral_mesh::batch::BatchParams::default().laplacian)]
     pub laplacian: Laplacian,
     /// Target relative residual of every eigenpair.
     #[arg(long, default_value_t = EigenParams::default().tolerance)]
@@ -85,6 +85,11 @@ pub struct Args {
     /// eigenvector).
     #[arg(long, value_name = "PIXELS")]
     pub thumbnail: Option<u32>,
+    /// Geodesic distances (heat method, mesh units) from N farthest-point samples per mesh
+    /// (the first at the vertex of largest x): arrays `geodesic` (n x N, inf where a
+    /// sample cannot reach) and `geodesic_sources`.
+    #[arg(long, value_name = "N")]
+    pub geodesic: Option<usize>,
     /// Worker processes, each working on one shape at a time (default: the number of
     /// cores, at most the number of shapes). Lower it when large meshes do not fit in
     /// memory side by side.
@@ -140,6 +145,7 @@ impl Args {
             scaled: self.scaled,
             thumbnail: self.thumbnail,
             point_cloud: self.cloud.params()?,
+            geodesic: self.geodesic,
         })
     }
 }

@@ -10,10 +10,7 @@ use spectral_mesh::spectral::distances::{ALL_PAIRS_LIMIT, all_pairs};
 use spectral_mesh::spectral::store::npy_f64;
 
 use crate::engine::{self, BasisArgs, check_vertex};
-use crate::figure::{FigureArgs, write_field};
-use crate::output::{
-    FIGURE_EXTS, check_experiment_file, check_outputs, check_writable, extension, write,
-};
+use crate::output::{FieldOutputArgs, check_writable, extension, write};
 
 /// The syntax of `--distance` / `--filter`, shown in `--help`.
 pub const FILTER_HELP: &str = "The filter, stored as its weight w = 1/phi; \
@@ -54,15 +51,8 @@ pub struct Args {
     /// Output file(s) of the distances from the source: .png, .wrl, .ply or .txt.
     #[arg(long, short = 'o')]
     pub out: Vec<PathBuf>,
-    /// Also write an experiment file that reproduces the distances from the source with
-    /// `run FILE.toml`.
-    #[arg(long, value_name = "FILE.toml")]
-    pub save_experiment: Option<PathBuf>,
-    /// Overwrite existing outputs.
-    #[arg(long, short = 'f')]
-    pub force: bool,
     #[command(flatten)]
-    pub figure: FigureArgs,
+    pub output: FieldOutputArgs,
 }
 
 /// Computes the distances and writes the outputs.
@@ -76,15 +66,14 @@ pub fn run(args: Args) -> Result<()> {
     if args.out.is_empty() && args.all_pairs.is_none() {
         bail!("nothing to write: give -o FILE and/or --all-pairs OUT.npy");
     }
-    check_outputs(&args.out, &FIGURE_EXTS, args.force)?;
-    check_experiment_file(args.save_experiment.as_ref(), args.force)?;
+    args.output.check(&args.out)?;
     let filter = match (&args.all_pairs, &spec) {
         (None, _) => None,
         (Some(p), spec) => {
             if extension(p).as_deref() != Some("npy") {
                 bail!("{}: --all-pairs writes a .npy file", p.display());
             }
-            check_writable(p, args.force)?;
+            check_writable(p, args.output.force)?;
             let DistanceSpec::Filter(f) = spec else {
                 bail!("--all-pairs: only for filters of the form w(lambda), not wfem-diffusion");
             };
@@ -99,7 +88,8 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(s) = args.source {
         check_vertex(s, n, "--source")?;
     }
-    args.basis.warn_unrecorded(args.save_experiment.as_ref());
+    args.basis
+        .warn_unrecorded(args.output.save_experiment.as_ref());
     let request = FieldRequest::Distance {
         source: args.source,
         distance: spec,
@@ -124,24 +114,14 @@ pub fn run(args: Args) -> Result<()> {
         },
     );
     println!("max distance {} at vertex {}", stats.max, stats.argmax);
-    let figure = args.figure.options();
-    write_field(&an, &field, &args.out, figure)?;
+    args.output.write_field(&an, &field, &args.out)?;
     if let (Some(p), Some(f)) = (&args.all_pairs, &filter) {
         let basis = engine::basis(&an, args.basis.k, None)?.basis;
         let m = all_pairs(basis.view(args.basis.k), f)?;
         write(p, &npy_f64(&m, &[n as u64, n as u64], false)?)?;
         println!("all pairs ({n} x {n}) -> {}", p.display());
     }
-    if let Some(file) = &args.save_experiment {
-        engine::save_field_experiment(
-            file,
-            &info,
-            &an,
-            &field,
-            args.basis.repair,
-            &figure,
-            args.force,
-        )?;
-    }
+    args.output
+        .save_experiment(&info, &an, &field, args.basis.repair)?;
     Ok(())
 }

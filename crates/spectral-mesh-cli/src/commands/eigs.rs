@@ -37,11 +37,11 @@ pub struct Args {
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Relative gap below which consecutive eigenvalues count as one cluster.
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = spectral_mesh::defaults::CLUSTER_TOLERANCE)]
     pub cluster_tolerance: f64,
     /// Floating-point type of the eigenvalues and eigenvectors in the .npz (float64 or
     /// float32): computed in double precision either way and rounded once when written.
-    #[arg(long, default_value = "float64")]
+    #[arg(long, default_value = BasisDtype::default().name())]
     pub dtype: String,
     /// Certify that no eigenvalue was skipped, multiplicities included: count the
     /// eigenvalues below a shift just above lambda_k from the negative pivots of an
@@ -57,7 +57,9 @@ pub struct Args {
 
 /// Computes the basis and prints its summary.
 pub fn run(args: Args) -> Result<()> {
+    let mut stages = Stages::new();
     let input = args.basis.load(args.mesh.as_deref())?;
+    stages.done("read");
     for p in [&args.out, &args.eigenvalues_txt, &args.plot]
         .into_iter()
         .flatten()
@@ -94,6 +96,7 @@ pub fn run(args: Args) -> Result<()> {
     // The options without Dirichlet vertices first: the boundary comes from the topology.
     let options = args.basis.options(&input.shape, false, None)?;
     let mut an = Analysis::from_input(input.shape, options)?;
+    stages.done("operators");
     let dirichlet = if args.dirichlet_boundary {
         let b = an.topology().boundary_vertices();
         if b.is_empty() {
@@ -119,7 +122,9 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         None
     };
+    stages.done("boundary");
     let solved = engine::basis(&an, args.basis.k, args.basis.cache.as_deref())?;
+    stages.done("solve");
     let seconds = solved.seconds;
     let params = EigenParams {
         k: args.basis.k,
@@ -142,6 +147,7 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         None
     };
+    stages.done("certify");
     let b: &Eigenbasis = completed.as_ref().unwrap_or(&solved.basis);
     // The solver's own orthogonality report when it computed the basis now.
     let r = BasisReport::with_orthogonality(
@@ -156,6 +162,7 @@ pub fn run(args: Args) -> Result<()> {
             solved.orthogonality
         },
     );
+    stages.done("check");
     let mesh = an.mesh();
     println!(
         "{label}: {}n = {n}, m = {}{}, {} discretization{}",
@@ -236,6 +243,7 @@ pub fn run(args: Args) -> Result<()> {
         .with_context(|| format!("{}: cannot save the basis", p.display()))?;
         println!("basis ({}) -> {}", dtype.name(), p.display());
     }
+    stages.done("write");
     if let Some(p) = &args.eigenvalues_txt {
         write(p, field_text(&b.values).as_bytes())?;
         println!("eigenvalues -> {}", p.display());
@@ -246,10 +254,52 @@ pub fn run(args: Args) -> Result<()> {
             .with_context(|| format!("{}: cannot plot the spectrum", p.display()))?;
         println!("spectrum plot -> {}", p.display());
     }
+    stages.done("other outputs");
+    stages.report();
     if !certified {
         bail!(
             "--certify: the eigenvalue count disagrees (see above); the outputs hold the pairs found"
         );
     }
     Ok(())
+}
+
+/// Wall seconds of the command's stages, printed to stderr when the solver's phase
+/// timings are on (`SPECTRAL_MESH_EIG_TIMINGS=1`, see `spectral_mesh::linalg::timing`):
+/// the whole process, next to the solver's own phases.
+struct Stages {
+    on: bool,
+    last: std::time::Instant,
+    done: Vec<(&'static str, f64)>,
+}
+
+impl Stages {
+    fn new() -> Self {
+        Self {
+            on: spectral_mesh::linalg::timing::enabled(),
+            last: std::time::Instant::now(),
+            done: Vec::new(),
+        }
+    }
+
+    /// Ends the stage `name` (the time since the previous one).
+    fn done(&mut self, name: &'static str) {
+        if self.on {
+            let now = std::time::Instant::now();
+            self.done
+                .push((name, now.duration_since(self.last).as_secs_f64()));
+            self.last = now;
+        }
+    }
+
+    fn report(&self) {
+        if self.on {
+            let parts: Vec<String> = self
+                .done
+                .iter()
+                .map(|(name, s)| format!("{name}={s:.3}"))
+                .collect();
+            eprintln!("eigs stages (s): {}", parts.join(" "));
+        }
+    }
 }

@@ -19,12 +19,12 @@ pub struct Args {
     /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// The filter whose distance the embedding realizes (see below).
-    #[arg(long, default_value_t = Filter::Biharmonic.to_string(), long_help = FILTER_HELP)]
+    #[arg(long, default_value_t = Filter::default().to_string(), long_help = FILTER_HELP)]
     pub filter: String,
     /// Number of coordinates (pairs with non-zero weight, in basis order) written by
     /// --coords. The mesh output always has the first three (0 where the basis has fewer
     /// pairs of non-zero weight).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = spectral_mesh::defaults::EMBED_DIMS)]
     pub dims: usize,
     #[command(flatten)]
     pub basis: BasisArgs,

@@ -10,6 +10,7 @@ use spectral_mesh::analysis::request::{DEFAULT_HEAT_T, DEFAULT_K};
 use spectral_mesh::analysis::{Analysis, AnalysisOptions, DistanceSpec, FieldRequest, Kernel};
 use spectral_mesh::experiments::file::parent_dir;
 use spectral_mesh::experiments::file::{ExperimentFile, HarmonicConstraints, relative_path};
+use spectral_mesh::experiments::harmonic::HarmonicExperimentParams;
 use spectral_mesh::experiments::paper::{
     self, SUMMARY_FILE, field_outputs, harmonic_outputs, output_stem,
 };
@@ -81,6 +82,16 @@ pub struct Outputs {
     pub figure: FigureOptions,
 }
 
+impl Outputs {
+    /// Creates the output folder and returns the paths of `names` in it, checking before
+    /// any work that none of them, nor the experiment file, exists unless `--force`.
+    fn prepare(&self, names: &[&str]) -> Result<Vec<PathBuf>> {
+        let paths = prepare_outputs(&self.out, names, self.force)?;
+        check_experiment_file(self.save_experiment.as_ref(), self.force)?;
+        Ok(paths)
+    }
+}
+
 impl From<&Common> for Outputs {
     fn from(c: &Common) -> Self {
         Self {
@@ -100,7 +111,7 @@ pub struct HarmonicArgs {
     /// built-in shape (default: the 3-torus).
     pub mesh: Option<String>,
     /// Numbers of default constraints (min/max x, then y, then z), one map each.
-    #[arg(long, value_delimiter = ',', default_values_t = vec![2usize, 4, 6])]
+    #[arg(long, value_delimiter = ',', default_values_t = HarmonicExperimentParams::default().constraint_counts)]
     pub constraints: Vec<usize>,
     /// An explicit constraint VERTEX=VALUE (repeatable); replaces the defaults.
     #[arg(long = "constraint", value_parser = parse_constraint_arg)]
@@ -109,7 +120,7 @@ pub struct HarmonicArgs {
     #[arg(long)]
     pub constraints_file: Option<PathBuf>,
     /// 1 = harmonic (S f = 0), 2 = bi-harmonic (S B^-1 S f = 0).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = HarmonicExperimentParams::default().order)]
     pub order: u32,
     /// Discretization (matters for the bi-harmonic map's mass).
     #[arg(long, help = LAPLACIAN_HELP, long_help = LAPLACIAN_LONG_HELP)]
@@ -289,8 +300,7 @@ pub fn run_field(input: Input, setup: &FieldSetup, o: &Outputs) -> Result<()> {
         names[2].as_str(),
         SUMMARY_FILE,
     ];
-    let paths = prepare_outputs(&o.out, &all, o.force)?;
-    check_experiment_file(o.save_experiment.as_ref(), o.force)?;
+    let paths = o.prepare(&all)?;
     let Input { shape, info } = input;
     let an = Analysis::from_input(
         shape,
@@ -336,6 +346,9 @@ pub fn run_field(input: Input, setup: &FieldSetup, o: &Outputs) -> Result<()> {
         describe(&run.field.request),
         o.out.display()
     );
+    if let Some(msg) = &run.summary.unreachable {
+        eprintln!("warning: {msg}");
+    }
     if let Some(file) = &o.save_experiment {
         let mut e = experiment_file(setup.experiment, &info, &an, o, file);
         let req = run.field.request.clone();
@@ -377,6 +390,17 @@ fn describe(r: &FieldRequest) -> String {
         FieldRequest::Distance {
             source, distance, ..
         } => format!("{distance} from vertex {}", source.unwrap_or(0)),
+        FieldRequest::Geodesic {
+            source, sources, ..
+        } => {
+            let mut all: Vec<String> = source
+                .iter()
+                .chain(sources)
+                .map(|v| v.to_string())
+                .collect();
+            all.dedup();
+            format!("geodesic distance from vertex {}", all.join(", "))
+        }
         other => other.kind().to_string(),
     }
 }
@@ -430,8 +454,7 @@ pub fn run_harmonic(
     let mut names: Vec<String> = (1..=maps).flat_map(harmonic_outputs).collect();
     names.push(SUMMARY_FILE.into());
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
-    let paths = prepare_outputs(&o.out, &name_refs, o.force)?;
-    check_experiment_file(o.save_experiment.as_ref(), o.force)?;
+    let paths = o.prepare(&name_refs)?;
     let Input { shape, info } = input;
     // The analysis holds the mesh (a point cloud's triangle union), its topology and the
     // hash; the maps need no basis. On a point cloud the maps use the robust Laplacian of

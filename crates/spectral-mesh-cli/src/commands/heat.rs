@@ -9,9 +9,8 @@ use spectral_mesh::analysis::{FieldRequest, Kernel, Signal};
 use spectral_mesh::experiments::paper::FieldStats;
 
 use crate::engine::{self, BasisArgs, check_vertex};
-use crate::figure::{FigureArgs, write_field};
 use crate::input::read_field;
-use crate::output::{FIGURE_EXTS, check_experiment_file, check_outputs};
+use crate::output::FieldOutputArgs;
 
 /// The kernels, as typed.
 fn kernel_parser() -> impl clap::builder::TypedValueParser<Value = Kernel> {
@@ -51,14 +50,8 @@ pub struct Args {
     /// Output file(s): .png, .wrl, .ply or .txt by extension (repeatable).
     #[arg(long, short = 'o', required = true)]
     pub out: Vec<PathBuf>,
-    /// Also write an experiment file that reproduces the field with `run FILE.toml`.
-    #[arg(long, value_name = "FILE.toml")]
-    pub save_experiment: Option<PathBuf>,
-    /// Overwrite existing outputs.
-    #[arg(long, short = 'f')]
-    pub force: bool,
     #[command(flatten)]
-    pub figure: FigureArgs,
+    pub output: FieldOutputArgs,
 }
 
 fn parse_indicator(text: &str) -> Result<(usize, f64)> {
@@ -123,9 +116,9 @@ pub fn run(args: Args) -> Result<()> {
         },
     };
     request.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;
-    check_outputs(&args.out, &FIGURE_EXTS, args.force)?;
-    check_experiment_file(args.save_experiment.as_ref(), args.force)?;
-    args.basis.warn_unrecorded(args.save_experiment.as_ref());
+    args.output.check(&args.out)?;
+    args.basis
+        .warn_unrecorded(args.output.save_experiment.as_ref());
     let info = input.info;
     let an = args.basis.analysis(input.shape, !args.no_normalize)?;
     let (field, seconds) = engine::field(&an, &request, args.basis.cache.as_deref())?;
@@ -172,18 +165,8 @@ pub fn run(args: Args) -> Result<()> {
             (mass_out - mass_in).abs()
         }
     );
-    let figure = args.figure.options();
-    write_field(&an, &field, &args.out, figure)?;
-    if let Some(file) = &args.save_experiment {
-        engine::save_field_experiment(
-            file,
-            &info,
-            &an,
-            &field,
-            args.basis.repair,
-            &figure,
-            args.force,
-        )?;
-    }
+    args.output.write_field(&an, &field, &args.out)?;
+    args.output
+        .save_experiment(&info, &an, &field, args.basis.repair)?;
     Ok(())
 }

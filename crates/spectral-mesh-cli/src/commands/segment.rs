@@ -10,9 +10,8 @@ use spectral_mesh::fields::segmentation::patch_genera;
 use spectral_mesh_render::figure::field_text;
 
 use crate::engine::{self, BasisArgs};
-use crate::figure::{FigureArgs, write_field};
 use crate::input::read_field;
-use crate::output::{FIGURE_EXTS, check_experiment_file, check_outputs, write};
+use crate::output::{FieldOutputArgs, check_outputs, write};
 
 /// Help of `--signature`.
 const SIGNATURE_HELP: &str = "The field whose maxima seed the patches:
@@ -49,15 +48,8 @@ pub struct Args {
     /// Also write the segmented field, one value per line.
     #[arg(long)]
     pub field_out: Option<PathBuf>,
-    /// Also write an experiment file that reproduces the segmentation with
-    /// `run FILE.toml`.
-    #[arg(long, value_name = "FILE.toml")]
-    pub save_experiment: Option<PathBuf>,
-    /// Overwrite existing outputs.
-    #[arg(long, short = 'f')]
-    pub force: bool,
     #[command(flatten)]
-    pub figure: FigureArgs,
+    pub output: FieldOutputArgs,
 }
 
 /// `--signature`: `field:FILE` read here, anything else parsed by the library.
@@ -107,12 +99,12 @@ pub fn run(args: Args) -> Result<()> {
         k: args.basis.k,
     };
     request.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;
-    check_outputs(&args.out, &FIGURE_EXTS, args.force)?;
+    args.output.check(&args.out)?;
     if let Some(p) = &args.field_out {
-        check_outputs(std::slice::from_ref(p), &["txt"], args.force)?;
+        check_outputs(std::slice::from_ref(p), &["txt"], args.output.force)?;
     }
-    check_experiment_file(args.save_experiment.as_ref(), args.force)?;
-    args.basis.warn_unrecorded(args.save_experiment.as_ref());
+    args.basis
+        .warn_unrecorded(args.output.save_experiment.as_ref());
     let info = input.info;
     let an = args.basis.analysis(input.shape, !args.no_normalize)?;
     let (field, seconds) = engine::field(&an, &request, args.basis.cache.as_deref())
@@ -145,8 +137,7 @@ pub fn run(args: Args) -> Result<()> {
         };
         println!("  patch {i}: {s} vertices, maximum at vertex {m}, genus {g}");
     }
-    let figure = args.figure.options();
-    write_field(&an, &field, &args.out, figure)?;
+    args.output.write_field(&an, &field, &args.out)?;
     if let Some(p) = &args.field_out {
         let values = match (&spec, signature_request(&spec, args.basis.k)) {
             (SignatureSpec::Values(v), _) => v.clone(),
@@ -156,16 +147,7 @@ pub fn run(args: Args) -> Result<()> {
         write(p, field_text(&values).as_bytes())?;
         println!("field -> {}", p.display());
     }
-    if let Some(file) = &args.save_experiment {
-        engine::save_field_experiment(
-            file,
-            &info,
-            &an,
-            &field,
-            args.basis.repair,
-            &figure,
-            args.force,
-        )?;
-    }
+    args.output
+        .save_experiment(&info, &an, &field, args.basis.repair)?;
     Ok(())
 }

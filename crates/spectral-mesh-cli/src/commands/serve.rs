@@ -4,6 +4,7 @@ use std::net::IpAddr;
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
+use spectral_mesh::defaults::server;
 use spectral_mesh_web::{Limits, ServeConfig, serve_blocking};
 
 /// The end of `serve --help`: how the limits above are answered.
@@ -34,52 +35,52 @@ unless --host names another address.";
 pub struct Args {
     /// Address to listen on. Only 127.0.0.1 (this machine) unless you ask for another:
     /// with another address, other machines on the network can use the server.
-    #[arg(long, default_value = "127.0.0.1")]
+    #[arg(long, default_value_t = server::HOST)]
     pub host: IpAddr,
     /// Port (0 picks a free one).
-    #[arg(long, default_value_t = 8000)]
+    #[arg(long, default_value_t = server::PORT)]
     pub port: u16,
     /// Memory budget of the server in MiB: the cache plus the work in progress.
-    #[arg(long, default_value_t = 2048, value_name = "MIB")]
+    #[arg(long, default_value_t = server::MEMORY_MIB, value_name = "MIB")]
     pub memory_mib: usize,
     /// Most the cache of meshes and analyses (operators, factorization, eigenbasis) may
     /// hold, in MiB (at most --memory-mib).
-    #[arg(long, default_value_t = 1024, value_name = "MIB")]
+    #[arg(long, default_value_t = server::CACHE_MIB, value_name = "MIB")]
     pub cache_mib: usize,
     /// Largest mesh upload, in MiB (413 beyond).
-    #[arg(long, default_value_t = 64, value_name = "MIB")]
+    #[arg(long, default_value_t = server::MAX_UPLOAD_MIB, value_name = "MIB")]
     pub max_upload_mib: usize,
     /// Most vertices of a mesh, uploaded or built (413 beyond).
-    #[arg(long, default_value_t = 1_000_000, value_name = "N")]
+    #[arg(long, default_value_t = server::MAX_VERTICES, value_name = "N")]
     pub max_vertices: usize,
     /// Most triangles of a mesh, after polygons are split (413 beyond).
-    #[arg(long, default_value_t = 2_000_000, value_name = "N")]
+    #[arg(long, default_value_t = server::MAX_FACES, value_name = "N")]
     pub max_faces: usize,
     /// Most eigenpairs of a basis (422 beyond; also at most the number of vertices).
-    #[arg(long, default_value_t = 1000, value_name = "K")]
+    #[arg(long, default_value_t = server::MAX_K, value_name = "K")]
     pub max_k: usize,
     /// Eigenbasis computations running at once; more wait in a queue.
-    #[arg(long, default_value_t = 2, value_name = "N")]
+    #[arg(long, default_value_t = server::MAX_JOBS, value_name = "N")]
     pub max_jobs: usize,
     /// Eigenbasis requests waiting in the queue (503 beyond).
-    #[arg(long, default_value_t = 16, value_name = "N")]
+    #[arg(long, default_value_t = server::MAX_QUEUED, value_name = "N")]
     pub max_queued: usize,
     /// Longest an eigenbasis computation may run, in seconds (then it is stopped).
-    #[arg(long, default_value_t = 600, value_name = "S")]
+    #[arg(long, default_value_t = server::JOB_SECONDS, value_name = "S")]
     pub job_seconds: u64,
     /// An eigenbasis job whose status nobody asked for during this many seconds is
     /// cancelled (its client went away).
-    #[arg(long, default_value_t = 60, value_name = "S")]
+    #[arg(long, default_value_t = server::JOB_IDLE_SECONDS, value_name = "S")]
     pub job_idle_seconds: u64,
     /// Longest time for any other request, reading its body and waiting for memory
     /// included (408 when the body is late, 503 otherwise).
-    #[arg(long, default_value_t = 120, value_name = "S")]
+    #[arg(long, default_value_t = server::REQUEST_SECONDS, value_name = "S")]
     pub request_seconds: u64,
     /// Requests in progress at once (503 beyond).
-    #[arg(long, default_value_t = 64, value_name = "N")]
+    #[arg(long, default_value_t = server::MAX_REQUESTS, value_name = "N")]
     pub max_requests: usize,
     /// Meshes and analyses nobody used for this many seconds are dropped (0: never).
-    #[arg(long, default_value_t = 3600, value_name = "S")]
+    #[arg(long, default_value_t = server::IDLE_SECONDS, value_name = "S")]
     pub idle_seconds: u64,
     /// Folder holding npm's `node_modules` with three.js, served instead of the copy
     /// embedded in this binary at build time.
@@ -171,7 +172,7 @@ mod tests {
         let cfg = parse(&[]).config().unwrap_or_else(|e| panic!("{e}"));
         assert!(cfg.host.is_loopback());
         assert_eq!(cfg.limits, Limits::default());
-        assert_eq!(cfg.port, 8000);
+        assert_eq!(cfg.port, server::PORT);
         let cfg = parse(&["--host", "0.0.0.0"])
             .config()
             .unwrap_or_else(|e| panic!("{e}"));

@@ -16,8 +16,7 @@ use spectral_mesh::spectral::signatures::{
 
 use super::distance::FILTER_HELP;
 use crate::engine::{self, BasisArgs};
-use crate::figure::{FigureArgs, write_field};
-use crate::output::{FIGURE_EXTS, check_experiment_file, check_outputs, extension, write};
+use crate::output::{FieldOutputArgs, extension, write};
 
 /// Which signature.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -70,7 +69,7 @@ pub struct Args {
     #[arg(long)]
     pub scaled: bool,
     /// The filter of the spectral function (default biharmonic).
-    #[arg(long, default_value_t = Filter::Biharmonic.to_string(), long_help = FILTER_HELP)]
+    #[arg(long, default_value_t = Filter::default().to_string(), long_help = FILTER_HELP)]
     pub filter: String,
     /// Which column (time or energy, 0-based) is drawn in .png, .wrl and .ply outputs;
     /// .txt outputs hold every column.
@@ -84,15 +83,8 @@ pub struct Args {
     /// Output file(s): .png, .wrl, .ply or .txt by extension (repeatable).
     #[arg(long, short = 'o', required = true)]
     pub out: Vec<PathBuf>,
-    /// Also write an experiment file that reproduces the drawn column with
-    /// `run FILE.toml`.
-    #[arg(long, value_name = "FILE.toml")]
-    pub save_experiment: Option<PathBuf>,
-    /// Overwrite existing outputs.
-    #[arg(long, short = 'f')]
-    pub force: bool,
     #[command(flatten)]
-    pub figure: FigureArgs,
+    pub output: FieldOutputArgs,
 }
 
 /// A list of parameters: `auto:N` or `a,b,c`.
@@ -276,8 +268,7 @@ fn columns_text(kind: &str, name: &str, labels: &[String], values: &[Vec<f64>]) 
 /// Computes the signature and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
     let input = args.basis.load(args.mesh.as_deref())?;
-    check_outputs(&args.out, &FIGURE_EXTS, args.force)?;
-    check_experiment_file(args.save_experiment.as_ref(), args.force)?;
+    args.output.check(&args.out)?;
     if args.t.is_some() && !matches!(args.kind, Kind::Hks | Kind::Adf) {
         bail!("--t is for --kind hks or adf");
     }
@@ -296,7 +287,8 @@ pub fn run(args: Args) -> Result<()> {
             args.column
         );
     }
-    args.basis.warn_unrecorded(args.save_experiment.as_ref());
+    args.basis
+        .warn_unrecorded(args.output.save_experiment.as_ref());
     let info = input.info;
     let k = args.basis.k;
     let an = args.basis.analysis(input.shape, !args.no_normalize)?;
@@ -332,7 +324,6 @@ pub fn run(args: Args) -> Result<()> {
         "column {} ({} = {}): min {}, max {}",
         args.column, cols.name, cols.labels[args.column], stats.min, stats.max
     );
-    let figure = args.figure.options();
     let (many, single): (Vec<PathBuf>, Vec<PathBuf>) = args
         .out
         .iter()
@@ -346,17 +337,8 @@ pub fn run(args: Args) -> Result<()> {
             println!("-> {}", o.display());
         }
     }
-    write_field(&an, &field, &single, figure)?;
-    if let Some(file) = &args.save_experiment {
-        engine::save_field_experiment(
-            file,
-            &info,
-            &an,
-            &field,
-            args.basis.repair,
-            &figure,
-            args.force,
-        )?;
-    }
+    args.output.write_field(&an, &field, &single)?;
+    args.output
+        .save_experiment(&info, &an, &field, args.basis.repair)?;
     Ok(())
 }

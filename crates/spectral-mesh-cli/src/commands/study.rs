@@ -50,13 +50,13 @@ pub struct TruncationArgs {
     /// Mesh file or built-in shape (default: torus:res=2, 1568 vertices).
     pub mesh: Option<String>,
     /// Discretizations, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = vec!["cot".to_string(), "voronoi-cot".to_string(), "fem".to_string()])]
+    #[arg(long, value_delimiter = ',', default_values_t = TruncationParams::default().laplacians.iter().map(|l| l.name().to_string()).collect::<Vec<_>>())]
     pub laplacian: Vec<String>,
     /// Diffusion times (for the shape scaled to unit area unless --no-normalize).
-    #[arg(long, value_delimiter = ',', default_values_t = vec![0.01, 0.05, 0.1])]
+    #[arg(long, value_delimiter = ',', default_values_t = TruncationParams::default().times)]
     pub t: Vec<f64>,
     /// Numbers of pairs; `all` = every pair (n with the dense reference).
-    #[arg(long, short = 'k', value_delimiter = ',', default_values_t = ["10", "20", "50", "100", "200", "500", "1000", "all"].map(String::from).to_vec())]
+    #[arg(long, short = 'k', value_delimiter = ',', default_values_t = TruncationParams::default().ks.iter().map(|&k| if k == usize::MAX { "all".to_string() } else { k.to_string() }).collect::<Vec<_>>())]
     pub k: Vec<String>,
     /// Anchor vertex (default: the vertex of largest x).
     #[arg(long)]

@@ -26,10 +26,9 @@ const NAMES: [&str; 12] = [
 
 /// Runs one input of the target (what libFuzzer calls, and what the seed replay calls).
 pub fn run(data: &[u8]) {
-    let Some((&b, rest)) = data.split_first() else {
+    let Some((name, rest)) = crate::named(data, &NAMES) else {
         return;
     };
-    let name = NAMES[usize::from(b) % NAMES.len()];
     let input = match read_input_from_bytes(rest, name) {
         Ok(i) => i,
         Err(e) => {

@@ -43,7 +43,8 @@ use axum::http::{Method, Request, StatusCode, header};
 use serde_json::{Value, json};
 use spectral_mesh::analysis::{Analysis, AnalysisOptions};
 use spectral_mesh::{Eigenbasis, Laplacian, Mesh, Operators};
-use spectral_mesh_web::state::{AnalysisKey, AppState};
+use spectral_mesh_web::entries::AnalysisKey;
+use spectral_mesh_web::state::AppState;
 use spectral_mesh_web::{Limits, ServeConfig, api, field::parse_reply};
 use tower::ServiceExt;
 

@@ -35,7 +35,8 @@ from __future__ import annotations
 from . import _native
 from ._analysis import Analysis, CriticalPoints, LevelSet
 from ._batch import batch
-from ._geodesic import GeodesicSolver, geodesic_distance
+from ._correspondence import functional_map, p2p, zoomout
+from ._geodesic import GeodesicSolver, geodesic_distance, point_cloud_geodesic_distance
 from ._api import (
     eigenbasis,
     eigsh,
@@ -77,10 +78,13 @@ __all__ = [
     "batch",
     "eigenbasis",
     "eigsh",
+    "functional_map",
     "geodesic_distance",
     "laplacian",
     "load_basis",
     "num_threads",
+    "p2p",
+    "point_cloud_geodesic_distance",
     "point_cloud_laplacian",
     "read_mesh",
     "read_points",
@@ -89,4 +93,5 @@ __all__ = [
     "shape",
     "shape_names",
     "write_mesh",
+    "zoomout",
 ]

@@ -4,6 +4,7 @@ with ``k``, answering every field of the paper."""
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Literal, Sequence, overload
 
@@ -13,7 +14,7 @@ import numpy.typing as npt
 from . import _arrays, _native
 from ._arrays import FloatArray, IntArray
 from ._errors import InternalError
-from ._api import _labels, _marks, _view_text
+from ._api import _render_args
 if TYPE_CHECKING:
     from ._arrays import CsrMatrix
 
@@ -458,10 +459,13 @@ class Analysis:
         """Any field by its request kind and parameters, exactly as in experiment files
         and the web app (``kind`` is one of ``harmonic``, ``heat``, ``diffusion``,
         ``distance``, ``spectral-function``, ``hks``, ``wks``, ``adf``, ``segmentation``,
-        ``embedding``, ``eigenfunction``, ``green``; unknown parameters are refused by
-        name). Returns the ``(n,)`` values, or ``(values, info)`` with
-        ``return_info=True`` (``info``: see :attr:`last_info`). A segmentation returns its
-        int64 labels."""
+        ``embedding``, ``eigenfunction``, ``green``, ``geodesic``; unknown parameters are
+        refused by name). ``geodesic`` (``source``, ``sources``, ``time_factor``,
+        ``convention``) is the heat method's distance in the mesh's units, from the
+        solver the analysis keeps; vertices its sources cannot reach are ``inf``, with a
+        ``RuntimeWarning`` and ``info["unreachable"]``. Returns the ``(n,)`` values, or
+        ``(values, info)`` with ``return_info=True`` (``info``: see :attr:`last_info`). A
+        segmentation returns its int64 labels."""
         values, labels = self._request(kind, params.pop("_values", None), params)
         out = labels if labels is not None else values
         return (out, self._info) if return_info else out
@@ -479,6 +483,9 @@ class Analysis:
         info.pop("labels", None)
         self._info = info
         self._last = labels if labels is not None else vals
+        if info.get("unreachable_message"):
+            # A geodesic distance's unreachable components: inf, said aloud.
+            warnings.warn(info["unreachable_message"], RuntimeWarning, stacklevel=3)
         return vals, labels
 
     def _values(self, kind: str, values: FloatArray | None = None, **params: Any) -> FloatArray:
@@ -822,20 +829,7 @@ class Analysis:
         when ``values`` is the array that request returned."""
         if marks is None:
             marks = self._info.get("marks", []) if values is self._last else []
-        return self._a.render(
-            _arrays.per_vertex(values, self.n),
-            _marks(marks),
-            _labels(labels, self.n),
-            _arrays.count(levels, "levels"),
-            str(colormap),
-            _view_text(view),
-            _arrays.count(size, "size", 1),
-            bool(transparent),
-            bool(critical_points),
-            bool(colorbar),
-            None if path is None else os.fspath(path),
-            legend=bool(legend),
-            height=None if height is None else _arrays.count(height, "height", 1),
-            scale=None if scale is None else _arrays.real(scale, "scale"),
-            dpi=None if dpi is None else _arrays.count(dpi, "dpi", 1),
-        )
+        args = _render_args(values, self.n, marks, labels, levels, colormap, view, size,
+                            transparent, critical_points, colorbar, path,
+                            legend=legend, height=height, scale=scale, dpi=dpi)
+        return self._a.render(*args)

@@ -169,6 +169,42 @@ def point_cloud_laplacian(
 # -------------------------------------------------------------------------- eigenbasis
 
 
+@overload
+def eigenbasis(
+    V: npt.ArrayLike,
+    F: npt.ArrayLike,
+    k: int = ...,
+    kind: str = ...,
+    *,
+    normalize: bool = ...,
+    tol: float = ...,
+    seed: int = ...,
+    dirichlet: Sequence[int] | None = ...,
+    method: str = ...,
+    progress: Callable[[dict[str, Any]], Any] | None = ...,
+    certify: Literal[False] = ...,
+    dtype: str | None = ...,
+) -> tuple[npt.NDArray[np.floating[Any]], npt.NDArray[np.floating[Any]]]: ...
+
+
+@overload
+def eigenbasis(
+    V: npt.ArrayLike,
+    F: npt.ArrayLike,
+    k: int = ...,
+    kind: str = ...,
+    *,
+    normalize: bool = ...,
+    tol: float = ...,
+    seed: int = ...,
+    dirichlet: Sequence[int] | None = ...,
+    method: str = ...,
+    progress: Callable[[dict[str, Any]], Any] | None = ...,
+    certify: Literal[True],
+    dtype: str | None = ...,
+) -> tuple[npt.NDArray[np.floating[Any]], npt.NDArray[np.floating[Any]], dict[str, Any]]: ...
+
+
 def eigenbasis(
     V: npt.ArrayLike,
     F: npt.ArrayLike,
@@ -181,10 +217,15 @@ def eigenbasis(
     dirichlet: Sequence[int] | None = None,
     method: str = METHOD,
     progress: Callable[[dict[str, Any]], Any] | None = None,
-) -> tuple[FloatArray, FloatArray]:
+    certify: bool = False,
+    dtype: str | None = None,
+) -> (
+    tuple[npt.NDArray[np.floating[Any]], npt.NDArray[np.floating[Any]]]
+    | tuple[npt.NDArray[np.floating[Any]], npt.NDArray[np.floating[Any]], dict[str, Any]]
+):
     """The ``k`` smallest eigenpairs of ``S x = lambda B x`` for the mesh ``(V, F)``.
 
-    Returns ``(evals, evecs)``: ``evals`` is ``(k,)`` float64, ascending, ``>= 0`` up to
+    Returns ``(evals, evecs)``: ``evals`` is ``(k,)`` float64 (or ``dtype``), ascending, ``>= 0`` up to
     round-off (one zero per connected component); ``evecs`` is ``(n, k)`` float64
     (Fortran order), **B-orthonormal**: ``evecs.T @ B @ evecs = I`` (not ``evecs.T @ evecs``,
     as with LaPy, pyFM and SciPy's ``eigsh(S, k, M=B, ...)``). Sign convention: each
@@ -219,6 +260,19 @@ def eigenbasis(
         "iterations", "solves", "max_residual", "orthogonality_error"}`` or
         ``{"stage": "dense", "n"}``. An exception it raises stops the solve and is raised
         by this call.
+    certify : ``True``: prove that no eigenvalue was skipped, multiplicities included
+        (the command line's ``eigs --certify``): the eigenvalues below a shift just above
+        ``lambda_k`` are counted from the negative pivots of an ``L D L^T`` factorization
+        of ``S - sigma B`` (Sylvester's law of inertia) and compared with the computed
+        ones; when they disagree the missing pairs are searched for and the completed
+        basis is returned. The call then returns a third item, the certificate:
+        ``{"certified": True, "k", "first": {"shift", "below", "found"}, "last": {...},
+        "added", "searches", "values_changed", "lines"}`` (``first`` is the count of the
+        pairs as solved, ``last`` after any completion, ``lines`` the report the command
+        line prints). A count that still disagrees raises :class:`SolverError`. Cost:
+        about one more factorization.
+    dtype : ``"float64"`` (default) or ``"float32"`` (as learning pipelines store
+        bases): the pairs are computed in double precision either way and rounded once.
 
     Raises ``ValueError`` for bad arrays or parameters (``k > n`` among them),
     :class:`NoConvergenceError` and :class:`SolverError` for numerical failures.
@@ -233,7 +287,7 @@ def eigenbasis(
             f"k = {k} eigenpairs asked for, but the mesh has only {V.shape[0]} vertices"
         )
     d = None if dirichlet is None else [_arrays.count(i, "dirichlet vertex") for i in dirichlet]
-    return _native.eigenbasis(
+    evals, evecs, certificate = _native.eigenbasis(
         V,
         F,
         k,
@@ -244,7 +298,13 @@ def eigenbasis(
         d,
         str(method),
         progress,
+        bool(certify),
+        None if dtype is None else str(dtype),
     )
+    if certify:
+        assert certificate is not None
+        return evals, evecs, certificate
+    return evals, evecs
 
 
 #: A matrix :func:`eigsh` takes: a SciPy sparse matrix or array (any format) or a dense 2-d
@@ -499,6 +559,31 @@ def _marks(marks: int | Sequence[int] | None) -> list[int]:
     return [_arrays.count(m, "mark") for m in marks]
 
 
+def _render_args(values: Any, n: int, marks: Any, labels: Any, levels: Any, colormap: Any,
+                 view: Any, size: Any, transparent: Any, critical_points: Any,
+                 colorbar: Any, path: Any, *, legend: Any = True, height: Any = None,
+                 scale: Any = None, dpi: Any = None) -> tuple[Any, ...]:
+    """The native render's arguments after the mesh (values, marks, labels, the picture
+    options as one dict, path), checked and converted: the one way of :func:`render` and
+    :meth:`Analysis.render` (``n`` vertices)."""
+    vals = _arrays.per_vertex(values, n)
+    marks, labels = _marks(marks), _labels(labels, n)
+    figure = {
+        "levels": _arrays.count(levels, "levels"),
+        "colormap": str(colormap),
+        "view": _view_text(view),
+        "size": _arrays.count(size, "size", 1),
+        "transparent": bool(transparent),
+        "critical_points": bool(critical_points),
+        "colorbar": bool(colorbar),
+        "legend": bool(legend),
+        "height": None if height is None else _arrays.count(height, "height", 1),
+        "scale": None if scale is None else _arrays.real(scale, "scale"),
+        "dpi": None if dpi is None else _arrays.count(dpi, "dpi", 1),
+    }
+    return vals, marks, labels, figure, None if path is None else os.fspath(path)
+
+
 def render(
     V: npt.ArrayLike,
     F: npt.ArrayLike,
@@ -542,26 +627,10 @@ def render(
     command line's ``render`` give the same picture.
     """
     V, F = _arrays.mesh(V, F)
-    vals = _arrays.per_vertex(values, V.shape[0])
-    return _native.render(
-        V,
-        F,
-        vals,
-        _marks(marks),
-        _labels(labels, V.shape[0]),
-        _arrays.count(levels, "levels"),
-        str(colormap),
-        _view_text(view),
-        _arrays.count(size, "size", 1),
-        bool(transparent),
-        bool(critical_points),
-        bool(colorbar),
-        None if path is None else os.fspath(path),
-        legend=bool(legend),
-        height=None if height is None else _arrays.count(height, "height", 1),
-        scale=None if scale is None else _arrays.real(scale, "scale"),
-        dpi=None if dpi is None else _arrays.count(dpi, "dpi", 1),
-    )
+    args = _render_args(values, V.shape[0], marks, labels, levels, colormap, view, size,
+                        transparent, critical_points, colorbar, path,
+                        legend=legend, height=height, scale=scale, dpi=dpi)
+    return _native.render(V, F, *args)
 
 
 def num_threads() -> int:

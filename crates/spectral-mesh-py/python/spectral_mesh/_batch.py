@@ -76,6 +76,7 @@ def batch(
     adf: str | int | Sequence[float] | None = BATCH["adf"],
     scaled: bool = BATCH["scaled"],
     thumbnail: int | None = BATCH["thumbnail"],
+    geodesic: int | None = BATCH["geodesic"],
     n_neighbors: int = POINT_CLOUD["n_neighbors"],
     mollify_factor: float = POINT_CLOUD["mollify_factor"],
     client: Any = None,
@@ -97,7 +98,9 @@ def batch(
     relative residual ``tol``, on the shape scaled to unit area (``normalize``); the
     descriptors ``hks``, ``wks``, ``adf``: ``"auto:N"`` (or ``N``) automatic times /
     energies from each spectrum, or a list; ``thumbnail``: a PNG of that many pixels a
-    side; ``eigenvectors=False`` saves the eigenvalues (and descriptors) only. Point clouds
+    side; ``geodesic``: heat-method distances (mesh units) from that many farthest-point
+    samples of each mesh, arrays ``geodesic`` ``(n, N)`` (``inf`` where a sample cannot
+    reach) and ``geodesic_sources``; ``eigenvectors=False`` saves the eigenvalues (and descriptors) only. Point clouds
     (point files, PLY files without faces) use their point-cloud Laplacian with
     ``n_neighbors`` and ``mollify_factor`` (as :meth:`Analysis.from_points`; the command
     line's ``--neighbors`` and ``--mollify-factor``). Results are
@@ -135,7 +138,7 @@ def batch(
         "k": k, "laplacian": laplacian, "tolerance": tol, "normalize": bool(normalize),
         "basis": bool(eigenvectors), "hks": _schedule(hks, "hks"), "wks": _schedule(wks, "wks"),
         "wks_sigma": wks_sigma, "adf": _schedule(adf, "adf"), "scaled": bool(scaled),
-        "thumbnail": thumbnail,
+        "thumbnail": thumbnail, "geodesic": geodesic,
         "point_cloud": {
             "neighbors": n_neighbors,
             "mollify_factor": mollify_factor,

@@ -1,4 +1,5 @@
-"""Geodesic distance by the heat method (Crane, Weischedel and Wardetzky 2013)."""
+"""Geodesic distance by the heat method (Crane, Weischedel and Wardetzky 2013), on meshes
+and point clouds."""
 
 from __future__ import annotations
 
@@ -62,6 +63,35 @@ class GeodesicSolver:
         tf = None if time_factor is None else _arrays.real(time_factor, "time_factor")
         self._native = _native.GeodesicSolver(V, F, kind, tf, convention)
 
+    @classmethod
+    def from_points(
+        cls,
+        P: Any,
+        *,
+        normals: Any = None,
+        n_neighbors: int | None = None,
+        mollify_factor: float | None = None,
+        gradient_neighbors: int | None = None,
+        time_factor: float | None = None,
+        convention: str | None = None,
+    ) -> "GeodesicSolver":
+        """The heat method on a point cloud ``P`` (``(n, 3)``): the heat and Poisson solves
+        on its point-cloud Laplacian (:func:`point_cloud_laplacian`, ``n_neighbors`` and
+        ``mollify_factor`` as there), the gradient by least squares over each point's
+        ``gradient_neighbors`` nearest neighbours in its tangent plane (PCA, or
+        ``normals`` where non-zero). ``h`` is the mean edge length of the Laplacian's
+        triangles. Sources are point indices (no face points). ``None``: the library's
+        default."""
+        P = _arrays.vertices(P, "P")
+        nr = None if normals is None else _arrays.vertices(normals, "normals")
+        tf = None if time_factor is None else _arrays.real(time_factor, "time_factor")
+        nn = None if n_neighbors is None else _arrays.count(n_neighbors, "n_neighbors")
+        gn = None if gradient_neighbors is None else _arrays.count(gradient_neighbors, "gradient_neighbors")
+        mf = None if mollify_factor is None else _arrays.real(mollify_factor, "mollify_factor")
+        self = cls.__new__(cls)
+        self._native = _native.GeodesicSolver.from_points(P, nr, nn, mf, gn, tf, convention)
+        return self
+
     @property
     def t(self) -> float:
         """The time step ``t = m h^2``."""
@@ -110,3 +140,24 @@ def geodesic_distance(
     distance to the nearest). See :class:`GeodesicSolver`, which keeps its factors for
     more sources."""
     return GeodesicSolver(V, F, kind, time_factor=time_factor, convention=convention).distance(sources)
+
+
+def point_cloud_geodesic_distance(
+    P: Any,
+    sources: Any,
+    *,
+    normals: Any = None,
+    n_neighbors: int | None = None,
+    gradient_neighbors: int | None = None,
+    time_factor: float | None = None,
+) -> np.ndarray:
+    """``(n,)`` heat-method geodesic distance on the point cloud ``P`` from the point or
+    points ``sources`` (the distance to the nearest). See
+    :meth:`GeodesicSolver.from_points`, which keeps its factors for more sources."""
+    return GeodesicSolver.from_points(
+        P,
+        normals=normals,
+        n_neighbors=n_neighbors,
+        gradient_neighbors=gradient_neighbors,
+        time_factor=time_factor,
+    ).distance(sources)

@@ -11,7 +11,7 @@ worker thread, raises ``KeyboardInterrupt`` on Ctrl-C and never lets a Rust pani
 """
 
 from os import PathLike
-from typing import Any, Callable
+from typing import Any, Callable, TypedDict
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,6 +19,23 @@ from numpy.typing import NDArray
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 Csc = tuple[F64, I64, I64]
+# The picture options of both ``render``s, checked by the Python layer (``_render_args``).
+Figure = TypedDict(
+    "Figure",
+    {
+        "levels": int,
+        "colormap": str,
+        "view": str,
+        "size": int,
+        "transparent": bool,
+        "critical_points": bool,
+        "colorbar": bool,
+        "legend": bool,
+        "height": int | None,
+        "scale": float | None,
+        "dpi": int | None,
+    },
+)
 
 __version__: str
 
@@ -53,9 +70,12 @@ def eigenbasis(
     dirichlet: list[int] | None,
     method: str,
     progress: Callable[[dict], object] | None = None,
-) -> tuple[F64, F64]:
-    """``(evals (k,), evecs (n, k) Fortran order)``, ``evecs.T @ B @ evecs = I``;
-    ``progress`` is called with a dict per solver event."""
+    certify: bool = False,
+    dtype: str | None = None,
+) -> tuple[NDArray[np.floating[Any]], NDArray[np.floating[Any]], dict | None]:
+    """``(evals (k,), evecs (n, k) Fortran order, certificate or None)``,
+    ``evecs.T @ B @ evecs = I``; ``progress`` is called with a dict per solver event;
+    ``dtype``: ``"float64"`` or ``"float32"`` (``None``: the library's default)."""
 
 def eigsh(
     n: int,
@@ -87,13 +107,7 @@ def render(
     values: F64,
     marks: list[int],
     labels: list[int] | None,
-    levels: int,
-    colormap: str,
-    view: str,
-    size: int,
-    transparent: bool,
-    critical_points: bool,
-    colorbar: bool,
+    figure: Figure,
     path: str | PathLike[str] | None,
 ) -> NDArray[np.uint8] | None:
     """Writes ``path`` (format from its extension) and returns None, or returns the
@@ -103,6 +117,25 @@ def defaults() -> dict[str, Any]:
     """The library's defaults: ``requests`` (every request kind's keys), ``analysis``,
     ``figure``, ``point_cloud``, ``batch`` (``spectral_mesh.batch``'s keywords),
     ``zero_eigenvalue_eps``, ``shape``, ``laplacians``, ``colormaps``."""
+
+def learning_operators(
+    v: F64,
+    f: I64 | None,
+    k_eig: int,
+    cache_dir: str | None,
+    dtype: str,
+    normals: F64 | None,
+    laplacian: str,
+    grad_regularization: float,
+    n_neighbors: int,
+    tol: float,
+) -> tuple[tuple[Any, Any, Csc, Any, Any, Csc, Csc], bool, str | None]:
+    """``((frames (n, 3, 3), mass, L, evals, evecs (n, k) Fortran, gradX, gradY),
+    from_cache, cache_file)``; a point cloud when ``f`` is None; float arrays in ``dtype``
+    (``"float64"`` or ``"float32"``, rounded once), sparse ones as CSC arrays."""
+
+def learning_defaults() -> dict:
+    """The library's defaults of the learning operators."""
 
 def num_threads() -> int: ...
 def _panic_for_tests(message: str) -> None: ...
@@ -211,13 +244,7 @@ class Analysis:
         values: F64,
         marks: list[int],
         labels: list[int] | None,
-        levels: int,
-        colormap: str,
-        view: str,
-        size: int,
-        transparent: bool,
-        critical_points: bool,
-        colorbar: bool,
+        figure: Figure,
         path: str | PathLike[str] | None,
     ) -> NDArray[np.uint8] | None: ...
     def options(self) -> dict:
@@ -243,6 +270,16 @@ class GeodesicSolver:
     def __init__(
         self, v: F64, f: I64, kind: str, time_factor: float | None = None, convention: str | None = None
     ) -> None: ...
+    @staticmethod
+    def from_points(
+        p: F64,
+        normals: F64 | None = None,
+        neighbors: int | None = None,
+        mollify_factor: float | None = None,
+        gradient_neighbors: int | None = None,
+        time_factor: float | None = None,
+        convention: str | None = None,
+    ) -> GeodesicSolver: ...
     def distance(self, vertices: list[int], points: list[tuple[int, float, float, float]]) -> F64: ...
     def distances(self, vertices: list[int]) -> F64: ...
     def distance_matrix(self, samples: list[int], symmetric: bool) -> F64: ...
@@ -253,3 +290,33 @@ class GeodesicSolver:
     def h(self) -> float: ...
     @property
     def n(self) -> int: ...
+
+def correspondence_defaults() -> str: ...
+def functional_map(
+    v1: F64,
+    f1: I64,
+    evals1: F64,
+    evecs1_t: F64,
+    v2: F64,
+    f2: I64,
+    evals2: F64,
+    evecs2_t: F64,
+    kind: str,
+    params: str,
+    landmarks: list[tuple[int, int]],
+) -> tuple[F64, float]: ...
+def zoomout_refine(
+    v1: F64,
+    f1: I64,
+    evecs1_t: F64,
+    v2: F64,
+    f2: I64,
+    evecs2_t: F64,
+    kind: str,
+    c: F64,
+    k_final: int,
+    step: int,
+) -> tuple[F64, NDArray[np.uintp]]: ...
+def point_map(
+    c: F64, evecs1_t: F64, evecs2_t: F64, adjoint: bool, to_second: bool
+) -> NDArray[np.uintp]: ...

@@ -1,6 +1,23 @@
 //! Routes of the eigenbasis job: start, cancel, status.
 
-use super::*;
+use std::sync::Arc;
+
+use axum::Json;
+use axum::body::Body;
+use axum::extract::{Extension, Path, State};
+use axum::http::{HeaderMap, StatusCode};
+use axum::response::{IntoResponse, Response};
+use spectral_mesh::analysis::Analysis;
+use spectral_mesh::analysis::memory::creation_bytes;
+
+use super::meshes::{check_id, check_k, entry, get_mesh};
+use super::reading::{json_body, reserve};
+use crate::body;
+use crate::entries::{AnalysisKey, Item};
+use crate::error::{ApiError, ApiResult, busy, internal};
+use crate::jobs::{self, Job, Submit, Submitted};
+use crate::limits::{Deadline, mib};
+use crate::state::{AppState, St};
 
 /// The analysis of `key`: the existing one, or a new one made off the request thread
 /// with the memory of its assembly reserved first.
@@ -18,7 +35,7 @@ pub(super) async fn analysis_for(
     let r = reserve(
         s,
         "assembling the operators",
-        analysis_creation_bytes(n, key.laplacian, points),
+        creation_bytes(n, key.laplacian, points),
         deadline,
         StatusCode::UNPROCESSABLE_ENTITY,
     )
@@ -65,8 +82,8 @@ pub(super) async fn start_basis(
         normalize: b.normalize,
     };
     let analysis = analysis_for(&s, &item, &key, deadline).await?;
-    let estimate = jobs::estimate(n, b.k, &analysis);
-    let after = jobs::held_after(n, b.k, &analysis);
+    let estimate = analysis.basis_peak_bytes(b.k);
+    let after = analysis.bytes_with_basis(b.k);
     if analysis.held_k() < b.k {
         if after + mesh > limits.cache_bytes {
             return Err(ApiError::unprocessable(format!(
@@ -76,7 +93,7 @@ pub(super) async fn start_basis(
                 mib(limits.cache_bytes)
             )));
         }
-        let held = crate::state::analysis_bytes(&analysis) + mesh;
+        let held = analysis.cached_bytes() + mesh;
         if estimate + held > limits.memory_bytes {
             return Err(ApiError::unprocessable(format!(
                 "an eigenbasis of k = {} on {n} {noun} needs about {} at its peak (estimate) besides the {} its input and analysis hold, more than this server's memory budget of {} (--memory-mib): ask for fewer pairs",
@@ -88,7 +105,7 @@ pub(super) async fn start_basis(
         }
     }
     let submitted = s.jobs.submit(
-        &s,
+        limits.max_queued,
         Submit {
             id: id.clone(),
             key,

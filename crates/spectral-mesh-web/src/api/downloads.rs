@@ -1,6 +1,25 @@
 //! Downloads of a field: picture, VRML, PLY, text, experiment file.
 
-use super::*;
+use std::sync::Arc;
+
+use axum::body::Body;
+use axum::extract::rejection::QueryRejection;
+use axum::extract::{Extension, Path, Query, State};
+use axum::http::{HeaderMap, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use serde::Deserialize;
+use spectral_mesh::analysis::AnalysisInput;
+use spectral_mesh::experiments::file::{ExperimentFile, PointCloudFile};
+use spectral_mesh_render::figure::Figure;
+
+use super::fields::{Computed, compute};
+use super::meshes::{check_id, entry};
+use super::reading::{json_body, reserve};
+use crate::body::{self, FieldBody};
+use crate::entries::Loaded;
+use crate::error::{ApiError, ApiResult, internal};
+use crate::limits::Deadline;
+use crate::state::{AppState, St};
 
 /// Query of `GET /api/mesh/{id}/download`.
 #[derive(Deserialize)]

@@ -1,6 +1,23 @@
 //! The field route: one field of a loaded mesh, computed by the analysis.
 
-use super::*;
+use std::sync::Arc;
+
+use axum::body::Body;
+use axum::extract::{Extension, Path, State};
+use axum::http::{HeaderMap, StatusCode};
+use axum::response::Response;
+use spectral_mesh::analysis::memory::field_bytes;
+use spectral_mesh::analysis::{Analysis, AnalysisError};
+
+use super::basis::analysis_for;
+use super::meshes::{check_id, entry, get_mesh, octet};
+use super::reading::{json_body, reserve};
+use crate::body::{self, FieldBody};
+use crate::entries::{AnalysisKey, Item};
+use crate::error::{ApiError, ApiResult, internal};
+use crate::field::{FieldReply, field_reply};
+use crate::limits::Deadline;
+use crate::state::{AppState, St};
 
 /// A computed field with what it was computed on.
 pub(super) struct Computed {

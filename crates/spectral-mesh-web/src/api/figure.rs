@@ -1,10 +1,20 @@
 //! The figure route: a field's figure described again for other picture options (the
 //! page changes its colour map or its levels without asking for the field again).
 
-use super::*;
+use axum::Json;
+use axum::body::Body;
+use axum::extract::{Extension, State};
+use axum::http::HeaderMap;
+use axum::response::{IntoResponse, Response};
+use serde::Deserialize;
 use spectral_mesh::experiments::file::FigureFile;
 use spectral_mesh_render::description::{FieldSummary, describe};
 use spectral_mesh_render::figure::FigureOptions;
+
+use super::reading::json_body;
+use crate::error::{ApiError, ApiResult};
+use crate::limits::Deadline;
+use crate::state::St;
 
 /// The body of `POST /api/figure`: the summary of a field reply's `figure` and the
 /// picture options (the keys of an experiment file's `[figure]` table).

@@ -1,6 +1,29 @@
 //! Routes of meshes and point clouds: health, shapes, upload, info, geometry.
 
-use super::*;
+use std::sync::Arc;
+
+use axum::Json;
+use axum::body::Body;
+use axum::extract::{Extension, Path, State};
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use serde_json::json;
+use spectral_mesh::analysis::memory::creation_bytes;
+use spectral_mesh::analysis::{Analysis, AnalysisInput};
+use spectral_mesh::io::{Input, LoadedPoints};
+use spectral_mesh::mesh::topology::Topology;
+use spectral_mesh::operators::PointCloudParams;
+use spectral_mesh::shapes::ShapeError;
+use spectral_mesh::{Laplacian, Mesh};
+
+use super::reading::{
+    SHAPE_BYTES_PER_VERTEX, UPLOAD_FACTOR, json_body, no_room, read_body, reserve,
+};
+use crate::body;
+use crate::entries::{AnalysisKey, Item, Key, Loaded, MeshEntry, Reservation};
+use crate::error::{ApiError, ApiResult, internal};
+use crate::limits::{Deadline, mib};
+use crate::state::{AppState, St};
 
 pub(super) async fn health(State(s): St) -> Json<serde_json::Value> {
     let (running, queued) = s.jobs.counts();
@@ -126,9 +149,9 @@ pub(super) fn mesh_reply(e: &MeshEntry) -> serde_json::Value {
     })
 }
 
-/// Largest built-in shape the web app builds whatever `--max-vertices` says (a
-/// resolution typo must not exhaust memory).
-pub const MAX_SHAPE_VERTICES: usize = 2_000_000;
+/// Largest built-in shape the web app builds whatever `--max-vertices` says: the
+/// library's limit.
+pub use spectral_mesh::defaults::server::MAX_SHAPE_VERTICES;
 
 /// Checks a mesh or a point cloud against the vertex and triangle limits (413); `noun`
 /// is `vertices` or `points`.
@@ -261,7 +284,7 @@ pub(super) async fn insert_cloud(
     let r = reserve(
         s,
         "building the point-cloud Laplacian",
-        analysis_creation_bytes(n, Laplacian::Robust, true),
+        creation_bytes(n, Laplacian::Robust, true),
         deadline,
         StatusCode::PAYLOAD_TOO_LARGE,
     )

@@ -1,6 +1,14 @@
 //! Reading request bodies within the limits: memory reservations, deadlines, draining refused bodies.
 
-use super::*;
+use axum::body::{Body, Bytes};
+use axum::http::{HeaderMap, StatusCode, header};
+use http_body_util::BodyExt;
+
+use crate::cache::Shortfall;
+use crate::entries::Reservation;
+use crate::error::{ApiError, ApiResult};
+use crate::limits::{Deadline, mib};
+use crate::state::AppState;
 
 /// The answer to a reservation that failed: 503 when other work holds the memory (try
 /// again), `never` (413 or 422) when it could never fit.
@@ -162,12 +170,9 @@ pub(super) async fn drain(body: &mut Body, deadline: Deadline) {
 /// Memory reserved per byte of a JSON body (the text, `serde_json::Value`, the request).
 pub(super) const JSON_FACTOR: usize = 8;
 
-/// Memory reserved per byte of an uploaded mesh: the bytes, the parsed mesh, its
-/// connectivity and validation report (see RELIABILITY.md for the measurement).
-pub const UPLOAD_FACTOR: usize = 12;
-
-/// Memory reserved per vertex while a shape is built and checked.
-pub const SHAPE_BYTES_PER_VERTEX: usize = 1200;
+/// Memory reserved per byte of an uploaded input and per vertex of a built shape: the
+/// library's estimates.
+pub use spectral_mesh::analysis::memory::{READ_FACTOR as UPLOAD_FACTOR, SHAPE_BYTES_PER_VERTEX};
 
 pub(super) async fn json_body(
     s: &AppState,

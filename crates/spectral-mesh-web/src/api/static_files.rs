@@ -1,6 +1,12 @@
 //! The page's static files and its vendored 3D library (a fixed list: no path parameters).
 
-use super::*;
+use axum::extract::State;
+use axum::http::{StatusCode, header};
+use axum::response::{IntoResponse, Response};
+
+use crate::error::ApiError;
+use crate::limits::read_inside;
+use crate::state::{AppState, St};
 
 pub(super) const INDEX_HTML: &str = include_str!("../../static/index.html");
 pub(super) const APP_JS: &str = include_str!("../../static/app.js");

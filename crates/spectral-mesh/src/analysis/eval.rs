@@ -5,6 +5,7 @@ use super::request::{Constraints, DistanceSpec, FieldRequest, Signal, SignatureS
 use super::{Analysis, AnalysisError, Field};
 use crate::fields::harmonic::Constraint;
 use crate::fields::segmentation::{SegmentParams, segment};
+use crate::geodesic::{GeodesicParams, Source};
 use crate::spectral::distances::{
     DistanceError, distances_from, green_row, spectral_function, wfem_diffusion_distances_with,
 };
@@ -120,6 +121,8 @@ pub(super) fn evaluate(
     let mut constraints: Vec<Constraint> = Vec::new();
     let mut labels = None;
     let mut floating = Vec::new();
+    let mut unreachable = Vec::new();
+    let mut unreachable_vertices = 0;
     let source = |key: &'static str, v: Option<usize>| -> Result<usize, AnalysisError> {
         vertex(an, key, v.unwrap_or_else(|| an.default_source()))
     };
@@ -221,8 +224,46 @@ pub(super) fn evaluate(
             marks.push(s);
             green_row(need()?, s, filter)?
         }
+        FieldRequest::Geodesic {
+            source: s,
+            sources,
+            time_factor,
+            convention,
+        } => {
+            let mut set = Vec::with_capacity(sources.len() + 1);
+            if s.is_some() || sources.is_empty() {
+                let v = source("source", *s)?;
+                request.set_source(Some(v));
+                set.push(v);
+            }
+            for &v in sources {
+                set.push(vertex(an, "sources", v)?);
+            }
+            marks = set.clone();
+            marks.sort_unstable();
+            marks.dedup();
+            let solver = an.geodesic_solver(&GeodesicParams {
+                time_factor: *time_factor,
+                convention: *convention,
+                ..GeodesicParams::default()
+            })?;
+            let list: Vec<Source> = marks.iter().map(|&v| Source::Vertex(v)).collect();
+            let d = solver.distance(&list)?;
+            let comp = &an.topology().vertex_component;
+            for (v, x) in d.iter().enumerate() {
+                if *x == f64::INFINITY {
+                    unreachable_vertices += 1;
+                    unreachable.push(comp[v]);
+                }
+            }
+            unreachable.sort_unstable();
+            unreachable.dedup();
+            d
+        }
     };
-    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+    // A geodesic distance is +inf, and only that, where its sources cannot reach.
+    let allowed = |v: f64| v.is_finite() || (unreachable_vertices > 0 && v == f64::INFINITY);
+    if let Some(i) = values.iter().position(|&v| !allowed(v)) {
         return Err(AnalysisError::NonFinite {
             kind: req.kind(),
             vertex: i,
@@ -236,12 +277,15 @@ pub(super) fn evaluate(
         constraints,
         floating,
         labels,
+        unreachable,
+        unreachable_vertices,
         k: if uses_basis { k } else { None },
         basis_k: if uses_basis {
             basis.map(|b| b.k())
         } else {
             None
         },
-        normalized: an.options().normalize,
+        // A geodesic distance is a length of the mesh as given.
+        normalized: an.options().normalize && !matches!(req, FieldRequest::Geodesic { .. }),
     })
 }

@@ -31,6 +31,7 @@
 
 mod eval;
 pub mod hint;
+pub mod memory;
 pub mod points;
 pub mod request;
 
@@ -50,6 +51,7 @@ use crate::fields::critical_points::{
 use crate::fields::harmonic::{Constraint, FloatingComponent, HarmonicError, HarmonicSolver};
 use crate::fields::persistence::{Persistence, PersistencePair, persistence};
 use crate::fields::segmentation::SegmentationError;
+use crate::geodesic::{GeodesicError, GeodesicParams, GeodesicSolver};
 use crate::linalg::EigenProgress;
 use crate::mesh::topology::Topology;
 use crate::mesh::{Mesh, PointCloud};
@@ -79,7 +81,7 @@ impl Default for AnalysisOptions {
     fn default() -> Self {
         Self {
             laplacian: Laplacian::Fem,
-            normalize: true,
+            normalize: crate::defaults::values::NORMALIZE,
             eigen: EigenParams::default(),
         }
     }
@@ -140,6 +142,10 @@ pub enum AnalysisError {
     /// Critical points could not be classified.
     #[error(transparent)]
     CriticalPoints(#[from] CriticalPointsError),
+    /// A geodesic distance could not be computed (a source on no triangle, a Laplacian
+    /// without a gradient, a failed factorization).
+    #[error("geodesic distance: {0}")]
+    Geodesic(#[from] GeodesicError),
     /// The held basis has fewer pairs than the request uses.
     #[error("the request uses k = {k} eigenpairs but the basis holds {held}")]
     BasisTooSmall {
@@ -199,12 +205,58 @@ pub struct Field {
     pub floating: Vec<FloatingComponent>,
     /// Patch labels of a segmentation (`n` entries), `None` otherwise.
     pub labels: Option<Vec<usize>>,
+    /// Components (as in [`Topology::components`]; `usize::MAX` for vertices no triangle
+    /// uses) that the sources of a geodesic distance cannot reach: the values there are
+    /// `+inf`, and they have no critical points or level sets. Empty otherwise.
+    pub unreachable: Vec<usize>,
+    /// Vertices whose value is `+inf` (those of `unreachable`).
+    pub unreachable_vertices: usize,
     /// Eigenpairs used (`None` when no basis was used).
     pub k: Option<usize>,
     /// Eigenpairs the basis held when the field was computed (the first `k` were used).
     pub basis_k: Option<usize>,
-    /// True when the values are those of the shape scaled to unit area.
+    /// True when the values are those of the shape scaled to unit area (never for a
+    /// geodesic distance, which is in the mesh's units).
     pub normalized: bool,
+}
+
+impl Field {
+    /// The smallest and largest finite values (`None` when no value is finite): the range
+    /// of colour maps and level sets, leaving out a geodesic distance's `+inf`.
+    pub fn finite_range(&self) -> Option<(f64, f64)> {
+        self.values
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(None, |r, &v| match r {
+                None => Some((v, v)),
+                Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
+            })
+    }
+
+    /// What every face says of a field with unreachable vertices (`None` when every value
+    /// is finite): how many vertices, on how many components, have an infinite distance.
+    pub fn unreachable_message(&self) -> Option<String> {
+        if self.unreachable_vertices == 0 {
+            return None;
+        }
+        let comps = self
+            .unreachable
+            .iter()
+            .filter(|&&c| c != usize::MAX)
+            .count();
+        let loose = self.unreachable.contains(&usize::MAX);
+        Some(format!(
+            "{} of {} vertices cannot be reached from the sources ({comps} component{} without a source{}): their geodesic distance is infinite (inf), with no level sets or critical points there",
+            self.unreachable_vertices,
+            self.values.len(),
+            if comps == 1 { "" } else { "s" },
+            if loose {
+                ", and vertices in no triangle"
+            } else {
+                ""
+            },
+        ))
+    }
 }
 
 /// An analysis (see the module documentation).
@@ -226,6 +278,8 @@ pub struct Analysis {
     bx: Mutex<Option<BxCache>>,
     /// The last few harmonic solvers: (order, constrained vertices ascending, solver).
     harmonic: Mutex<Vec<HarmonicEntry>>,
+    /// The last few heat-method solvers, by their parameters (each holds its factors).
+    geodesic: Mutex<Vec<(GeodesicParams, Arc<GeodesicSolver>)>>,
     /// Values of the eigensolver's kept factorizations, as of its last solve (read
     /// without waiting for a running solve).
     factor_len: AtomicUsize,
@@ -238,6 +292,8 @@ type HarmonicEntry = (u32, Vec<usize>, Arc<HarmonicSolver>);
 
 /// Harmonic solvers kept per analysis (each holds a factorization).
 const HARMONIC_CACHE: usize = 4;
+/// Heat-method solvers kept per analysis (each holds two or three factorizations).
+const GEODESIC_CACHE: usize = 2;
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // A panic elsewhere while holding the lock leaves plain data behind; keep serving.
@@ -271,10 +327,7 @@ impl Analysis {
         options: AnalysisOptions,
     ) -> Self {
         let mesh = mesh.into();
-        let input_mass: f64 = ops.mass.values().iter().sum();
-        if options.normalize && input_mass > 0.0 && input_mass.is_finite() {
-            ops.mass = ops.mass.add_scaled(1.0 / input_mass, &ops.mass, 0.0);
-        }
+        let input_mass = ops.normalize_mass(options.normalize);
         let ops = Arc::new(ops);
         let solver = EigenSolver::new(ops.clone(), options.eigen.clone());
         Self {
@@ -289,6 +342,7 @@ impl Analysis {
             held: RwLock::new(None),
             bx: Mutex::new(None),
             harmonic: Mutex::new(Vec::new()),
+            geodesic: Mutex::new(Vec::new()),
             factor_len: AtomicUsize::new(0),
         }
     }
@@ -481,6 +535,10 @@ impl Analysis {
             .iter()
             .map(|(_, v, s)| v.len() * 8 + s.memory_bytes())
             .sum();
+        let geodesic: usize = lock(&self.geodesic)
+            .iter()
+            .map(|(_, s)| s.memory_bytes())
+            .sum();
         let topology = self.topology.get().map_or(0, |t| {
             t.edges.len() * 20
                 + (t.vertex_component.len() + t.triangle_component.len()) * 8
@@ -494,7 +552,7 @@ impl Analysis {
             .critical
             .get()
             .map_or(0, |_| 3 * m * 16 + (n + 1) * 8 + n);
-        ops + factor + basis + bx + harmonic + topology + critical
+        ops + factor + basis + bx + harmonic + geodesic + topology + critical
     }
 
     /// The field of `request`, computing the eigenbasis first when the held one is too
@@ -557,10 +615,13 @@ impl Analysis {
     }
 
     /// The critical points of a computed field: the components a harmonic map left
-    /// unconstrained are left out (their constant values have no critical points).
+    /// unconstrained (their constant values have no critical points) and those a
+    /// geodesic distance cannot reach (infinite there) are left out.
     pub fn field_critical_points(&self, field: &Field) -> Result<CriticalReport, AnalysisError> {
-        let p = self.find_critical_points(&field.values)?;
-        let excluded: Vec<usize> = field.floating.iter().map(|c| c.component).collect();
+        let values = crate::fields::persistence::finite_for_critical(&field.values);
+        let p = self.find_critical_points(&values)?;
+        let mut excluded: Vec<usize> = field.floating.iter().map(|c| c.component).collect();
+        excluded.extend(field.unreachable.iter().filter(|&&c| c != usize::MAX));
         Ok(CriticalReport::new(p, self.topology(), &excluded))
     }
 
@@ -599,6 +660,35 @@ impl Analysis {
             *g = Some((held, bx.clone()));
         }
         bx
+    }
+
+    /// The heat-method solver of this analysis' Laplacian on its mesh with `params`
+    /// (distances in the mesh's units), from the cache or factored now: one factoring
+    /// answers every source.
+    pub fn geodesic_solver(
+        &self,
+        params: &GeodesicParams,
+    ) -> Result<Arc<GeodesicSolver>, AnalysisError> {
+        {
+            let mut g = lock(&self.geodesic);
+            if let Some(i) = g.iter().position(|(p, _)| p == params) {
+                let entry = g.remove(i);
+                let s = entry.1.clone();
+                g.push(entry);
+                return Ok(s);
+            }
+        }
+        let s = Arc::new(GeodesicSolver::new(
+            &self.mesh,
+            self.options.laplacian,
+            params,
+        )?);
+        let mut g = lock(&self.geodesic);
+        if g.len() >= GEODESIC_CACHE {
+            g.remove(0);
+        }
+        g.push((*params, s.clone()));
+        Ok(s)
     }
 
     /// A harmonic solver for the constrained vertices `vertices` (ascending, no repeats),

@@ -226,14 +226,8 @@ fn errors_name_what_is_wrong() {
 #[test]
 fn a_component_without_constraints_floats_and_is_left_out_of_the_critical_points() {
     // Two disjoint tori; the preset constraints (min x, max x) both fall on the first.
-    let t = build_str("torus:res=2").unwrap();
-    let (p, f) = (t.positions().to_vec(), t.triangles().to_vec());
-    let n0 = p.len();
-    let mut pos = p.clone();
-    pos.extend(p.iter().map(|q| [q[0] - 10.0, q[1], q[2]]));
-    let mut tris = f.clone();
-    tris.extend(f.iter().map(|t| [t[0] + n0, t[1] + n0, t[2] + n0]));
-    let an = Analysis::new(Mesh::new(pos, tris).unwrap(), AnalysisOptions::default());
+    let (mesh, n0) = two_copies("torus:res=2");
+    let an = Analysis::new(mesh, AnalysisOptions::default());
     let field = an.field(&FieldRequest::Harmonic {
         constraints: Constraints::List(vec![
             Constraint {
@@ -310,4 +304,198 @@ fn a_heat_kernel_at_a_huge_time_is_flat_and_the_hint_follows_t() {
     // No time, no hint.
     let d = an.field(&FieldRequest::default_with_k(50)).unwrap();
     assert!(an.truncation_hint(&d).is_none());
+}
+
+/// Two disjoint copies of `shape`, the second moved by -10 in x.
+fn two_copies(shape: &str) -> (Mesh, usize) {
+    let t = build_str(shape).unwrap();
+    let (p, f) = (t.positions().to_vec(), t.triangles().to_vec());
+    let n0 = p.len();
+    let mut pos = p.clone();
+    pos.extend(p.iter().map(|q| [q[0] - 10.0, q[1], q[2]]));
+    let mut tris = f.clone();
+    tris.extend(f.iter().map(|t| [t[0] + n0, t[1] + n0, t[2] + n0]));
+    (Mesh::new(pos, tris).unwrap(), n0)
+}
+
+#[test]
+fn a_geodesic_request_is_the_heat_method_in_mesh_units_factored_once() {
+    use crate::geodesic::{Convention, GeodesicParams, GeodesicSolver};
+    // Normalisation does not scale a geodesic distance: it is in the mesh's units.
+    let an = analysis("3torus", true);
+    let n = an.n();
+    let f = an
+        .field(&serde_json::from_str(r#"{"kind": "geodesic"}"#).unwrap())
+        .unwrap();
+    let src = an.default_source();
+    let direct = GeodesicSolver::new(an.mesh(), Laplacian::Fem, &GeodesicParams::default())
+        .unwrap()
+        .distance_from_vertex(src)
+        .unwrap();
+    assert_eq!(f.values, direct);
+    assert_eq!(f.values[src], 0.0);
+    assert_eq!(f.marks, vec![src]);
+    assert_eq!(f.request.source(), Some(src));
+    assert!(f.k.is_none() && f.unreachable.is_empty() && f.unreachable_vertices == 0);
+    assert!(f.unreachable_message().is_none());
+    assert!(
+        an.held_basis().is_none(),
+        "a geodesic distance needs no basis"
+    );
+    let (lo, hi) = f.finite_range().unwrap();
+    assert!(lo == 0.0 && hi > 1.0 && hi.is_finite(), "{lo} {hi}");
+    // Many sources from one factoring; the set is the distance to the nearest.
+    let before = an.memory_bytes();
+    let s1 = an.geodesic_solver(&GeodesicParams::default()).unwrap();
+    for v in [0, 5, n - 1] {
+        let g = an
+            .field(&FieldRequest::Geodesic {
+                source: Some(v),
+                sources: vec![],
+                time_factor: 1.0,
+                convention: Convention::Crane,
+            })
+            .unwrap();
+        assert_eq!(g.values[v], 0.0);
+    }
+    let set = an
+        .field(&FieldRequest::Geodesic {
+            source: None,
+            sources: vec![0, n - 1],
+            time_factor: 1.0,
+            convention: Convention::Crane,
+        })
+        .unwrap();
+    assert_eq!(set.marks, vec![0, n - 1]);
+    assert_eq!(set.request.source(), Some(0));
+    assert_eq!(
+        set.values,
+        s1.distance(&[0.into(), (n - 1).into()]).unwrap()
+    );
+    assert!(Arc::ptr_eq(
+        &s1,
+        &an.geodesic_solver(&GeodesicParams::default()).unwrap()
+    ));
+    assert_eq!(lock(&an.geodesic).len(), 1);
+    assert_eq!(an.memory_bytes(), before);
+    // Another m is another solver (kept beside the first).
+    let m2 = an
+        .field(&FieldRequest::Geodesic {
+            source: Some(src),
+            sources: vec![],
+            time_factor: 4.0,
+            convention: Convention::Crane,
+        })
+        .unwrap();
+    assert_ne!(m2.values, f.values);
+    assert_eq!(lock(&an.geodesic).len(), 2);
+    assert!(an.memory_bytes() > before);
+    // Critical points: the source is the one minimum.
+    let rep = an.field_critical_points(&f).unwrap();
+    assert!(rep.points.minima.contains(&src), "{:?}", rep.points.minima);
+}
+
+#[test]
+fn a_geodesic_distance_says_which_components_it_cannot_reach() {
+    let (mesh, n0) = two_copies("sphere:res=2");
+    let an = Analysis::new(mesh, AnalysisOptions::default());
+    let f = an
+        .field(&FieldRequest::Geodesic {
+            source: Some(3),
+            sources: vec![],
+            time_factor: 1.0,
+            convention: Default::default(),
+        })
+        .unwrap();
+    assert!(f.values[..n0].iter().all(|v| v.is_finite()));
+    assert!(f.values[n0..].iter().all(|&v| v == f64::INFINITY));
+    let other = an.topology().vertex_component[n0];
+    assert_eq!(f.unreachable, vec![other]);
+    assert_eq!(f.unreachable_vertices, n0);
+    let msg = f.unreachable_message().unwrap();
+    assert!(
+        msg.starts_with(&format!("{n0} of {} vertices cannot be reached", 2 * n0))
+            && msg.contains("1 component without a source")
+            && msg.contains("infinite"),
+        "{msg}"
+    );
+    let (lo, hi) = f.finite_range().unwrap();
+    assert!(lo == 0.0 && hi.is_finite() && hi > 0.0);
+    // No critical point on the unreachable sphere; the reached one checks alone.
+    let rep = an.field_critical_points(&f).unwrap();
+    assert_eq!(rep.excluded_components, vec![other]);
+    assert!(rep.points.minima.iter().all(|&v| v < n0));
+    assert!(rep.points.maxima.iter().all(|&v| v < n0));
+    assert!(rep.points.saddles.iter().all(|&(v, _)| v < n0));
+    assert!(rep.holds && rep.chi == 2, "{rep:?}");
+    // The library's picture path leaves it out as well.
+    let p = crate::fields::persistence::simplified_critical_points(an.mesh(), &f.values).unwrap();
+    assert!(
+        p.shown
+            .minima
+            .iter()
+            .chain(&p.shown.maxima)
+            .all(|&v| v < n0)
+    );
+    // A source on each: every value finite.
+    let both = an
+        .field(&FieldRequest::Geodesic {
+            source: Some(3),
+            sources: vec![n0 + 3],
+            time_factor: 1.0,
+            convention: Default::default(),
+        })
+        .unwrap();
+    assert!(both.values.iter().all(|v| v.is_finite()));
+    assert!(both.unreachable.is_empty());
+    close(&both.values[..n0], &f.values[..n0], 1e-12);
+}
+
+#[test]
+fn geodesic_errors_name_the_source_and_the_laplacian() {
+    let t = build_str("sphere:res=1").unwrap();
+    let n = t.n_vertices();
+    let mut pos = t.positions().to_vec();
+    pos.push([5.0, 5.0, 5.0]); // a vertex in no triangle
+    let an = Analysis::new(
+        Mesh::new(pos, t.triangles().to_vec()).unwrap(),
+        AnalysisOptions::default(),
+    );
+    let req = |source: usize, sources: Vec<usize>| FieldRequest::Geodesic {
+        source: Some(source),
+        sources,
+        time_factor: 1.0,
+        convention: Default::default(),
+    };
+    let e = an.field(&req(n + 1, vec![])).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with(&format!("source {} is out of range", n + 1)),
+        "{e}"
+    );
+    let e = an.field(&req(0, vec![n + 7])).unwrap_err();
+    assert!(e.to_string().starts_with("sources"), "{e}");
+    let e = an.field(&req(n, vec![])).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains(&format!("source vertex {n} belongs to no triangle")),
+        "{e}"
+    );
+    // The loose vertex is unreachable from any source: said, never a number.
+    let f = an.field(&req(0, vec![])).unwrap();
+    assert_eq!(f.values[n], f64::INFINITY);
+    assert!(
+        f.unreachable_message()
+            .unwrap()
+            .contains("vertices in no triangle")
+    );
+    let uniform = Analysis::new(
+        build_str("sphere:res=1").unwrap(),
+        AnalysisOptions {
+            laplacian: Laplacian::Uniform,
+            ..Default::default()
+        },
+    );
+    let e = uniform.field(&req(0, vec![])).unwrap_err();
+    assert!(e.to_string().contains("cotangent Laplacian"), "{e}");
 }

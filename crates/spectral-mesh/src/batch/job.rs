@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use crate::analysis::{Analysis, AnalysisOptions};
 use crate::cancel::CancelToken;
+use crate::geodesic::{GeodesicParams, farthest_point_sampling};
 use crate::io::{Input, read_input_from_bytes, write_atomic};
 use crate::linalg::{EigenProgress, connected_components};
 use crate::mesh::Mesh;
@@ -105,6 +106,10 @@ pub struct BatchMeta {
     pub wks_sigma: Option<f64>,
     /// ADF times used (also the array `adf_times`).
     pub adf_times: Option<Vec<f64>>,
+    /// The farthest-point samples of the geodesic distances (also the array
+    /// `geodesic_sources`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub geodesic_sources: Option<Vec<usize>>,
     /// The reader's warnings.
     pub warnings: Vec<String>,
 }
@@ -350,6 +355,9 @@ struct Solved {
     laplacian: Laplacian,
     columns: Vec<(String, Vec<f64>, Vec<Vec<f64>>)>,
     wks_sigma: Option<f64>,
+    /// Farthest-point samples and the distance from each (meshes with
+    /// [`BatchParams::geodesic`]).
+    geodesic: Option<(Vec<usize>, Vec<Vec<f64>>)>,
 }
 
 fn solve(
@@ -371,6 +379,7 @@ fn solve(
             )
         )
     };
+    let mut geodesic = None;
     let (basis, mesh, mesh_hash, kind, laplacian) = match parsed {
         Input::Mesh(loaded) => {
             let mesh = loaded.mesh;
@@ -393,6 +402,9 @@ fn solve(
                     JobError::from(e)
                 }
             })?;
+            if let Some(count) = params.geodesic {
+                geodesic = Some(geodesic_columns(&an, count)?);
+            }
             let hash = an.mesh().content_hash();
             (
                 basis,
@@ -408,6 +420,10 @@ fn solve(
             rec.n = Some(cloud.n_points());
             rec.faces = Some(0);
             rec.discretization = Laplacian::Robust.name().to_string();
+            if params.geodesic.is_some() {
+                rec.warnings
+                    .push("no geodesic distances: the input is a point cloud".into());
+            }
             let n = cloud.n_points();
             if k > n {
                 return Err(format!(
@@ -418,10 +434,7 @@ fn solve(
             let mut ops = Operators::from_points(&cloud, &params.point_cloud)?;
             rec.components = Some(connected_components(&ops.stiffness, &ops.mass)?.len());
             // The same scale normalisation as an analysis of a mesh.
-            let total: f64 = ops.mass.values().iter().sum();
-            if params.normalize && total > 0.0 && total.is_finite() {
-                ops.mass = ops.mass.add_scaled(1.0 / total, &ops.mass, 0.0);
-            }
+            ops.normalize_mass(params.normalize);
             let mut solver = EigenSolver::new(Arc::new(ops), eigen);
             let basis = solver
                 .solve(k, &mut progress, &options.cancel)
@@ -494,7 +507,29 @@ fn solve(
         laplacian,
         columns,
         wks_sigma,
+        geodesic,
     })
+}
+
+/// `count` farthest-point samples of `an`'s mesh (from the vertex of largest x) and the
+/// heat-method distance from each (`inf` where a sample cannot reach; NaN refused).
+fn geodesic_columns(an: &Analysis, count: usize) -> Result<(Vec<usize>, Vec<Vec<f64>>), JobError> {
+    let solver = an.geodesic_solver(&GeodesicParams::default())?;
+    let samples = farthest_point_sampling(&solver, count, an.default_source())
+        .map_err(|e| format!("geodesic: {e}"))?;
+    let rows = solver
+        .distances_from_vertices(&samples)
+        .map_err(|e| format!("geodesic: {e}"))?;
+    for (j, row) in rows.iter().enumerate() {
+        if let Some(i) = row.iter().position(|v| v.is_nan()) {
+            return Err(format!(
+                "geodesic column {j} (from vertex {}) is not a number at vertex {i}",
+                samples[j]
+            )
+            .into());
+        }
+    }
+    Ok((samples, rows))
 }
 
 /// The first eigenvector with a non-zero eigenvalue (the first one when all are zero).
@@ -571,11 +606,26 @@ fn write_outputs(
         times(key, params_of)?;
         meta_times[slot] = Some(params_of.clone());
     }
-    for (name, _, values) in &solved.columns {
+    let mut geodesic_sources = None;
+    if let Some((samples, _)) = &solved.geodesic {
+        let v: Vec<f64> = samples.iter().map(|&s| s as f64).collect();
+        times("geodesic_sources", &v)?;
+        geodesic_sources = Some(samples.clone());
+    }
+    let geodesic = solved
+        .geodesic
+        .as_ref()
+        .map(|(_, rows)| ("geodesic".to_string(), rows));
+    for (name, values) in solved
+        .columns
+        .iter()
+        .map(|(name, _, values)| (name.clone(), values))
+        .chain(geodesic)
+    {
         let flat: Vec<f64> = values.iter().flatten().copied().collect();
         let npy = npy_f64(&flat, &[n as u64, values.len() as u64], true)
             .map_err(|e| transient(e.to_string()))?;
-        extra.push((name.clone(), npy));
+        extra.push((name, npy));
     }
     let [hks_times, wks_energies, adf_times] = meta_times;
     let mut basis_meta = BasisMeta::new(b, None, &params.eigen());
@@ -598,6 +648,7 @@ fn write_outputs(
             wks_energies,
             wks_sigma: solved.wks_sigma,
             adf_times,
+            geodesic_sources,
             warnings: warnings.clone(),
         },
     };

@@ -125,6 +125,14 @@ pub struct BatchParams {
     pub thumbnail: Option<u32>,
     /// Parameters of the point-cloud Laplacian (point-cloud inputs only).
     pub point_cloud: PointCloudParams,
+    /// Geodesic distances (the heat method with its defaults, in the mesh's units) from
+    /// this many farthest-point samples of each mesh, the first at the vertex of largest x:
+    /// the `n x N` array `geodesic` (column `j`: the distance from sample `j`, `inf` on
+    /// components it cannot reach) and the samples `geodesic_sources`. Meshes only (a
+    /// point cloud gets a warning). Left out of the hash when `None`, so that the results
+    /// of earlier batches stay valid.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub geodesic: Option<usize>,
 }
 
 impl Default for BatchParams {
@@ -133,7 +141,7 @@ impl Default for BatchParams {
             k: DEFAULT_K,
             laplacian: Laplacian::Fem,
             tolerance: EigenParams::default().tolerance,
-            normalize: true,
+            normalize: crate::defaults::values::NORMALIZE,
             basis: true,
             hks: None,
             wks: None,
@@ -142,6 +150,7 @@ impl Default for BatchParams {
             scaled: false,
             thumbnail: None,
             point_cloud: PointCloudParams::default(),
+            geodesic: None,
         }
     }
 }
@@ -186,10 +195,14 @@ impl BatchParams {
         {
             return Err(bad("wks_sigma", format!("{s} is not a positive number")));
         }
-        if let Some(t) = self.thumbnail
-            && !(16..=4096).contains(&t)
-        {
-            return Err(bad("thumbnail", format!("{t} pixels: use 16 to 4096")));
+        if let Some(t) = self.thumbnail {
+            crate::defaults::values::check_picture_size(t).map_err(|e| bad("thumbnail", e))?;
+        }
+        if self.geodesic == Some(0) {
+            return Err(bad(
+                "geodesic",
+                "at least one source sample is needed".into(),
+            ));
         }
         self.point_cloud
             .validate()

@@ -10,9 +10,9 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DoubleType, Int64Type};
+use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DataType, DoubleType, Int64Type};
 use parquet::file::properties::WriterProperties;
-use parquet::file::writer::SerializedFileWriter;
+use parquet::file::writer::{SerializedColumnWriter, SerializedFileWriter};
 use parquet::schema::parser::parse_message_type;
 
 use super::BatchError;
@@ -122,6 +122,24 @@ pub fn summary_csv(records: &[BatchRecord]) -> String {
     s
 }
 
+/// Writes an optional column of Parquet type `T`: the present values and the definition
+/// levels (1 present, 0 null), `value` giving each cell's value.
+fn write_optional<'a, T: DataType>(
+    col: &mut SerializedColumnWriter<'_>,
+    column: impl Iterator<Item = &'a Cell>,
+    value: impl Fn(&'a Cell) -> Option<T::T>,
+) -> Result<(), parquet::errors::ParquetError> {
+    let mut values = Vec::new();
+    let mut defs = Vec::new();
+    for cell in column {
+        let v = value(cell);
+        defs.push(i16::from(v.is_some()));
+        values.extend(v);
+    }
+    col.typed::<T>().write_batch(&values, Some(&defs), None)?;
+    Ok(())
+}
+
 /// The summary as a Parquet file in memory.
 pub fn summary_parquet(records: &[BatchRecord]) -> Result<Vec<u8>, parquet::errors::ParquetError> {
     let schema = Arc::new(parse_message_type(SCHEMA)?);
@@ -141,43 +159,19 @@ pub fn summary_parquet(records: &[BatchRecord]) -> Result<Vec<u8>, parquet::erro
             // No rows: every column is empty, whatever its type.
             None => {}
             Some(Cell::Text(_)) => {
-                let mut values = Vec::new();
-                let mut defs = Vec::new();
-                for cell in column {
-                    if let Cell::Text(t) = cell {
-                        defs.push(i16::from(t.is_some()));
-                        if let Some(t) = t {
-                            values.push(ByteArray::from(t.as_bytes().to_vec()));
-                        }
-                    }
-                }
-                col.typed::<ByteArrayType>()
-                    .write_batch(&values, Some(&defs), None)?;
+                write_optional::<ByteArrayType>(&mut col, column, |c| match c {
+                    Cell::Text(Some(t)) => Some(ByteArray::from(t.as_bytes().to_vec())),
+                    _ => None,
+                })?
             }
-            Some(Cell::Int(_)) => {
-                let mut values = Vec::new();
-                let mut defs = Vec::new();
-                for cell in column {
-                    if let Cell::Int(v) = cell {
-                        defs.push(i16::from(v.is_some()));
-                        values.extend(v);
-                    }
-                }
-                col.typed::<Int64Type>()
-                    .write_batch(&values, Some(&defs), None)?;
-            }
-            Some(Cell::Float(_)) => {
-                let mut values = Vec::new();
-                let mut defs = Vec::new();
-                for cell in column {
-                    if let Cell::Float(v) = cell {
-                        defs.push(i16::from(v.is_some()));
-                        values.extend(v);
-                    }
-                }
-                col.typed::<DoubleType>()
-                    .write_batch(&values, Some(&defs), None)?;
-            }
+            Some(Cell::Int(_)) => write_optional::<Int64Type>(&mut col, column, |c| match c {
+                Cell::Int(v) => *v,
+                _ => None,
+            })?,
+            Some(Cell::Float(_)) => write_optional::<DoubleType>(&mut col, column, |c| match c {
+                Cell::Float(v) => *v,
+                _ => None,
+            })?,
             Some(Cell::Bool(_)) => {
                 let values: Vec<bool> = column
                     .map(|cell| matches!(cell, Cell::Bool(true)))

@@ -236,19 +236,15 @@ fn thumbnails_eigenvalues_only_panics_and_point_clouds() {
         thumbnail: Some(64),
         ..Default::default()
     };
+    let png = JobOptions {
+        thumbnailer: Some(&Png),
+        ..Default::default()
+    };
     // No renderer given: a failure of the run (no marker).
     let r = process_one(&input, &p, &out, &JobOptions::default());
     assert!(r.error.unwrap().contains("thumbnail"));
     assert!(!out.join("s.off.error.json").exists());
-    let r = process_one(
-        &input,
-        &p,
-        &out,
-        &JobOptions {
-            thumbnailer: Some(&Png),
-            ..Default::default()
-        },
-    );
+    let r = process_one(&input, &p, &out, &png);
     assert_eq!(r.status, Status::Ok, "{r:?}");
     assert_eq!(r.outputs, ["s.off.png", "s.off.npz"]);
     assert!(read(out.join("s.off.png")).starts_with(b"png 64 "));
@@ -256,15 +252,7 @@ fn thumbnails_eigenvalues_only_panics_and_point_clouds() {
     assert!(load_npz(&out.join("s.off.npz")).is_err());
     // A lost thumbnail is made again.
     std::fs::remove_file(out.join("s.off.png")).unwrap();
-    let r = process_one(
-        &input,
-        &p,
-        &out,
-        &JobOptions {
-            thumbnailer: Some(&Png),
-            ..Default::default()
-        },
-    );
+    let r = process_one(&input, &p, &out, &png);
     assert_eq!(r.status, Status::Ok);
     assert!(out.join("s.off.png").is_file());
     // A panic inside is a row, not a crash.
@@ -301,10 +289,7 @@ fn thumbnails_eigenvalues_only_panics_and_point_clouds() {
             ..p.clone()
         },
         &out,
-        &JobOptions {
-            thumbnailer: Some(&Png),
-            ..Default::default()
-        },
+        &png,
     );
     assert_eq!(r.status, Status::Ok, "{r:?}");
     assert_eq!(
@@ -646,4 +631,79 @@ fn the_output_folder_must_be_empty_new_or_a_batch_folder() {
     assert!(!theirs.join(MARKER_FILE).exists());
     prepare_output(&theirs, true).unwrap();
     assert_eq!(std::fs::read(theirs.join("notes.txt")).unwrap(), b"keep me");
+}
+
+/// One `.npy` array of a result archive: (shape, values).
+fn npz_array(path: &Path, name: &str) -> (Vec<u64>, Vec<f64>) {
+    let f = std::fs::File::open(path).unwrap();
+    let mut zip = zip::ZipArchive::new(f).unwrap();
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(
+        &mut zip.by_name(&format!("{name}.npy")).unwrap(),
+        &mut bytes,
+    )
+    .unwrap();
+    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+    let shape = npy.shape().to_vec();
+    (shape, npy.into_vec().unwrap())
+}
+
+#[test]
+fn geodesic_distances_from_farthest_samples_are_saved_and_hashed() {
+    use crate::analysis::{Analysis, AnalysisOptions};
+    use crate::geodesic::{GeodesicParams, GeodesicSolver, farthest_point_sampling};
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let input = write_shape(d.path(), "t.off", "torus:res=2");
+    let plain = BatchParams {
+        k: 6,
+        ..Default::default()
+    };
+    let p = BatchParams {
+        geodesic: Some(4),
+        ..plain.clone()
+    };
+    // `None` stays out of the hash (earlier results stay valid); a count enters it.
+    let mut old = serde_json::to_value(&plain).unwrap();
+    assert!(old.get("geodesic").is_none());
+    old.as_object_mut().unwrap().remove("geodesic");
+    let back: BatchParams = serde_json::from_value(old).unwrap();
+    assert_eq!(back.hash(), plain.hash());
+    assert_ne!(p.hash(), plain.hash());
+    assert!(
+        BatchParams {
+            geodesic: Some(0),
+            ..plain.clone()
+        }
+        .validate()
+        .unwrap_err()
+        .to_string()
+        .contains("geodesic")
+    );
+    let r = process_one(&input, &p, &out, &JobOptions::default());
+    assert_eq!(r.status, Status::Ok, "{r:?}");
+    let file = out.join("t.off.npz");
+    // The library's samples and distances, the same numbers.
+    let mesh = build_str("torus:res=2").unwrap();
+    let an = Analysis::new(mesh.clone(), AnalysisOptions::default());
+    let solver =
+        GeodesicSolver::new(&mesh, crate::Laplacian::Fem, &GeodesicParams::default()).unwrap();
+    let samples = farthest_point_sampling(&solver, 4, an.default_source()).unwrap();
+    let want = solver.distances_from_vertices(&samples).unwrap();
+    let (shape, got) = npz_array(&file, "geodesic");
+    assert_eq!(shape, [mesh.n_vertices() as u64, 4]);
+    assert_eq!(got, want.concat());
+    let (_, src) = npz_array(&file, "geodesic_sources");
+    assert_eq!(src, samples.iter().map(|&s| s as f64).collect::<Vec<_>>());
+    for (j, &s) in samples.iter().enumerate() {
+        assert_eq!(want[j][s], 0.0);
+    }
+    let m: ResultMeta =
+        serde_json::from_slice(&crate::spectral::store::read_npz_meta(&file).unwrap()).unwrap();
+    assert_eq!(m.batch.geodesic_sources.as_deref(), Some(&samples[..]));
+    // Without it: no arrays, and no key in the metadata.
+    let r = process_one(&input, &plain, &out, &JobOptions::default());
+    assert_eq!(r.status, Status::Ok, "{r:?}");
+    let meta = crate::spectral::store::read_npz_meta(&file).unwrap();
+    assert!(!String::from_utf8_lossy(&meta).contains("geodesic"));
 }

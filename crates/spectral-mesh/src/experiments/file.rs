@@ -379,14 +379,16 @@ impl ExperimentFile {
         }
         if let Some(f) = &self.figure {
             if let Some(l) = f.levels
-                && l > 1000
+                && l > crate::defaults::values::MAX_LEVELS
             {
-                return Err(key_err("figure.levels", format!("{l}: at most 1000")));
+                return Err(key_err(
+                    "figure.levels",
+                    format!("{l}: at most {}", crate::defaults::values::MAX_LEVELS),
+                ));
             }
-            if let Some(s) = f.size
-                && !(16..=8192).contains(&s)
-            {
-                return Err(key_err("figure.size", format!("{s}: must be 16..8192")));
+            if let Some(s) = f.size {
+                crate::defaults::values::check_picture_size(s)
+                    .map_err(|e| key_err("figure.size", e))?;
             }
             if let Some(s) = f.height
                 && !(16..=8192).contains(&s)
@@ -423,7 +425,7 @@ impl ExperimentFile {
 
     /// Scale normalisation (default true).
     pub fn normalize(&self) -> bool {
-        self.normalize.unwrap_or(true)
+        self.normalize.unwrap_or(crate::defaults::values::NORMALIZE)
     }
 
     /// The field request of a `diffusion-basis`, `spectral-distance` or `field` file
@@ -737,6 +739,52 @@ mod tests {
                 k: 100
             })
         );
+    }
+
+    #[test]
+    fn a_geodesic_field_file_parses_round_trips_and_names_its_errors() {
+        let base = "experiment = \"field\"\nmesh = \"3torus\"\n[field]\nkind = \"geodesic\"\n";
+        let f = ExperimentFile::parse(
+            &format!("{base}source = 3\nsources = [7, 9]\ntime_factor = 2.0\nconvention = \"potpourri3d\"\n"),
+            "g.toml",
+        )
+        .unwrap();
+        let req = FieldRequest::Geodesic {
+            source: Some(3),
+            sources: vec![7, 9],
+            time_factor: 2.0,
+            convention: crate::geodesic::Convention::Potpourri3d,
+        };
+        assert_eq!(f.request(), Some(req.clone()));
+        let back = ExperimentFile::parse(
+            &ExperimentFile::for_field("3torus", req.clone())
+                .to_toml()
+                .unwrap(),
+            "x",
+        )
+        .unwrap();
+        assert_eq!(back.request(), Some(req));
+        // Defaults; a basis_k has no meaning without eigenpairs, and is not asked for.
+        let d = ExperimentFile::parse(base, "g.toml").unwrap();
+        assert_eq!(
+            d.request(),
+            Some(FieldRequest::Geodesic {
+                source: None,
+                sources: vec![],
+                time_factor: crate::analysis::request::DEFAULT_GEODESIC_TIME_FACTOR,
+                convention: Default::default(),
+            })
+        );
+        for (extra, says) in [
+            ("time_factor = 0.0\n", "time_factor"),
+            ("k = 30\n", "unknown field"),
+            ("convention = \"exact\"\n", "exact"),
+        ] {
+            let e = ExperimentFile::parse(&format!("{base}{extra}"), "g.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("g.toml") && e.contains(says), "{extra:?}: {e}");
+        }
     }
 
     #[test]

@@ -4,8 +4,5 @@
 pub mod file;
 pub mod harmonic;
 pub mod paper;
-pub mod replay;
 pub mod study;
 pub mod truncation;
-
-pub use replay::mesh_hash;

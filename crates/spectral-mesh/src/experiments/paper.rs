@@ -224,7 +224,8 @@ pub struct FieldStats {
 }
 
 impl FieldStats {
-    /// The statistics of `values` (NaN values are skipped; an empty field gives
+    /// The statistics of the finite `values` (NaN and the `+inf` of a geodesic distance's
+    /// unreachable vertices are skipped; a field without a finite value gives
     /// `min = +inf`, `max = -inf` at vertex 0).
     pub fn of(values: &[f64]) -> Self {
         let mut s = Self {
@@ -233,7 +234,7 @@ impl FieldStats {
             max: f64::NEG_INFINITY,
             argmax: 0,
         };
-        for (i, &v) in values.iter().enumerate() {
+        for (i, &v) in values.iter().enumerate().filter(|(_, v)| v.is_finite()) {
             if v < s.min {
                 s.min = v;
                 s.argmin = i;
@@ -322,6 +323,10 @@ pub struct FieldSummary {
     /// labels).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub critical_points: Option<CriticalSummary>,
+    /// A geodesic distance's vertices its sources cannot reach (infinite there, `inf` in
+    /// the text file), in words ([`Field::unreachable_message`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unreachable: Option<String>,
 }
 
 /// The summary of `field`, computed on `an` (whose held basis it used).
@@ -377,6 +382,7 @@ fn summary_with(
             .as_ref()
             .map(|l| l.iter().max().map_or(0, |m| m + 1)),
         critical_points,
+        unreachable: field.unreachable_message(),
     })
 }
 
@@ -768,6 +774,50 @@ mod tests {
 
     fn summary_of(an: &Analysis) -> MeshSummary {
         MeshSummary::new("x", an.mesh().content_hash(), an.mesh(), an.topology())
+    }
+
+    #[test]
+    fn a_geodesic_run_reports_finite_stats_and_what_it_cannot_reach() {
+        let t = build_str("sphere:res=2").unwrap();
+        let (p, f) = (t.positions().to_vec(), t.triangles().to_vec());
+        let n0 = p.len();
+        let mut pos = p.clone();
+        pos.extend(p.iter().map(|q| [q[0] + 5.0, q[1], q[2]]));
+        let mut tris = f.clone();
+        tris.extend(f.iter().map(|t| [t[0] + n0, t[1] + n0, t[2] + n0]));
+        let an = Analysis::new(
+            crate::mesh::Mesh::new(pos, tris).unwrap(),
+            AnalysisOptions::default(),
+        );
+        let req: FieldRequest =
+            serde_json::from_str(r#"{"kind": "geodesic", "source": 2}"#).unwrap();
+        let run = run_field(
+            &an,
+            "field",
+            summary_of(&an),
+            &req,
+            None,
+            &mut |_| {},
+            &CancelToken::new(),
+        )
+        .unwrap();
+        let s = &run.summary;
+        assert!(s.basis.is_none());
+        assert_eq!(s.scale_normalization, "none");
+        assert_eq!(s.value_at_source, Some(0.0));
+        assert_eq!((s.stats.min, s.stats.argmin), (0.0, 2));
+        assert!(s.stats.max.is_finite() && s.stats.argmax < n0);
+        let msg = s.unreachable.as_deref().unwrap();
+        assert!(
+            msg.contains(&format!("{n0} of {} vertices", 2 * n0)),
+            "{msg}"
+        );
+        let cp = s.critical_points.as_ref().unwrap();
+        assert!(cp.euler_check.holds);
+        let json = serde_json::to_value(s).unwrap();
+        assert!(json["max"].is_f64(), "{json}");
+        assert_eq!(json["unreachable"], msg);
+        assert_eq!(output_stem("field", &req), "geodesic");
     }
 
     #[test]

@@ -184,6 +184,36 @@ enum Kind {
     Saddle(usize),
 }
 
+impl CriticalPoints {
+    /// Files vertex `v` of kind `kind` (`open`: its link is open, `nonman`: it is
+    /// non-manifold) in the lists it belongs to.
+    fn record(&mut self, v: usize, kind: Kind, open: bool, nonman: bool) {
+        if nonman {
+            self.non_manifold.push(v);
+        }
+        if kind != Kind::Regular && open {
+            self.on_boundary.push(v);
+        }
+        match kind {
+            Kind::Regular => {}
+            Kind::Min => self.minima.push(v),
+            Kind::Max => self.maxima.push(v),
+            Kind::Saddle(m) => self.saddles.push((v, m)),
+        }
+    }
+}
+
+/// Refuses a field whose length is not the `n` vertices.
+fn check_length(field: &[f64], n: usize) -> Result<(), CriticalPointsError> {
+    if field.len() != n {
+        return Err(CriticalPointsError::LengthMismatch {
+            expected: n,
+            got: field.len(),
+        });
+    }
+    Ok(())
+}
+
 /// Critical points of `field` with the given boundary rule.
 pub fn critical_points_with(
     mesh: &Mesh,
@@ -356,12 +386,7 @@ impl CriticalPointFinder {
         fast: bool,
     ) -> Result<CriticalPoints, CriticalPointsError> {
         let n = self.n_vertices();
-        if field.len() != n {
-            return Err(CriticalPointsError::LengthMismatch {
-                expected: n,
-                got: field.len(),
-            });
-        }
+        check_length(field, n)?;
         let (plateaus, on_plateau) = self.plateaus(field);
         let q = quantized(field);
         let field = &q[..];
@@ -388,18 +413,7 @@ impl CriticalPointFinder {
             ..Default::default()
         };
         for (v, kind, open, nonman) in found {
-            if nonman {
-                out.non_manifold.push(v);
-            }
-            if kind != Kind::Regular && open {
-                out.on_boundary.push(v);
-            }
-            match kind {
-                Kind::Regular => {}
-                Kind::Min => out.minima.push(v),
-                Kind::Max => out.maxima.push(v),
-                Kind::Saddle(m) => out.saddles.push((v, m)),
-            }
+            out.record(v, kind, open, nonman);
         }
         Ok(out)
     }
@@ -468,12 +482,7 @@ fn classify_all(
     fast: bool,
 ) -> Result<CriticalPoints, CriticalPointsError> {
     let n = mesh.n_vertices();
-    if field.len() != n {
-        return Err(CriticalPointsError::LengthMismatch {
-            expected: n,
-            got: field.len(),
-        });
-    }
+    check_length(field, n)?;
     let vt = VertexTriangles::new(mesh);
     let tris = mesh.triangles();
     let mut out = CriticalPoints {
@@ -508,18 +517,7 @@ fn classify_all(
             Some(c) => (closed_kind(c, above(edges[0].0)), false, false),
             None => classify(&edges, &above, rule),
         };
-        if nonman {
-            out.non_manifold.push(v);
-        }
-        if kind != Kind::Regular && open {
-            out.on_boundary.push(v);
-        }
-        match kind {
-            Kind::Regular => {}
-            Kind::Min => out.minima.push(v),
-            Kind::Max => out.maxima.push(v),
-            Kind::Saddle(m) => out.saddles.push((v, m)),
-        }
+        out.record(v, kind, open, nonman);
     }
     Ok(out)
 }
@@ -922,13 +920,7 @@ mod tests {
             fan(7, false),
             two_fans,
         ];
-        let mut state = 12345u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 33) as f64 / (1u64 << 31) as f64
-        };
+        let mut next = crate::test_support::lcg(12345);
         let mut shortcut_taken = 0;
         for m in &meshes {
             let n = m.n_vertices();

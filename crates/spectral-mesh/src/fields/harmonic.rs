@@ -832,19 +832,7 @@ pub fn vertex_adjacency(mesh: &Mesh) -> Vec<Vec<usize>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn two_triangles() -> Mesh {
-        Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [0.0, 1.0, 0.0],
-            ],
-            vec![[0, 1, 2], [0, 2, 3]],
-        )
-        .unwrap()
-    }
+    use crate::test_support::unit_square;
 
     #[test]
     fn parses_arguments_and_files() {
@@ -872,7 +860,7 @@ mod tests {
 
     #[test]
     fn extremes_on_flat_square_conflict_in_z() {
-        let m = two_triangles();
+        let m = unit_square();
         let c = ConstraintSpec::Extremes(2).resolve(&m).unwrap();
         // min x: vertices 0 and 3 tie -> 0; max x: 1 and 2 tie -> 1.
         assert_eq!(c[0].vertex, 0);
@@ -891,7 +879,7 @@ mod tests {
 
     #[test]
     fn constraint_validation() {
-        let m = two_triangles();
+        let m = unit_square();
         let c = |vertex, value| Constraint { vertex, value };
         let p = HarmonicParams::default();
         assert!(matches!(
@@ -923,7 +911,7 @@ mod tests {
 
     #[test]
     fn nearest_points() {
-        let m = two_triangles();
+        let m = unit_square();
         let c =
             ConstraintSpec::NearestPoints(vec![([0.9, 1.2, 0.0], 3.0), ([-1.0, 0.1, 0.0], 1.0)])
                 .resolve(&m)

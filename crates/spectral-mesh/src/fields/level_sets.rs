@@ -645,13 +645,7 @@ mod tests {
             uv_sphere(1.0, 16, 24),
             dup,
         ];
-        let mut state = 99u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 33) as f64 / (1u64 << 31) as f64
-        };
+        let mut next = crate::test_support::lcg(99);
         let mut total = 0;
         for m in &meshes {
             let n = m.n_vertices();

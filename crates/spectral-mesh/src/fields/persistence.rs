@@ -319,9 +319,25 @@ pub fn simplified_critical_points(
     mesh: &crate::mesh::Mesh,
     field: &[f64],
 ) -> Result<Persistence, CriticalPointsError> {
+    let field = finite_for_critical(field);
     let finder = CriticalPointFinder::new(mesh);
-    let raw = finder.find(field, BoundaryRule::default())?;
-    persistence(&finder, field, raw)
+    let raw = finder.find(&field, BoundaryRule::default())?;
+    persistence(&finder, &field, raw)
+}
+
+/// `field` with every `+inf` (a geodesic distance where its sources cannot reach: whole
+/// components) replaced by 0, so that such a component is one plateau, with no critical
+/// point; borrowed unchanged when no value is `+inf`.
+pub fn finite_for_critical(field: &[f64]) -> std::borrow::Cow<'_, [f64]> {
+    if field.contains(&f64::INFINITY) {
+        field
+            .iter()
+            .map(|&v| if v == f64::INFINITY { 0.0 } else { v })
+            .collect::<Vec<f64>>()
+            .into()
+    } else {
+        field.into()
+    }
 }
 
 /// One sweep over `order` (every vertex a triangle uses): the pairs `(extremum, saddle)`

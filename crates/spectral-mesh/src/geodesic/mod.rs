@@ -26,23 +26,30 @@
 //! triangles (this is what geometry-central's heat-method solver does with its robust
 //! Laplacian).
 
+mod cloud;
 mod sampling;
 mod triangles;
 
 use rayon::prelude::*;
 
+use crate::linalg::cholesky::CholeskyAnalysis;
 use crate::linalg::{CholeskyError, SparseCholesky, SparseMatrix};
-use crate::mesh::Mesh;
 use crate::mesh::topology::UnionFind;
+use crate::mesh::{Mesh, PointCloud};
 use crate::operators::robust::{Gluing, MollifyMean, RobustError, RobustParams, robust_with_faces};
-use crate::operators::{Laplacian, Operators};
+use crate::operators::{Laplacian, Operators, PointCloudParams, point_cloud_laplacian};
+use cloud::TangentGradient;
 use triangles::FaceFrames;
 
+pub use cloud::DEFAULT_GRADIENT_NEIGHBORS;
 pub use sampling::farthest_point_sampling;
 
-/// Columns solved together in a block (bounds the memory of many-source calls to
-/// `3 n BLOCK` values).
-const BLOCK: usize = 32;
+/// Source sets solved together as one block of right-hand sides (bounds the working
+/// memory of many-source calls to about `3 n BLOCK` values).
+pub const BLOCK: usize = 32;
+
+/// Columns of the divergence on triangles computed together.
+const LANES: usize = 8;
 
 /// Which published variant of the heat method.
 #[derive(
@@ -110,7 +117,7 @@ pub struct GeodesicParams {
 impl Default for GeodesicParams {
     fn default() -> Self {
         Self {
-            time_factor: 1.0,
+            time_factor: crate::analysis::request::DEFAULT_GEODESIC_TIME_FACTOR,
             convention: Convention::Crane,
             robust: RobustParams::default(),
         }
@@ -172,6 +179,14 @@ pub enum GeodesicError {
         /// Triangles.
         m: usize,
     },
+    /// A face-point source given to a point cloud's solver.
+    #[error(
+        "a point cloud has no triangles: the face-point source in triangle {face} needs a mesh (name source points by index)"
+    )]
+    FacePointOnCloud {
+        /// The triangle index given.
+        face: usize,
+    },
     /// Barycentric coordinates that are negative, not finite or sum to 0.
     #[error(
         "the barycentric coordinates {bary:?} of the source in triangle {face} must be finite, >= 0 and sum to 1"
@@ -195,16 +210,79 @@ pub enum GeodesicError {
     Robust(#[from] RobustError),
 }
 
-/// The heat method on one mesh: factored once, then any number of sources
+/// The carrier of the gradient and the divergence.
+#[derive(Debug)]
+enum Gradient {
+    /// Triangles laid out in their planes (meshes).
+    Triangles(FaceFrames),
+    /// Least squares in each point's tangent plane (point clouds).
+    Tangent(TangentGradient),
+}
+
+impl Gradient {
+    fn memory_bytes(&self) -> usize {
+        match self {
+            Gradient::Triangles(f) => f.memory_bytes(),
+            Gradient::Tangent(g) => g.memory_bytes(),
+        }
+    }
+}
+
+/// Parameters of the heat method on a point cloud. `Default`: the point-cloud Laplacian's
+/// defaults, [`DEFAULT_GRADIENT_NEIGHBORS`] neighbours for the gradient.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CloudGeodesicParams {
+    /// The point-cloud Laplacian (S, B) of the heat and Poisson solves; its `normals`
+    /// also choose the tangent planes of the gradient.
+    pub laplacian: PointCloudParams,
+    /// Nearest neighbours of the least-squares gradient of each point (`>= 2`; fewer when
+    /// the cloud has fewer points).
+    pub gradient_neighbors: usize,
+    /// The matrix of the Poisson solve.
+    pub poisson: CloudPoisson,
+}
+
+impl Default for CloudGeodesicParams {
+    fn default() -> Self {
+        Self {
+            laplacian: PointCloudParams::default(),
+            gradient_neighbors: DEFAULT_GRADIENT_NEIGHBORS,
+            poisson: CloudPoisson::default(),
+        }
+    }
+}
+
+/// The matrix of the Poisson solve on a point cloud.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum CloudPoisson {
+    /// `G^T B G`, the energy of the least-squares gradient itself, so that `div grad` is
+    /// exactly minus the Poisson matrix, as on meshes: `phi` is the function whose
+    /// gradient fits the unit field best in the mass-weighted least-squares sense. A wider
+    /// stencil than S (about 37 entries a row with 12 gradient neighbours against 7).
+    /// Falls back to [`CloudPoisson::Laplacian`] where the neighbour graph splits a
+    /// component of S.
+    #[default]
+    GradientEnergy,
+    /// The point-cloud Laplacian S (inconsistent with the divergence: on the unit sphere
+    /// the distances come out about 3% short).
+    Laplacian,
+}
+
+/// The heat method on one mesh or point cloud: factored once, then any number of sources
 /// (see the module docs).
 #[derive(Debug)]
 pub struct GeodesicSolver {
     n: usize,
-    /// Input triangles and positions (face-point sources and the shift).
+    /// Input triangles (face-point sources) and positions (the shift); for a point cloud
+    /// the triangle union of its Laplacian (pictures only).
     triangles: Vec<[usize; 3]>,
     positions: Vec<[f64; 3]>,
-    /// Triangles carrying gradient and divergence.
-    frames: FaceFrames,
+    /// Gradient and divergence.
+    gradient: Gradient,
     /// Component of each vertex (`usize::MAX` for a vertex no triangle uses).
     component: Vec<usize>,
     n_components: usize,
@@ -219,7 +297,153 @@ pub struct GeodesicSolver {
     t: f64,
     laplacian: Laplacian,
     params: GeodesicParams,
+    point_cloud: bool,
     factor_len: usize,
+}
+
+/// The factored matrices shared by meshes and point clouds.
+struct Factors {
+    heat: SparseCholesky,
+    dirichlet: Option<(Vec<usize>, SparseCholesky)>,
+    poisson: SparseCholesky,
+    zero_rhs: Vec<usize>,
+    component: Vec<usize>,
+    n_components: usize,
+}
+
+/// Components of the graph of `edges` over the vertices marked `used` (`usize::MAX` for
+/// the others), and the first vertex of each component.
+fn components(
+    n: usize,
+    used: &[bool],
+    edges: impl Iterator<Item = (usize, usize)>,
+) -> (Vec<usize>, Vec<usize>) {
+    let mut uf = UnionFind::new(n);
+    for (a, b) in edges {
+        uf.union(a, b);
+    }
+    let mut root_id = vec![usize::MAX; n];
+    let mut component = vec![usize::MAX; n];
+    let mut pinned = Vec::new();
+    for v in 0..n {
+        if !used[v] {
+            continue;
+        }
+        let r = uf.find(v);
+        if root_id[r] == usize::MAX {
+            root_id[r] = pinned.len();
+            pinned.push(v);
+        }
+        component[v] = root_id[r];
+    }
+    (component, pinned)
+}
+
+/// Factors the heat matrix `B + t S` (1 on the diagonal of unused vertices), the
+/// Dirichlet heat on the vertices not in `boundary` (when given and non-empty; Crane's
+/// rule), and the Poisson matrix of `convention` (`gc_scale`: geometry-central's
+/// Laplacian over ours, for its `1e-6 I` shift).
+#[allow(clippy::too_many_arguments)]
+fn factor(
+    stiffness: &SparseMatrix,
+    poisson_stiffness: Option<&SparseMatrix>,
+    mass: &SparseMatrix,
+    t: f64,
+    used: &[bool],
+    component: Vec<usize>,
+    pinned: &[usize],
+    boundary: Option<&[bool]>,
+    convention: Convention,
+    gc_scale: f64,
+) -> Result<Factors, GeodesicError> {
+    let n = used.len();
+    let pp3d = convention == Convention::Potpourri3d;
+    let n_components = pinned.len();
+    // Heat: B + t S, 1 on the diagonal of unused vertices.
+    let mut heat_m = mass.add_scaled(1.0, stiffness, t);
+    if let Some(p) = poisson_stiffness {
+        // The union of the two patterns (explicit zeros), shared by both factors.
+        heat_m = heat_m.add_scaled(1.0, p, 0.0);
+    }
+    let poisson_s = poisson_stiffness.unwrap_or(stiffness);
+    if used.iter().any(|&u| !u) {
+        let unused_diag: Vec<f64> = used.iter().map(|&u| if u { 0.0 } else { 1.0 }).collect();
+        heat_m = heat_m.add_scaled(1.0, &SparseMatrix::diagonal(&unused_diag), 1.0);
+    }
+    // Poisson, on the pattern of the heat matrix (explicit zeros where it has fewer
+    // entries) so that the two share one ordering and symbolic analysis.
+    let mut is_pinned = vec![false; n];
+    if !pp3d {
+        for &p in pinned {
+            is_pinned[p] = true;
+        }
+    }
+    let eps = 1e-6 / gc_scale;
+    let mut values = vec![0.0; heat_m.nnz()];
+    let col_ptr = heat_m.col_ptr();
+    let row_idx = heat_m.row_idx();
+    for c in 0..n {
+        let (srows, svals) = poisson_s.col(c);
+        let mut q = 0;
+        for k in col_ptr[c]..col_ptr[c + 1] {
+            let r = row_idx[k];
+            while q < srows.len() && srows[q] < r {
+                q += 1;
+            }
+            let s = if q < srows.len() && srows[q] == r {
+                svals[q]
+            } else {
+                0.0
+            };
+            let held = |v: usize| is_pinned[v] || !used[v];
+            values[k] = if held(r) || held(c) {
+                if r == c { 1.0 } else { 0.0 }
+            } else if pp3d && r == c {
+                s + eps
+            } else {
+                s
+            };
+        }
+    }
+    let poisson_m = SparseMatrix::from_csc(n, n, col_ptr.to_vec(), row_idx.to_vec(), values)
+        .ok_or_else(|| {
+            GeodesicError::Factorization(CholeskyError::Internal(
+                "the Poisson matrix has no valid pattern".to_string(),
+            ))
+        })?;
+    let analysis = CholeskyAnalysis::new(&heat_m)?;
+    // The Dirichlet heat (Crane's rule, meshes with boundary only).
+    let interior: Option<Vec<usize>> = match boundary {
+        Some(boundary) if !pp3d && boundary.iter().any(|&b| b) => {
+            let interior: Vec<usize> = (0..n).filter(|&v| !boundary[v]).collect();
+            (!interior.is_empty()).then_some(interior)
+        }
+        _ => None,
+    };
+    // The numeric factorizations side by side.
+    let ((heat, poisson), dirichlet) = rayon::join(
+        || rayon::join(|| analysis.factor(&heat_m), || analysis.factor(&poisson_m)),
+        || {
+            interior.map(|interior| {
+                let sub = heat_m.submatrix(&interior, &interior);
+                SparseCholesky::new(&sub).map(|f| (interior, f))
+            })
+        },
+    );
+    let (heat, poisson) = (heat?, poisson?);
+    let dirichlet = dirichlet.transpose()?;
+    let mut zero_rhs: Vec<usize> = (0..n).filter(|&v| !used[v]).collect();
+    if !pp3d {
+        zero_rhs.extend(pinned);
+    }
+    Ok(Factors {
+        heat,
+        dirichlet,
+        poisson,
+        zero_rhs,
+        component,
+        n_components,
+    })
 }
 
 impl GeodesicSolver {
@@ -230,12 +454,7 @@ impl GeodesicSolver {
         laplacian: Laplacian,
         params: &GeodesicParams,
     ) -> Result<Self, GeodesicError> {
-        if !(params.time_factor.is_finite() && params.time_factor > 0.0) {
-            return Err(GeodesicError::BadParameter(format!(
-                "the heat-method time factor m (t = m h^2) must be a finite number > 0, got {}",
-                params.time_factor
-            )));
-        }
+        check_time_factor(params)?;
         if !laplacian.is_cotangent() {
             return Err(GeodesicError::NotGeometric(laplacian));
         }
@@ -280,113 +499,191 @@ impl GeodesicSolver {
         let t = params.time_factor * h * h;
 
         // Components (through triangles) and vertices no triangle uses.
-        let mut uf = UnionFind::new(n);
         let mut used = vec![false; n];
         for tri in mesh.triangles() {
-            uf.union(tri[0], tri[1]);
-            uf.union(tri[1], tri[2]);
             for &v in tri {
                 used[v] = true;
             }
         }
-        let mut root_id = vec![usize::MAX; n];
-        let mut component = vec![usize::MAX; n];
-        let mut pinned = Vec::new();
-        for v in 0..n {
-            if !used[v] {
-                continue;
-            }
-            let r = uf.find(v);
-            if root_id[r] == usize::MAX {
-                root_id[r] = pinned.len();
-                pinned.push(v);
-            }
-            component[v] = root_id[r];
-        }
-        let n_components = pinned.len();
-
-        // Heat: B + t S, 1 on the diagonal of unused vertices.
-        let unused_diag: Vec<f64> = used.iter().map(|&u| if u { 0.0 } else { 1.0 }).collect();
-        let heat_m = mass.add_scaled(1.0, &stiffness, t).add_scaled(
-            1.0,
-            &SparseMatrix::diagonal(&unused_diag),
-            1.0,
-        );
-        let heat = SparseCholesky::new(&heat_m)?;
-
-        // Dirichlet heat (Crane's rule, meshes with boundary only).
-        let dirichlet = if pp3d {
-            None
-        } else {
-            let boundary = boundary_vertices(mesh);
-            if boundary.iter().any(|&b| b) {
-                let interior: Vec<usize> = (0..n).filter(|&v| !boundary[v]).collect();
-                if interior.is_empty() {
-                    None
-                } else {
-                    let sub = heat_m.submatrix(&interior, &interior);
-                    Some((interior, SparseCholesky::new(&sub)?))
-                }
-            } else {
-                None
-            }
-        };
-
-        // Poisson.
-        let poisson_m = if pp3d {
-            let eps = vec![1e-6 / gc_scale; n];
-            stiffness
-                .add_scaled(1.0, &SparseMatrix::diagonal(&eps), 1.0)
-                .add_scaled(1.0, &SparseMatrix::diagonal(&unused_diag), 1.0)
-        } else {
-            let mut is_pinned = vec![false; n];
-            for &p in &pinned {
-                is_pinned[p] = true;
-            }
-            let mut trip = Vec::with_capacity(stiffness.nnz() + n);
-            for c in 0..n {
-                let (rows, vals) = stiffness.col(c);
-                if is_pinned[c] || !used[c] {
-                    continue;
-                }
-                for (&r, &v) in rows.iter().zip(vals) {
-                    if !is_pinned[r] && used[r] {
-                        trip.push((r, c, v));
-                    }
-                }
-            }
-            for v in 0..n {
-                if is_pinned[v] || !used[v] {
-                    trip.push((v, v, 1.0));
-                }
-            }
-            SparseMatrix::from_triplets(n, n, &trip)
-        };
-        let poisson = SparseCholesky::new(&poisson_m)?;
-        let mut zero_rhs: Vec<usize> = (0..n).filter(|&v| !used[v]).collect();
-        if !pp3d {
-            zero_rhs.extend(&pinned);
-        }
-        let factor_len = heat.factor_len()
-            + poisson.factor_len()
-            + dirichlet.as_ref().map_or(0, |d| d.1.factor_len());
-        Ok(Self {
+        let (component, pinned) = components(
             n,
-            triangles: mesh.triangles().to_vec(),
-            positions: mesh.positions().to_vec(),
-            frames,
+            &used,
+            mesh.triangles()
+                .iter()
+                .flat_map(|t| [(t[0], t[1]), (t[1], t[2])]),
+        );
+        let boundary = boundary_vertices(mesh);
+        let f = factor(
+            &stiffness,
+            None,
+            &mass,
+            t,
+            &used,
             component,
-            n_components,
-            heat,
-            dirichlet,
-            poisson,
-            zero_rhs,
+            &pinned,
+            Some(&boundary),
+            params.convention,
+            gc_scale,
+        )?;
+        Ok(Self::from_factors(
+            f,
+            mesh.triangles().to_vec(),
+            mesh.positions().to_vec(),
+            Gradient::Triangles(frames),
+            h,
+            t,
+            laplacian,
+            params,
+            false,
+        ))
+    }
+
+    /// The heat method on a point cloud: the heat and Poisson solves on the point-cloud
+    /// Laplacian ([`point_cloud_laplacian`], unscaled), the gradient by least squares in
+    /// each point's tangent plane over its nearest neighbours, and the divergence its
+    /// adjoint with the mass (see `docs/MATH.md`). `h` is the mean edge length of the
+    /// Laplacian's triangles. Sources are points ([`Source::Vertex`]); a point cloud has
+    /// no boundary rule (Neumann heat only). `params.robust` is not used: the cloud's
+    /// Laplacian has its own parameters in `cloud`.
+    pub fn from_point_cloud(
+        points: &PointCloud,
+        cloud: &CloudGeodesicParams,
+        params: &GeodesicParams,
+    ) -> Result<Self, GeodesicError> {
+        check_time_factor(params)?;
+        if cloud.gradient_neighbors < 2 {
+            return Err(GeodesicError::BadParameter(format!(
+                "the gradient of a point cloud needs at least 2 neighbours, got {}",
+                cloud.gradient_neighbors
+            )));
+        }
+        let lap = point_cloud_laplacian(points, &cloud.laplacian)?;
+        let n = points.n_points();
+        let h = mean_edge_length_of(points.positions(), &lap.triangles);
+        let h = if h > 0.0 {
+            h
+        } else {
+            // No triangle at all (every neighbourhood collinear): the mean distance to
+            // the nearest neighbour.
+            mean_nearest_distance(points.positions())
+        };
+        let t = params.time_factor * h * h;
+        let used = vec![true; n];
+        let gradient = TangentGradient::new(
+            points,
+            cloud.gradient_neighbors,
+            cloud.laplacian.neighbors,
+            cloud.laplacian.normals,
+            lap.mass.diag(),
+        );
+        let graph_edges = |m: &SparseMatrix| -> Vec<(usize, usize)> {
+            (0..n)
+                .flat_map(|c| {
+                    let (rows, vals) = m.col(c);
+                    rows.iter()
+                        .zip(vals)
+                        .filter(move |&(&r, &v)| r != c && v != 0.0)
+                        .map(move |(&r, _)| (r, c))
+                        .collect::<Vec<_>>()
+                })
+                .collect()
+        };
+        let s = &lap.stiffness;
+        let s_edges = graph_edges(s);
+        let energy = match cloud.poisson {
+            CloudPoisson::GradientEnergy => {
+                let e = gradient.energy();
+                let e_edges = graph_edges(&e);
+                // The energy's components must be those of the union (else a component
+                // of the union would have more than one null vector).
+                let (_, own) = components(n, &used, e_edges.iter().copied());
+                let (_, union) = components(n, &used, e_edges.iter().chain(&s_edges).copied());
+                (own.len() == union.len()).then_some(e)
+            }
+            CloudPoisson::Laplacian => None,
+        };
+        let (component, pinned) = match &energy {
+            Some(e) => components(
+                n,
+                &used,
+                graph_edges(e).into_iter().chain(s_edges.iter().copied()),
+            ),
+            None => components(n, &used, s_edges.iter().copied()),
+        };
+        let f = factor(
+            s,
+            energy.as_ref(),
+            &lap.mass,
+            t,
+            &used,
+            component,
+            &pinned,
+            None,
+            params.convention,
+            1.0,
+        )?;
+        Ok(Self::from_factors(
+            f,
+            lap.triangles,
+            points.positions().to_vec(),
+            Gradient::Tangent(gradient),
+            h,
+            t,
+            Laplacian::Robust,
+            params,
+            true,
+        ))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn from_factors(
+        f: Factors,
+        triangles: Vec<[usize; 3]>,
+        positions: Vec<[f64; 3]>,
+        gradient: Gradient,
+        h: f64,
+        t: f64,
+        laplacian: Laplacian,
+        params: &GeodesicParams,
+        point_cloud: bool,
+    ) -> Self {
+        let factor_len = f.heat.factor_len()
+            + f.poisson.factor_len()
+            + f.dirichlet.as_ref().map_or(0, |d| d.1.factor_len());
+        Self {
+            n: positions.len(),
+            triangles,
+            positions,
+            gradient,
+            component: f.component,
+            n_components: f.n_components,
+            heat: f.heat,
+            dirichlet: f.dirichlet,
+            poisson: f.poisson,
+            zero_rhs: f.zero_rhs,
             h,
             t,
             laplacian,
             params: *params,
+            point_cloud,
             factor_len,
-        })
+        }
+    }
+
+    /// True for a solver built on a point cloud ([`GeodesicSolver::from_point_cloud`]).
+    pub fn is_point_cloud(&self) -> bool {
+        self.point_cloud
+    }
+
+    /// For a point cloud: its points with the triangle union of its Laplacian, oriented
+    /// consistently (to draw a distance on); `None` for a mesh or a cloud without
+    /// triangles.
+    pub fn point_cloud_mesh(&self) -> Option<Mesh> {
+        if !self.point_cloud {
+            return None;
+        }
+        let cloud = PointCloud::new(self.positions.clone(), None).ok()?;
+        crate::analysis::points::connectivity_mesh(&cloud, self.triangles.clone())
     }
 
     /// Number of vertices.
@@ -432,7 +729,7 @@ impl GeodesicSolver {
     /// Approximate memory held by the solver, in bytes.
     pub fn memory_bytes(&self) -> usize {
         8 * self.factor_len
-            + self.frames.memory_bytes()
+            + self.gradient.memory_bytes()
             + self.triangles.len() * 24
             + self.positions.len() * 24
             + self.component.len() * 8
@@ -539,6 +836,9 @@ impl GeodesicSolver {
                     }
                     ([v, v, v], [1.0, 0.0, 0.0], [0.0; 3])
                 }
+                Source::FacePoint { face, .. } if self.point_cloud => {
+                    return Err(GeodesicError::FacePointOnCloud { face });
+                }
                 Source::FacePoint { face, bary } => {
                     let Some(&tri) = self.triangles.get(face) else {
                         return Err(GeodesicError::FaceOutOfRange {
@@ -609,14 +909,39 @@ impl GeodesicSolver {
         }
         // Direction field and its divergence, one column per task.
         let mut phi = vec![0.0; n * k];
-        phi.par_chunks_mut(n)
-            .zip(u.par_chunks(n))
-            .for_each(|(div, col)| {
-                self.frames.normalized_divergence(col, div);
-                for &v in &self.zero_rhs {
-                    div[v] = 0.0;
-                }
-            });
+        match &self.gradient {
+            Gradient::Triangles(frames) => {
+                // Groups of LANES columns, each group's triangles read once (by rows).
+                phi.par_chunks_mut(n * LANES)
+                    .zip(u.par_chunks(n * LANES))
+                    .for_each(|(dcols, ucols)| {
+                        let w = ucols.len() / n.max(1);
+                        let mut ur = vec![[0.0; LANES]; n];
+                        for c in 0..w {
+                            for (i, r) in ur.iter_mut().enumerate() {
+                                r[c] = ucols[c * n + i];
+                            }
+                        }
+                        let mut dr = vec![[0.0; LANES]; n];
+                        frames.normalized_divergence_rows(&ur, &mut dr);
+                        for c in 0..w {
+                            for (i, r) in dr.iter().enumerate() {
+                                dcols[c * n + i] = r[c];
+                            }
+                        }
+                    });
+            }
+            Gradient::Tangent(g) => {
+                phi.par_chunks_mut(n)
+                    .zip(u.par_chunks(n))
+                    .for_each(|(div, col)| g.normalized_divergence(col, div));
+            }
+        }
+        for div in phi.chunks_mut(n) {
+            for &v in &self.zero_rhs {
+                div[v] = 0.0;
+            }
+        }
         drop(u);
         self.poisson.solve_many_in_place(&mut phi, k);
         phi.par_chunks_mut(n)
@@ -631,8 +956,25 @@ impl GeodesicSolver {
         let nc = self.n_components;
         let mut diff = vec![0.0; nc];
         let mut weight = vec![0.0; nc];
+        let cloud = match &self.gradient {
+            Gradient::Tangent(g) => Some(g),
+            Gradient::Triangles(_) => None,
+        };
         for p in &r.points {
             let c = self.component[p.verts[0]];
+            if let Some(g) = cloud {
+                // A point source: over its gradient stencil (the point and its gradient
+                // neighbours), each expected at its straight distance from the source
+                // (phi at the source alone can be off by a local oscillation).
+                let v = p.verts[0];
+                let pv = self.positions[v];
+                for &j in std::iter::once(&v).chain(g.neighbors(v)) {
+                    let expected = crate::mesh::norm(crate::mesh::sub(self.positions[j], pv));
+                    diff[c] += phi[j] - expected;
+                    weight[c] += 1.0;
+                }
+                continue;
+            }
             for i in 0..3 {
                 let w = p.bary[i];
                 if w == 0.0 {
@@ -651,6 +993,15 @@ impl GeodesicSolver {
                 *x = f64::INFINITY;
             } else {
                 *x -= diff[c] / weight[c];
+                if cloud.is_some() {
+                    // The stencil shift leaves values near the source slightly off 0.
+                    *x = x.max(0.0);
+                }
+            }
+        }
+        if cloud.is_some() {
+            for p in &r.points {
+                phi[p.verts[0]] = 0.0;
             }
         }
     }
@@ -683,11 +1034,22 @@ fn bary_distance(b1: [f64; 3], b2: [f64; 3], l: [f64; 3]) -> f64 {
     if s <= 0.0 { (-s).sqrt() } else { 0.0 }
 }
 
-/// Mean length of the distinct edges of `mesh` (geometry-central's mean over the mesh's
-/// edges).
-pub fn distinct_mean_edge_length(mesh: &Mesh) -> f64 {
-    let mut e: Vec<(usize, usize)> = Vec::with_capacity(3 * mesh.n_triangles());
-    for t in mesh.triangles() {
+/// Refuses a time factor that is not finite and `> 0`.
+fn check_time_factor(params: &GeodesicParams) -> Result<(), GeodesicError> {
+    if params.time_factor.is_finite() && params.time_factor > 0.0 {
+        Ok(())
+    } else {
+        Err(GeodesicError::BadParameter(format!(
+            "the heat-method time factor m (t = m h^2) must be a finite number > 0, got {}",
+            params.time_factor
+        )))
+    }
+}
+
+/// Mean length of the distinct edges of `triangles` over `positions` (0 without edges).
+fn mean_edge_length_of(positions: &[[f64; 3]], triangles: &[[usize; 3]]) -> f64 {
+    let mut e: Vec<(usize, usize)> = Vec::with_capacity(3 * triangles.len());
+    for t in triangles {
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
             e.push((a.min(b), a.max(b)));
@@ -695,12 +1057,39 @@ pub fn distinct_mean_edge_length(mesh: &Mesh) -> f64 {
     }
     e.par_sort_unstable();
     e.dedup();
-    let p = mesh.positions();
     let s: f64 = e
         .iter()
-        .map(|&(a, b)| crate::mesh::norm(crate::mesh::sub(p[a], p[b])))
+        .map(|&(a, b)| crate::mesh::norm(crate::mesh::sub(positions[a], positions[b])))
         .sum();
-    s / e.len().max(1) as f64
+    if e.is_empty() {
+        0.0
+    } else {
+        s / e.len() as f64
+    }
+}
+
+/// Mean distance of each point to its nearest other point (0 for a single point).
+fn mean_nearest_distance(positions: &[[f64; 3]]) -> f64 {
+    let nb = crate::operators::point_cloud::nearest_neighbors(positions, 1);
+    let d: Vec<f64> = nb
+        .iter()
+        .enumerate()
+        .filter_map(|(i, j)| {
+            j.first()
+                .map(|&j| crate::mesh::norm(crate::mesh::sub(positions[i], positions[j])))
+        })
+        .collect();
+    if d.is_empty() {
+        0.0
+    } else {
+        d.iter().sum::<f64>() / d.len() as f64
+    }
+}
+
+/// Mean length of the distinct edges of `mesh` (geometry-central's mean over the mesh's
+/// edges).
+pub fn distinct_mean_edge_length(mesh: &Mesh) -> f64 {
+    mean_edge_length_of(mesh.positions(), mesh.triangles())
 }
 
 /// `true` for the vertices of edges with exactly one triangle.

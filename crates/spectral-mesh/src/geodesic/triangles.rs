@@ -83,29 +83,44 @@ impl FaceFrames {
 
     /// Writes into `div` (zeroed first) the integrated divergence of `X = grad u / |grad u|`
     /// (zero in a triangle where `grad u = 0`):
-    /// `div_i = sum of w_ij (p_j - p_i) . X` over the edges `i -> j` of each triangle.
-    pub fn normalized_divergence(&self, u: &[f64], div: &mut [f64]) {
-        div.fill(0.0);
+    /// `div_i = sum of w_ij (p_j - p_i) . X` over the edges `i -> j` of each triangle;
+    /// for up to `W` columns at once, stored by rows (`u[i][c]`: column `c` at vertex `i`),
+    /// so that each triangle is read once for all of them. Every column gets the same
+    /// arithmetic, in the same order, as it would alone.
+    pub fn normalized_divergence_rows<const W: usize>(&self, u: &[[f64; W]], div: &mut [[f64; W]]) {
+        for d in div.iter_mut() {
+            *d = [0.0; W];
+        }
         for f in &self.frames {
-            // Unscaled gradient: sum_k u_k rot90(edge opposite k), rot90(x, y) = (-y, x).
-            let mut g = [0.0f64; 2];
+            let mut g0 = [0.0f64; W];
+            let mut g1 = [0.0f64; W];
             for k in 0..3 {
                 let o = f.e[(k + 1) % 3];
-                let uk = u[f.v[k]];
-                g[0] -= uk * o[1];
-                g[1] += uk * o[0];
+                let uk = &u[f.v[k]];
+                for l in 0..W {
+                    g0[l] -= uk[l] * o[1];
+                    g1[l] += uk[l] * o[0];
+                }
             }
-            let len = (g[0] * g[0] + g[1] * g[1]).sqrt();
-            if !(len > 0.0 && len.is_finite()) {
-                continue;
+            let mut x0 = [0.0f64; W];
+            let mut x1 = [0.0f64; W];
+            // Lanes where grad u = 0 keep X = 0 and so add (signed) zeros.
+            for l in 0..W {
+                let len = (g0[l] * g0[l] + g1[l] * g1[l]).sqrt();
+                if len > 0.0 && len.is_finite() {
+                    x0[l] = g0[l] / len;
+                    x1[l] = g1[l] / len;
+                }
             }
-            let x = [g[0] / len, g[1] / len];
             for k in 0..3 {
-                // Edge k runs v_k -> v_{k+1}; its weight is the half cotangent at the
-                // opposite corner k + 2.
-                let val = f.w[(k + 2) % 3] * (f.e[k][0] * x[0] + f.e[k][1] * x[1]);
-                div[f.v[k]] += val;
-                div[f.v[(k + 1) % 3]] -= val;
+                let wk = f.w[(k + 2) % 3];
+                let e = f.e[k];
+                let (a, b) = (f.v[k], f.v[(k + 1) % 3]);
+                for l in 0..W {
+                    let val = wk * (e[0] * x0[l] + e[1] * x1[l]);
+                    div[a][l] += val;
+                    div[b][l] -= val;
+                }
             }
         }
     }

@@ -22,7 +22,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use super::{IoError, atomic_write};
+use super::{IoError, atomic_write, read_file};
 
 /// Parses a per-vertex field (format in the module documentation). `origin` labels every
 /// error (a file name, `<upload>`, ...); `n`, when given, is the number of values expected
@@ -88,12 +88,7 @@ pub fn read_field_text(text: &str, origin: &str, n: Option<usize>) -> Result<Vec
 
 /// Reads a per-vertex field file ([`read_field_text`]); errors name the path.
 pub fn read_field(path: &Path, n: Option<usize>) -> Result<Vec<f64>, IoError> {
-    let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| IoError::Io {
-        path: name.clone(),
-        action: "read",
-        source,
-    })?;
+    let (bytes, name) = read_file(path)?;
     let text = std::str::from_utf8(&bytes).map_err(|e| {
         let line = 1 + bytes[..e.valid_up_to()]
             .iter()

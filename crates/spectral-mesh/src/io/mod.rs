@@ -242,13 +242,19 @@ pub struct WriteOptions {
 /// Reads a mesh file; the format comes from the extension, or from the content when the
 /// extension is missing or wrong.
 pub fn read_mesh(path: &Path) -> Result<LoadedMesh, IoError> {
+    let (bytes, name) = read_file(path)?;
+    read_mesh_from_bytes(&bytes, &name)
+}
+
+/// The bytes of a file and its name for messages (the one read of every reader here).
+pub(crate) fn read_file(path: &Path) -> Result<(Vec<u8>, String), IoError> {
     let name = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|source| IoError::Io {
         path: name.clone(),
         action: "read",
         source,
     })?;
-    read_mesh_from_bytes(&bytes, &name)
+    Ok((bytes, name))
 }
 
 /// Reads a mesh from memory. `name_hint` is a file name: its extension gives the format

@@ -22,25 +22,18 @@ pub(crate) struct OffHeader {
 fn parse_header(word: &str) -> Option<OffHeader> {
     let mut rest = word.strip_suffix("OFF")?;
     let mut h = OffHeader::default();
-    if let Some(r) = rest.strip_prefix("ST") {
-        h.texcoords = true;
-        rest = r;
-    }
-    if let Some(r) = rest.strip_prefix('C') {
-        h.colors = true;
-        rest = r;
-    }
-    if let Some(r) = rest.strip_prefix('N') {
-        h.normals = true;
-        rest = r;
-    }
-    if let Some(r) = rest.strip_prefix('4') {
-        h.four = true;
-        rest = r;
-    }
-    if let Some(r) = rest.strip_prefix('n') {
-        h.ndim = true;
-        rest = r;
+    // The optional prefixes, in the order they must appear.
+    for (prefix, flag) in [
+        ("ST", &mut h.texcoords),
+        ("C", &mut h.colors),
+        ("N", &mut h.normals),
+        ("4", &mut h.four),
+        ("n", &mut h.ndim),
+    ] {
+        if let Some(r) = rest.strip_prefix(prefix) {
+            *flag = true;
+            rest = r;
+        }
     }
     rest.is_empty().then_some(h)
 }

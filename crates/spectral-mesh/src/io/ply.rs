@@ -186,16 +186,33 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
     let Some(faces) = data.faces else {
         return Err(ctx.invalid(None, NO_FACE_ELEMENT));
     };
+    assemble_mesh(
+        ctx,
+        data.positions,
+        data.vertex_colors,
+        &faces,
+        data.warnings,
+    )
+}
+
+/// The mesh of a PLY file's vertices (with their colours) and `faces`, with `warnings`.
+pub(crate) fn assemble_mesh(
+    ctx: &Ctx,
+    positions: Vec<[f64; 3]>,
+    vertex_colors: Option<Vec<[f32; 3]>>,
+    faces: &RawFaces,
+    warnings: Vec<String>,
+) -> Result<LoadedMesh, IoError> {
     assemble(
         ctx,
         RawMesh {
             format: MeshFormat::Ply,
-            positions: data.positions,
+            positions,
             position_lines: None,
-            faces: &faces,
+            faces,
             index_base: 0,
-            vertex_colors: data.vertex_colors,
-            warnings: data.warnings,
+            vertex_colors,
+            warnings,
         },
     )
 }
@@ -319,48 +336,34 @@ pub(crate) fn parse(bytes: &[u8], ctx: &Ctx, require_faces: bool) -> Result<PlyD
     let mut positions = Vec::with_capacity(verts.len());
     let mut colors = Vec::new();
     let mut colors_ok = has_color;
-    for (v, e) in verts.iter().enumerate() {
-        let mut p = [0.0; 3];
-        for (d, key) in ["x", "y", "z"].into_iter().enumerate() {
-            p[d] = e.get(key).and_then(scalar).ok_or_else(|| {
-                ctx.invalid(
-                    line_of("vertex", v),
-                    format!("vertex {v}: property '{key}' is missing or not a number"),
-                )
-            })?;
-        }
-        if let Some(d) = p.iter().position(|c| !c.is_finite()) {
-            return Err(ctx.invalid(
-                line_of("vertex", v),
-                format!(
-                    "vertex {v} has a non-finite coordinate ({} = {})",
-                    ["x", "y", "z"][d],
-                    p[d]
-                ),
-            ));
-        }
-        positions.push(p);
-        if has_normals {
-            let mut nrm = [0.0; 3];
-            for (d, key) in ["nx", "ny", "nz"].into_iter().enumerate() {
-                nrm[d] = e.get(key).and_then(scalar).ok_or_else(|| {
+    // The three numeric properties `keys` of vertex `v`: missing or non-finite values are
+    // refused, naming the property (`what`: what one value is called).
+    let triple =
+        |e: &DefaultElement, v: usize, keys: [&str; 3], what: &str| -> Result<[f64; 3], IoError> {
+            let mut p = [0.0; 3];
+            for (d, key) in keys.into_iter().enumerate() {
+                p[d] = e.get(key).and_then(scalar).ok_or_else(|| {
                     ctx.invalid(
                         line_of("vertex", v),
                         format!("vertex {v}: property '{key}' is missing or not a number"),
                     )
                 })?;
             }
-            if let Some(d) = nrm.iter().position(|c| !c.is_finite()) {
-                return Err(ctx.invalid(
+            match p.iter().position(|c| !c.is_finite()) {
+                Some(d) => Err(ctx.invalid(
                     line_of("vertex", v),
                     format!(
-                        "vertex {v} has a non-finite normal component ({} = {})",
-                        ["nx", "ny", "nz"][d],
-                        nrm[d]
+                        "vertex {v} has a non-finite {what} ({} = {})",
+                        keys[d], p[d]
                     ),
-                ));
+                )),
+                None => Ok(p),
             }
-            normals.push(nrm);
+        };
+    for (v, e) in verts.iter().enumerate() {
+        positions.push(triple(e, v, ["x", "y", "z"], "coordinate")?);
+        if has_normals {
+            normals.push(triple(e, v, ["nx", "ny", "nz"], "normal component")?);
         }
         if colors_ok {
             let c: Vec<Option<f32>> = ["red", "green", "blue"]

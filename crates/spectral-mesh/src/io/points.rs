@@ -23,7 +23,7 @@ use std::fmt;
 use std::path::Path;
 
 use super::ply;
-use super::{Ctx, IoError, LoadedMesh, MeshFormat, RawMesh, assemble, read_mesh_from_bytes, sniff};
+use super::{Ctx, IoError, LoadedMesh, MeshFormat, read_file, read_mesh_from_bytes, sniff};
 use crate::mesh::{PointCloud, norm};
 
 /// The point-cloud file formats.
@@ -90,16 +90,6 @@ impl Input {
             Input::Points(p) => p.cloud.n_points(),
         }
     }
-}
-
-fn read_file(path: &Path) -> Result<(Vec<u8>, String), IoError> {
-    let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| IoError::Io {
-        path: name.clone(),
-        action: "read",
-        source,
-    })?;
-    Ok((bytes, name))
 }
 
 /// Reads a point-cloud file (text points, or a PLY file; a PLY file's faces, if any, are
@@ -172,17 +162,12 @@ pub fn read_input_from_bytes(bytes: &[u8], name_hint: &str) -> Result<Input, IoE
         warnings.extend(data.warnings);
         return match data.faces {
             Some(faces) if faces.len() > 0 => {
-                let mut m = assemble(
+                let mut m = ply::assemble_mesh(
                     &ctx,
-                    RawMesh {
-                        format: MeshFormat::Ply,
-                        positions: data.positions,
-                        position_lines: None,
-                        faces: &faces,
-                        index_base: 0,
-                        vertex_colors: data.vertex_colors,
-                        warnings: Vec::new(),
-                    },
+                    data.positions,
+                    data.vertex_colors,
+                    &faces,
+                    Vec::new(),
                 )?;
                 warnings.append(&mut m.warnings);
                 m.warnings = warnings;

@@ -3,10 +3,11 @@
 //! This is the only module that names `faer`.
 
 pub mod cholesky;
+pub mod dense_ops;
 pub mod eigen;
 mod scratch;
 pub mod sparse;
-mod timing;
+pub mod timing;
 
 pub use cholesky::{CholeskyError, Inertia, SparseCholesky, inertia};
 pub use eigen::{

@@ -1,8 +1,10 @@
 //! Phase timings of the Krylov-Schur eigensolver, for tuning: with the environment
 //! variable `SPECTRAL_MESH_EIG_TIMINGS=1`, the wall seconds spent in each phase are summed
 //! and printed to stderr when a solve succeeds (a failed attempt's time goes into the
-//! next report). The totals are process-wide, so solves running at the same time mix.
-//! Off by default (one cached flag test per phase).
+//! next report), with the number of block expansions and of operator applications
+//! (solves, columns). The totals are process-wide, so solves running at the same time
+//! mix. Off by default (one cached flag test per phase). The faces read [`enabled`] to
+//! print their own stages (the CLI's `eigs`: read, operators, solve, check, write).
 
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -11,7 +13,9 @@ use std::time::Instant;
 /// The phases that are timed.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Phase {
-    /// Symbolic and numeric factorization of `S - sigma B`.
+    /// The fill-reducing ordering and symbolic analysis of `S - sigma B`.
+    Ordering,
+    /// The numeric factorization of `S - sigma B`.
     Factor,
     /// `Op Q = K^-1 B Q`: the sparse product and the multi-right-hand-side solve.
     Op,
@@ -37,16 +41,20 @@ pub(super) enum Phase {
     Norms,
     /// The known null space: finding the components, projecting blocks against it.
     Deflate,
+    /// The orthogonality report of the returned vectors (`max |X^T B X - I|`).
+    Check,
 }
 
-const NAMES: [&str; 13] = [
-    "factor", "op", "local", "gram", "update", "svqb", "eig", "rotate", "estimate", "residual",
-    "start", "norms", "deflate",
+const NAMES: [&str; 15] = [
+    "ordering", "factor", "op", "local", "gram", "update", "svqb", "eig", "rotate", "estimate",
+    "residual", "start", "norms", "deflate", "check",
 ];
 
-static TOTALS: [AtomicU64; 13] = [const { AtomicU64::new(0) }; 13];
+static TOTALS: [AtomicU64; 15] = [const { AtomicU64::new(0) }; 15];
 
-fn enabled() -> bool {
+/// True when `SPECTRAL_MESH_EIG_TIMINGS` is set (not empty, not `0`): the solver then
+/// prints its phase timings, and the faces may print their own stages.
+pub fn enabled() -> bool {
     static ON: OnceLock<bool> = OnceLock::new();
     *ON.get_or_init(|| {
         std::env::var("SPECTRAL_MESH_EIG_TIMINGS").is_ok_and(|v| !v.is_empty() && v != "0")
@@ -73,8 +81,9 @@ pub(super) fn add(phase: Phase, d: std::time::Duration) {
     }
 }
 
-/// Prints and resets the totals (when timings are on).
-pub(super) fn report() {
+/// Prints and resets the totals (when timings are on), with the operator applications
+/// (`solves`, columns) and block expansions of the solve.
+pub(super) fn report(expansions: usize, solves: usize) {
     if !enabled() {
         return;
     }
@@ -86,5 +95,8 @@ pub(super) fn report() {
             format!("{name}={s:.3}")
         })
         .collect();
-    eprintln!("eig timings (s): {}", parts.join(" "));
+    eprintln!(
+        "eig timings (s): {} (expansions {expansions}, solves {solves})",
+        parts.join(" ")
+    );
 }

@@ -118,10 +118,13 @@ impl Mesh {
         &self.triangles
     }
 
-    /// The content hash every face uses to name a mesh: blake3 (64 hex digits) of the
-    /// positions as little-endian `f64` followed by the triangle indices as little-endian
-    /// `u64`. Experiment files record it; the web app's mesh ids are its first 16 digits;
-    /// cached bases are keyed by it.
+    /// The one content hash of a mesh, which every face uses to name it: blake3 (64
+    /// lowercase hex digits) of the positions as little-endian `f64` (x, y, z per vertex,
+    /// in order) followed by the triangle indices as little-endian `u64`. Two meshes have
+    /// the same hash exactly when they have the same coordinates bit for bit (`0.0` and
+    /// `-0.0` differ) and the same triangles in the same order (up to blake3 collisions).
+    /// Experiment files record it (`mesh_hash`) and replays check it; the web app's mesh
+    /// ids are its first 16 digits; saved and cached bases are keyed by it.
     pub fn content_hash(&self) -> String {
         let mut h = blake3::Hasher::new();
         for p in &self.positions {
@@ -182,15 +185,7 @@ impl Mesh {
 
     /// Axis-aligned bounding box as `(min, max)`.
     pub fn bounding_box(&self) -> ([f64; 3], [f64; 3]) {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for p in &self.positions {
-            for d in 0..3 {
-                lo[d] = lo[d].min(p[d]);
-                hi[d] = hi[d].max(p[d]);
-            }
-        }
-        (lo, hi)
+        bounding_box(&self.positions)
     }
 
     /// Length of the bounding-box diagonal.
@@ -259,6 +254,27 @@ impl Mesh {
     }
 }
 
+/// Axis-aligned bounding box `(min, max)` of points (infinite, inverted for none).
+pub fn bounding_box(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for d in 0..3 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    (lo, hi)
+}
+
+/// The vertices of a triangle in ascending order (the same for every orientation and
+/// rotation of it).
+pub(crate) fn sorted_triangle(t: [usize; 3]) -> [usize; 3] {
+    let mut s = t;
+    s.sort_unstable();
+    s
+}
+
 /// `a - b`.
 pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
@@ -297,4 +313,43 @@ pub fn norm(a: [f64; 3]) -> f64 {
 pub fn normalize(a: [f64; 3]) -> [f64; 3] {
     let l = norm(a);
     if l > 0.0 { scale(a, 1.0 / l) } else { [0.0; 3] }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri() -> Mesh {
+        Mesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![[0, 1, 2]],
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn the_content_hash_is_the_blake3_of_the_documented_bytes_and_sees_every_change() {
+        let m = tri();
+        let mut bytes = Vec::new();
+        for p in m.positions() {
+            for c in p {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        for t in m.triangles() {
+            for &v in t {
+                bytes.extend_from_slice(&(v as u64).to_le_bytes());
+            }
+        }
+        assert_eq!(m.content_hash(), blake3::hash(&bytes).to_hex().to_string());
+        assert_eq!(m.content_hash().len(), 64);
+        let moved = Mesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 1e-300]],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
+        assert_ne!(m.content_hash(), moved.content_hash());
+        let flipped = Mesh::new(m.positions().to_vec(), vec![[0, 2, 1]]).unwrap();
+        assert_ne!(m.content_hash(), flipped.content_hash());
+    }
 }

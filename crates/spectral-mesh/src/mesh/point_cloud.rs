@@ -7,7 +7,7 @@
 
 use thiserror::Error;
 
-use super::{norm, sub};
+use super::{bounding_box, norm, sub};
 
 /// Errors raised when a point cloud is built from raw arrays.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -127,15 +127,7 @@ impl PointCloud {
 
     /// Axis-aligned bounding box as `(min, max)`.
     pub fn bounding_box(&self) -> ([f64; 3], [f64; 3]) {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for p in &self.positions {
-            for d in 0..3 {
-                lo[d] = lo[d].min(p[d]);
-                hi[d] = hi[d].max(p[d]);
-            }
-        }
-        (lo, hi)
+        bounding_box(&self.positions)
     }
 
     /// Length of the bounding-box diagonal.

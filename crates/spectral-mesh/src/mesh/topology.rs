@@ -394,19 +394,7 @@ fn trace_loops(boundary: &[(usize, usize)]) -> Vec<Vec<usize>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn tetra() -> Mesh {
-        Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-        )
-        .unwrap()
-    }
+    use crate::test_support::{bow_tie, tetra};
 
     #[test]
     fn tetrahedron_is_a_closed_sphere() {
@@ -434,17 +422,7 @@ mod tests {
 
     #[test]
     fn bow_tie_vertex_is_non_manifold() {
-        let m = Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [-1.0, 0.0, 0.0],
-                [-1.0, -1.0, 0.0],
-            ],
-            vec![[0, 1, 2], [0, 3, 4]],
-        )
-        .unwrap();
+        let m = bow_tie();
         let t = Topology::new(&m);
         assert_eq!(t.non_manifold_vertices, vec![0]);
         assert_eq!(t.n_components(), 1);

@@ -12,7 +12,7 @@
 use std::collections::HashMap;
 
 use super::topology::{Component, Topology, UnionFind, VertexTriangles};
-use super::{Mesh, MeshError, cross, dot, norm, sub};
+use super::{Mesh, MeshError, cross, dot, norm, sorted_triangle, sub};
 
 /// Triangles with area `<= DEGENERATE_AREA_FACTOR * diagonal^2` count as zero-area.
 pub const DEGENERATE_AREA_FACTOR: f64 = 1e-14;
@@ -120,17 +120,11 @@ fn min_angle(c: [[f64; 3]; 3]) -> f64 {
     m
 }
 
-fn sorted(t: [usize; 3]) -> [usize; 3] {
-    let mut s = t;
-    s.sort_unstable();
-    s
-}
-
 fn duplicate_faces(tris: &[[usize; 3]]) -> Vec<usize> {
     let mut seen: HashMap<[usize; 3], usize> = HashMap::with_capacity(tris.len());
     let mut dups = Vec::new();
     for (t, &tri) in tris.iter().enumerate() {
-        if seen.insert(sorted(tri), t).is_some() {
+        if seen.insert(sorted_triangle(tri), t).is_some() {
             dups.push(t);
         }
     }
@@ -479,19 +473,7 @@ fn orient(tris: &mut [[usize; 3]]) -> (usize, usize, usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn tetra() -> Mesh {
-        Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-        )
-        .unwrap()
-    }
+    use crate::test_support::{bow_tie, tetra};
 
     #[test]
     fn clean_tetrahedron_reports_nothing() {
@@ -536,8 +518,12 @@ mod tests {
         // Majority orientation (the original, outward one) wins: 3 of 4 faces agree.
         let orig = tetra();
         for tri in rep.mesh.triangles() {
-            let s = sorted(*tri);
-            let o = orig.triangles().iter().find(|x| sorted(**x) == s).unwrap();
+            let s = sorted_triangle(*tri);
+            let o = orig
+                .triangles()
+                .iter()
+                .find(|x| sorted_triangle(**x) == s)
+                .unwrap();
             let rot = |x: [usize; 3]| [[x[0], x[1], x[2]], [x[1], x[2], x[0]], [x[2], x[0], x[1]]];
             assert!(rot(*o).contains(tri), "{tri:?} vs {o:?}");
         }
@@ -545,17 +531,7 @@ mod tests {
 
     #[test]
     fn bow_tie_is_split_into_two_manifold_fans() {
-        let m = Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [-1.0, 0.0, 0.0],
-                [-1.0, -1.0, 0.0],
-            ],
-            vec![[0, 1, 2], [0, 3, 4]],
-        )
-        .unwrap();
+        let m = bow_tie();
         assert_eq!(report(&m).non_manifold_vertices, vec![0]);
         let rep = repair(&m, &RepairOptions::default()).unwrap();
         let r = report(&rep.mesh);

@@ -194,4 +194,15 @@ impl Operators {
     pub fn n(&self) -> usize {
         self.stiffness.nrows()
     }
+
+    /// The total mass `A = 1^T B 1` as assembled; with `normalize` the mass becomes
+    /// `B / A` (unit total mass: the shape scaled to unit area for the area-based masses)
+    /// unless `A` is zero or not finite. Returns `A`.
+    pub fn normalize_mass(&mut self, normalize: bool) -> f64 {
+        let total: f64 = self.mass.values().iter().sum();
+        if normalize && total > 0.0 && total.is_finite() {
+            self.mass = self.mass.add_scaled(1.0 / total, &self.mass, 0.0);
+        }
+        total
+    }
 }

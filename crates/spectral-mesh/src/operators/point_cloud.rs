@@ -64,7 +64,7 @@ use super::robust::{
 };
 use super::stiffness::assemble_laplacian;
 use crate::linalg::SparseMatrix;
-use crate::mesh::{PointCloud, add, cross, dot, norm, normalize, scale, sub};
+use crate::mesh::{PointCloud, add, cross, dot, norm, normalize, scale, sorted_triangle, sub};
 
 /// Default neighbourhood size, as `robust_laplacian.point_cloud_laplacian(n_neighbors=30)`.
 pub const DEFAULT_NEIGHBORS: usize = 30;
@@ -248,7 +248,7 @@ pub fn pca_normal(pts: impl Iterator<Item = [f64; 3]> + Clone) -> [f64; 3] {
 }
 
 /// Eigenvector of the smallest eigenvalue of a symmetric 3x3 matrix (cyclic Jacobi).
-fn smallest_eigenvector(mut a: [[f64; 3]; 3]) -> [f64; 3] {
+pub(crate) fn smallest_eigenvector(mut a: [[f64; 3]; 3]) -> [f64; 3] {
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     let scale_ = a[0][0].abs() + a[1][1].abs() + a[2][2].abs();
     if !scale_.is_finite() || scale_ <= 0.0 {
@@ -434,14 +434,7 @@ fn union_of_stars(pts: &[[f64; 3]], nbrs: &[Vec<usize>], nrm: &[[f64; 3]]) -> Ve
 /// Distinct triangles (sorted vertex triples, ascending) with the number of times they
 /// occur.
 fn count_triangles(tris: &[[usize; 3]]) -> Vec<([usize; 3], usize)> {
-    let mut sorted: Vec<[usize; 3]> = tris
-        .iter()
-        .map(|t| {
-            let mut s = *t;
-            s.sort_unstable();
-            s
-        })
-        .collect();
+    let mut sorted: Vec<[usize; 3]> = tris.iter().map(|t| sorted_triangle(*t)).collect();
     sorted.par_sort_unstable();
     let mut out = Vec::with_capacity(sorted.len() / 3 + 1);
     let mut k = 0;
@@ -622,14 +615,7 @@ fn patched_union(
             }
         }
     }
-    let mut set: Vec<[usize; 3]> = chosen
-        .iter()
-        .map(|t| {
-            let mut s = *t;
-            s.sort_unstable();
-            s
-        })
-        .collect();
+    let mut set: Vec<[usize; 3]> = chosen.iter().map(|t| sorted_triangle(*t)).collect();
     set.sort_unstable();
     let mut out: Vec<[usize; 3]> = Vec::with_capacity(3 * chosen.len());
     for t in &chosen {

@@ -3,7 +3,7 @@
 //! [`SurfaceMap::Identity`] (correspondence by vertex index).
 
 use super::rng::Rng;
-use super::{PerturbError, Perturbed, SurfaceMap, finite};
+use super::{PerturbError, Perturbed, SurfaceMap, finite, finite_point, finite3, positive};
 use crate::mesh::{Mesh, add, dot, norm, scale as vscale, sub};
 
 /// Gaussian noise along the vertex normals: vertex `i` moves by `z_i n_i` with
@@ -55,19 +55,6 @@ pub fn surface_centroid(mesh: &Mesh) -> [f64; 3] {
     }
 }
 
-fn positive(name: &'static str, x: f64) -> Result<f64, PerturbError> {
-    let x = finite(name, x)?;
-    if x > 0.0 {
-        Ok(x)
-    } else {
-        Err(PerturbError::InvalidParameter {
-            name,
-            value: x.to_string(),
-            reason: "must be > 0".into(),
-        })
-    }
-}
-
 /// Uniform scaling by `alpha > 0` about the area-weighted centroid. Lengths scale by
 /// `alpha`, areas by `alpha^2`, and the eigenvalues of (S, B) for any area-based mass by
 /// `1 / alpha^2`.
@@ -104,9 +91,7 @@ pub fn local_scale(
 ) -> Result<Perturbed, PerturbError> {
     let radius = positive("local scale radius", radius)?;
     let alpha = positive("local scale factor", alpha)?;
-    for (k, &c) in center.iter().enumerate() {
-        finite(["center x", "center y", "center z"][k], c)?;
-    }
+    finite_point(center)?;
     if alpha >= 2.6 {
         return Err(PerturbError::InvalidParameter {
             name: "local scale factor",
@@ -157,12 +142,11 @@ pub fn rigid_motion(
     translation: [f64; 3],
 ) -> Result<Perturbed, PerturbError> {
     let angle = finite("rotation angle", angle)?;
-    for (k, &c) in axis.iter().enumerate() {
-        finite(["axis x", "axis y", "axis z"][k], c)?;
-    }
-    for (k, &c) in translation.iter().enumerate() {
-        finite(["translation x", "translation y", "translation z"][k], c)?;
-    }
+    finite3(["axis x", "axis y", "axis z"], axis)?;
+    finite3(
+        ["translation x", "translation y", "translation z"],
+        translation,
+    )?;
     let len = norm(axis);
     if len == 0.0 || !len.is_finite() {
         return Err(PerturbError::InvalidParameter {

@@ -241,6 +241,45 @@ pub(crate) fn finite(name: &'static str, x: f64) -> Result<f64, PerturbError> {
     }
 }
 
+/// `x` when it is finite and `> 0`.
+pub(crate) fn positive(name: &'static str, x: f64) -> Result<f64, PerturbError> {
+    let x = finite(name, x)?;
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(PerturbError::InvalidParameter {
+            name,
+            value: x.to_string(),
+            reason: "must be > 0".into(),
+        })
+    }
+}
+
+/// Checks that every coordinate of `v` is finite (`names`: the coordinates' names).
+pub(crate) fn finite3(names: [&'static str; 3], v: [f64; 3]) -> Result<(), PerturbError> {
+    for (name, c) in names.into_iter().zip(v) {
+        finite(name, c)?;
+    }
+    Ok(())
+}
+
+/// Checks that every coordinate of a ball's `center` is finite.
+pub(crate) fn finite_point(center: [f64; 3]) -> Result<(), PerturbError> {
+    finite3(["center x", "center y", "center z"], center)
+}
+
+/// The radius of a ball about `center` (`name`: the radius's name): the radius must be
+/// finite, then the centre, then the radius `> 0`.
+pub(crate) fn ball_radius(
+    name: &'static str,
+    center: [f64; 3],
+    radius: f64,
+) -> Result<f64, PerturbError> {
+    let radius = finite(name, radius)?;
+    finite_point(center)?;
+    positive(name, radius)
+}
+
 /// Counts the vertices no triangle uses.
 pub(crate) fn unreferenced_count(mesh: &Mesh) -> usize {
     let mut used = vec![false; mesh.n_vertices()];

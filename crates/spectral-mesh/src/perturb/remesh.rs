@@ -16,7 +16,7 @@
 use std::collections::HashMap;
 
 use super::rng::Rng;
-use super::{PerturbError, Perturbed, SurfaceMap, finite, unreferenced_count};
+use super::{PerturbError, Perturbed, SurfaceMap, ball_radius, unreferenced_count};
 use crate::mesh::{Mesh, add, dot, norm, scale as vscale, sub};
 
 /// Barycentric weight given to the near corner(s) by [`tiny_triangles`]: the inserted
@@ -489,17 +489,7 @@ pub fn refine_locally(
     radius: f64,
     levels: usize,
 ) -> Result<Perturbed, PerturbError> {
-    let radius = finite("refinement radius", radius)?;
-    for (k, &c) in center.iter().enumerate() {
-        finite(["center x", "center y", "center z"][k], c)?;
-    }
-    if radius <= 0.0 {
-        return Err(PerturbError::InvalidParameter {
-            name: "refinement radius",
-            value: radius.to_string(),
-            reason: "must be > 0".into(),
-        });
-    }
+    let radius = ball_radius("refinement radius", center, radius)?;
     if levels > MAX_REFINE_LEVELS {
         return Err(PerturbError::InvalidParameter {
             name: "refinement levels",

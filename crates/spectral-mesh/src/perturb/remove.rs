@@ -2,7 +2,7 @@
 //! ball.
 
 use super::rng::Rng;
-use super::{PerturbError, Perturbed, SurfaceMap, finite};
+use super::{PerturbError, Perturbed, SurfaceMap, ball_radius};
 use crate::mesh::topology::Topology;
 use crate::mesh::{Mesh, norm, sub};
 
@@ -122,17 +122,7 @@ const MAX_CLEANUP_ROUNDS: usize = 32;
 /// vertices no triangle uses. The map is [`SurfaceMap::Vertices`] (survivors are
 /// unmoved original vertices).
 pub fn hole(mesh: &Mesh, center: [f64; 3], radius: f64) -> Result<Perturbed, PerturbError> {
-    let radius = finite("hole radius", radius)?;
-    for (k, &c) in center.iter().enumerate() {
-        finite(["center x", "center y", "center z"][k], c)?;
-    }
-    if radius <= 0.0 {
-        return Err(PerturbError::InvalidParameter {
-            name: "hole radius",
-            value: radius.to_string(),
-            reason: "must be > 0".into(),
-        });
-    }
+    let radius = ball_radius("hole radius", center, radius)?;
     let mut keep: Vec<bool> = (0..mesh.n_triangles())
         .map(|t| {
             let [a, b, c] = mesh.corners(t);

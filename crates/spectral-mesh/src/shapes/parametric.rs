@@ -17,18 +17,24 @@ fn grid_triangles(ni: usize, nj: usize, nj_cells: usize) -> Vec<[usize; 3]> {
         let j1 = (j + 1) % nj;
         for i in 0..ni {
             let i1 = (i + 1) % ni;
-            let (p00, p10, p11, p01) = (j * ni + i, j * ni + i1, j1 * ni + i1, j1 * ni + i);
-            // Alternate the diagonal in a checkerboard so the mesh has no preferred direction.
-            if (i + j) % 2 == 0 {
-                t.push([p00, p10, p11]);
-                t.push([p00, p11, p01]);
-            } else {
-                t.push([p00, p10, p01]);
-                t.push([p10, p11, p01]);
-            }
+            let quad = [j * ni + i, j * ni + i1, j1 * ni + i1, j1 * ni + i];
+            push_quad(&mut t, quad, (i + j) % 2 == 0);
         }
     }
     t
+}
+
+/// Splits the cell with counter-clockwise corners `[a, b, c, d]` into two triangles along
+/// `a-c` when `even`, else along `b-d`. Alternating `even` in a checkerboard leaves the
+/// mesh no preferred direction.
+fn push_quad(t: &mut Vec<[usize; 3]>, [a, b, c, d]: [usize; 4], even: bool) {
+    if even {
+        t.push([a, b, c]);
+        t.push([a, c, d]);
+    } else {
+        t.push([a, b, d]);
+        t.push([b, c, d]);
+    }
 }
 
 /// Ring torus: `nu = 2k` steps around the axis, `nv = k` around the tube, `k = 7 * 2^res`.
@@ -88,19 +94,13 @@ pub(crate) fn uv_sphere(res: u32) -> Arrays {
     }
     for i in 1..k - 1 {
         for j in 0..nl {
-            let (a, b, c, d) = (
+            let quad = [
                 ring(i, j),
                 ring(i + 1, j),
                 ring(i + 1, j + 1),
                 ring(i, j + 1),
-            );
-            if (i + j) % 2 == 0 {
-                t.push([a, b, c]);
-                t.push([a, c, d]);
-            } else {
-                t.push([a, b, d]);
-                t.push([b, c, d]);
-            }
+            ];
+            push_quad(&mut t, quad, (i + j) % 2 == 0);
         }
     }
     for j in 0..nl {

@@ -9,10 +9,12 @@
 //! Defaults are the executable paper's: `k = 100` pairs, heat time `t = 0.5` (for the shape
 //! scaled to unit area, see [`super::AnalysisOptions::normalize`]), the bi-harmonic filter,
 //! the source or anchor at the vertex of largest x (lowest index on ties), 2 harmonic
-//! constraints (vertex of min x -> 0, of max x -> 1).
+//! constraints (vertex of min x -> 0, of max x -> 1), the heat method's time step
+//! `t = m h^2` with `m = 1` ([`DEFAULT_GEODESIC_TIME_FACTOR`]).
 
 use serde::{Deserialize, Serialize};
 
+use crate::geodesic::Convention;
 use crate::spectral::filters::Filter;
 
 mod constraints;
@@ -42,6 +44,9 @@ pub const DEFAULT_PERSISTENCE: f64 = 0.05;
 /// Default index of single eigenfunctions and embedding coordinates: the first pair after
 /// the constant one.
 pub const DEFAULT_COMPONENT: usize = 1;
+/// Default `m` of the heat method's time step `t = m h^2` (`h` the mean edge length;
+/// potpourri3d's `t_coef`): geodesic field requests and [`crate::geodesic::GeodesicParams`].
+pub const DEFAULT_GEODESIC_TIME_FACTOR: f64 = 1.0;
 /// Longest filter or signature text accepted (a bound on what a client can make us parse).
 pub const MAX_SPEC_LEN: usize = 1000;
 
@@ -62,6 +67,9 @@ fn default_persistence() -> f64 {
 }
 fn default_component() -> usize {
     DEFAULT_COMPONENT
+}
+fn default_geodesic_time_factor() -> f64 {
+    DEFAULT_GEODESIC_TIME_FACTOR
 }
 fn default_order() -> u32 {
     1
@@ -216,6 +224,24 @@ pub enum FieldRequest {
         #[serde(default = "default_k")]
         k: usize,
     },
+    /// Geodesic distance along the surface by the heat method ([`crate::geodesic`]), in
+    /// the mesh's units (never scaled to unit area), from `source` and every vertex of
+    /// `sources` (the distance to the nearest). No eigenbasis. Vertices the sources
+    /// cannot reach (other components) get `+inf`, listed in [`super::Field::unreachable`].
+    Geodesic {
+        /// Source vertex (default: the vertex of largest x, when `sources` is empty too).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        source: Option<usize>,
+        /// More source vertices (default none).
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        sources: Vec<usize>,
+        /// `m` in the time step `t = m h^2` (default 1), finite and `> 0`.
+        #[serde(default = "default_geodesic_time_factor")]
+        time_factor: f64,
+        /// The heat method's variant (default `crane`; `potpourri3d` to compare with it).
+        #[serde(default)]
+        convention: Convention,
+    },
 }
 
 impl Default for FieldRequest {
@@ -242,7 +268,7 @@ impl FieldRequest {
 }
 
 /// The names of the request kinds, as typed (`kind = "..."`).
-pub const KINDS: [&str; 12] = [
+pub const KINDS: [&str; 13] = [
     "harmonic",
     "heat",
     "diffusion",
@@ -255,6 +281,7 @@ pub const KINDS: [&str; 12] = [
     "embedding",
     "eigenfunction",
     "green",
+    "geodesic",
 ];
 
 impl FieldRequest {
@@ -273,14 +300,15 @@ impl FieldRequest {
             FieldRequest::Embedding { .. } => "embedding",
             FieldRequest::Eigenfunction { .. } => "eigenfunction",
             FieldRequest::Green { .. } => "green",
+            FieldRequest::Geodesic { .. } => "geodesic",
         }
     }
 
     /// The number of eigenpairs the request uses, `None` when it needs no eigenbasis (a
-    /// harmonic map, or a segmentation of a given field).
+    /// harmonic map, a geodesic distance, or a segmentation of a given field).
     pub fn eigenpairs(&self) -> Option<usize> {
         match self {
-            FieldRequest::Harmonic { .. } => None,
+            FieldRequest::Harmonic { .. } | FieldRequest::Geodesic { .. } => None,
             FieldRequest::Segmentation {
                 signature: SignatureSpec::Values(_),
                 ..
@@ -302,7 +330,7 @@ impl FieldRequest {
     /// Sets the number of eigenpairs (no effect on requests that need no basis).
     pub fn set_eigenpairs(&mut self, new_k: usize) {
         match self {
-            FieldRequest::Harmonic { .. } => {}
+            FieldRequest::Harmonic { .. } | FieldRequest::Geodesic { .. } => {}
             FieldRequest::Heat { k, .. }
             | FieldRequest::Diffusion { k, .. }
             | FieldRequest::Distance { k, .. }
@@ -317,10 +345,14 @@ impl FieldRequest {
         }
     }
 
-    /// The source or anchor vertex the request names, if it names one.
+    /// The source or anchor vertex the request names, if it names one (a geodesic
+    /// distance: `source`, else the first of `sources`).
     pub fn source(&self) -> Option<usize> {
         match self {
             FieldRequest::Heat { anchor, .. } => *anchor,
+            FieldRequest::Geodesic {
+                source, sources, ..
+            } => source.or_else(|| sources.first().copied()),
             FieldRequest::Distance { source, .. } | FieldRequest::Green { source, .. } => *source,
             _ => None,
         }
@@ -331,17 +363,21 @@ impl FieldRequest {
     pub fn uses_source(&self) -> bool {
         matches!(
             self,
-            FieldRequest::Heat { .. } | FieldRequest::Distance { .. } | FieldRequest::Green { .. }
+            FieldRequest::Heat { .. }
+                | FieldRequest::Distance { .. }
+                | FieldRequest::Green { .. }
+                | FieldRequest::Geodesic { .. }
         )
     }
 
-    /// Sets the source or anchor (no effect on requests without one).
+    /// Sets the source or anchor (no effect on requests without one; a geodesic
+    /// distance keeps its further `sources`).
     pub fn set_source(&mut self, v: Option<usize>) {
         match self {
             FieldRequest::Heat { anchor, .. } => *anchor = v,
-            FieldRequest::Distance { source, .. } | FieldRequest::Green { source, .. } => {
-                *source = v
-            }
+            FieldRequest::Distance { source, .. }
+            | FieldRequest::Green { source, .. }
+            | FieldRequest::Geodesic { source, .. } => *source = v,
             _ => {}
         }
     }

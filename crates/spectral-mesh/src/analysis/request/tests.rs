@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::fields::harmonic::Constraint;
+use crate::geodesic::Convention;
 
 fn json(v: &str) -> Result<FieldRequest, String> {
     serde_json::from_str(v).map_err(|e| e.to_string())
@@ -35,8 +36,10 @@ fn defaults_fill_every_missing_key() {
 fn unknown_keys_and_kinds_are_refused_by_name() {
     let e = json(r#"{"kind": "distance", "filter": "biharmonic"}"#).unwrap_err();
     assert!(e.contains("filter"), "{e}");
-    let e = json(r#"{"kind": "geodesic"}"#).unwrap_err();
-    assert!(e.contains("geodesic"), "{e}");
+    let e = json(r#"{"kind": "geodesics"}"#).unwrap_err();
+    assert!(e.contains("geodesics"), "{e}");
+    let e = json(r#"{"kind": "geodesic", "t": 1}"#).unwrap_err();
+    assert!(e.contains("`t`"), "{e}");
     let e = json(r#"{"kind": "distance", "distance": "diffusion:t=-1"}"#).unwrap_err();
     assert!(e.contains("t"), "{e}");
 }
@@ -125,7 +128,22 @@ fn every_kind_round_trips_through_json_and_toml() {
             filter: "band:1,2".parse().unwrap(),
             k: 10,
         },
+        FieldRequest::Geodesic {
+            source: Some(4),
+            sources: vec![9, 2],
+            time_factor: 2.5,
+            convention: Convention::Potpourri3d,
+        },
+        FieldRequest::Geodesic {
+            source: None,
+            sources: Vec::new(),
+            time_factor: DEFAULT_GEODESIC_TIME_FACTOR,
+            convention: Convention::Crane,
+        },
     ];
+    for k in KINDS {
+        assert!(reqs.iter().any(|r| r.kind() == k), "{k} is not tested");
+    }
     for r in reqs {
         r.validate().unwrap();
         let j = serde_json::to_string(&r).unwrap();
@@ -134,6 +152,36 @@ fn every_kind_round_trips_through_json_and_toml() {
         let back: FieldRequest = toml::from_str(&t).unwrap();
         assert_eq!(back, r, "{t}");
     }
+}
+
+#[test]
+fn a_geodesic_request_has_a_source_no_basis_and_the_library_defaults() {
+    let r = json(r#"{"kind": "geodesic"}"#).unwrap();
+    assert_eq!(
+        r,
+        FieldRequest::Geodesic {
+            source: None,
+            sources: Vec::new(),
+            time_factor: 1.0,
+            convention: Convention::Crane,
+        }
+    );
+    assert_eq!(
+        crate::geodesic::GeodesicParams::default().time_factor,
+        DEFAULT_GEODESIC_TIME_FACTOR
+    );
+    assert_eq!(r.eigenpairs(), None);
+    assert!(r.uses_source() && r.time().is_none());
+    let mut r =
+        json(r#"{"kind": "geodesic", "sources": [5, 1], "convention": "potpourri3d"}"#).unwrap();
+    assert_eq!(r.source(), Some(5));
+    r.set_source(Some(8));
+    assert_eq!(r.source(), Some(8));
+    assert!(matches!(&r, FieldRequest::Geodesic { sources, .. } if sources == &[5, 1]));
+    r.set_eigenpairs(3);
+    assert_eq!(r.eigenpairs(), None);
+    let e = json(r#"{"kind": "geodesic", "convention": "exact"}"#).unwrap_err();
+    assert!(e.contains("exact"), "{e}");
 }
 
 #[test]
@@ -158,6 +206,8 @@ fn validation_names_the_key() {
             r#"{"kind": "segmentation", "persistence": -1}"#,
             "persistence",
         ),
+        (r#"{"kind": "geodesic", "time_factor": 0}"#, "time_factor"),
+        (r#"{"kind": "geodesic", "time_factor": -2}"#, "time_factor"),
     ];
     for (text, key) in cases {
         let e = json(text).unwrap().validate().unwrap_err();

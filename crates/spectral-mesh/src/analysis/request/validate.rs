@@ -93,6 +93,16 @@ impl FieldRequest {
                 }
             }
             FieldRequest::Eigenfunction { .. } => {}
+            FieldRequest::Geodesic { time_factor, .. } => {
+                if !(time_factor.is_finite() && *time_factor > 0.0) {
+                    return Err(RequestError::Invalid {
+                        key: "time_factor",
+                        message: format!(
+                            "{time_factor}: m in the time step t = m h^2 must be a finite number > 0"
+                        ),
+                    });
+                }
+            }
         }
         if let FieldRequest::Embedding { component, k, .. }
         | FieldRequest::Eigenfunction {

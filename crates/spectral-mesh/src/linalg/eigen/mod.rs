@@ -170,24 +170,15 @@ pub fn sparse_generalized_eigen_with(
             )));
         }
         let bs = if opts.block_size > 0 {
-            opts.block_size
+            opts.block_size.min(dim)
         } else {
-            // Measured on a 38k-vertex mesh: 8 for k = 50, 16 for k = 200 (larger blocks
-            // need more solves, smaller ones give thin, slow matrix products).
-            (k / 12).clamp(8, 16)
-        }
-        .min(dim);
+            default_block_size(dim, k)
+        };
         let max_basis = if opts.max_basis > 0 {
-            opts.max_basis.max(k + 2 * bs)
+            opts.max_basis.max(k + 2 * bs).min(dim)
         } else {
-            // 2k up to k = 300, then k + 300: measured at k = 500 on 26k vertices, a
-            // basis of 750-850 needed fewer solves and less time than 1000 (6.5-6.8 s
-            // against 8.1 s) and less memory. At least k + 70: for k = 50 a basis of
-            // 120 took the same time as 150 (256 solves against 248, at 38k to 411k
-            // vertices) and 130 MiB less at 411k.
-            (2 * k).min(k + 300).max(k + 70).max(k + 4 * bs)
-        }
-        .min(dim);
+            columns_with_block(dim, k, bs)
+        };
         let pb = krylov_schur::Problem {
             s,
             b,
@@ -215,6 +206,7 @@ pub fn sparse_generalized_eigen_with(
             // temporaries of varying sizes raised the peak memory by 25-30 MiB on bunny00.
             lock: !opts.ks_plain && k >= 100,
             local: !opts.ks_plain,
+            early: true,
         };
         let mut rng = start_rng();
         let mut out = krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
@@ -272,6 +264,30 @@ fn indicators_only(
         progress,
         cancel,
     )
+}
+
+/// The block size of the sparse solver for `k` pairs of a problem of dimension `dim`
+/// (when the options leave it to the solver). Measured on a 38k-vertex mesh: 8 for
+/// k = 50, 16 for k = 200 (larger blocks need more solves, smaller ones give thin, slow
+/// matrix products).
+pub fn default_block_size(dim: usize, k: usize) -> usize {
+    (k / 12).clamp(8, 16).min(dim)
+}
+
+/// Columns of the sparse solver's search space for `k` pairs of a problem of dimension
+/// `dim` (when the options leave it to the solver): `min(2k, k + 300)`, at least `k + 70`
+/// and `k` plus four blocks, at most `dim`. 2k up to k = 300, then k + 300: measured at
+/// k = 500 on 26k vertices, a basis of 750-850 needed fewer solves and less time than
+/// 1000 (6.5-6.8 s against 8.1 s) and less memory. At least k + 70: for k = 50 a basis
+/// of 120 took the same time as 150 (256 solves against 248, at 38k to 411k vertices)
+/// and 130 MiB less at 411k. The web server's memory estimate reads the same rule.
+pub fn search_columns(dim: usize, k: usize) -> usize {
+    columns_with_block(dim, k, default_block_size(dim, k))
+}
+
+/// [`search_columns`] with blocks of `bs` columns.
+fn columns_with_block(dim: usize, k: usize, bs: usize) -> usize {
+    (2 * k).min(k + 300).max(k + 70).max(k + 4 * bs).min(dim)
 }
 
 #[cfg(test)]
@@ -448,6 +464,66 @@ pub(crate) mod tests {
         x[0] = 1.0;
         f.cholesky().solve_in_place(&mut x);
         assert!((x[0] - 1.0 / 0.098).abs() < 1e-12);
+    }
+
+    /// The tolerance is the target of the true relative residuals: every reported
+    /// residual is the one recomputed from the returned pair (`||S x - lambda B x|| /
+    /// ((||S||_1 + |lambda| ||B||_1) ||x||)`, not an estimate) and is below the tolerance,
+    /// and a looser tolerance takes fewer operator applications (solves counted); at
+    /// `1e-6` the eigenvalues stay within `1e-6 lambda_k` of the tight ones.
+    #[test]
+    fn a_looser_tolerance_takes_fewer_solves_and_reports_true_residuals() {
+        use crate::operators::{Laplacian, Operators};
+        let mesh = crate::shapes::build_str("irregular-double-torus:res=3").unwrap(); // 6564
+        let ops = Operators::new(&mesh, Laplacian::Fem);
+        let (s, b) = (&ops.stiffness, &ops.mass);
+        let k = 50;
+        let mut runs = Vec::new();
+        for tol in [1e-10, 1e-6, 1e-3] {
+            let opts = SparseEigenOptions {
+                k,
+                tolerance: tol,
+                ..Default::default()
+            };
+            let r = sparse_generalized_eigen(s, b, &opts, &mut |_| {}).unwrap();
+            let again = relative_residuals(s, b, &r.values, &r.vectors);
+            for (j, (&got, &want)) in r.residuals.iter().zip(&again).enumerate() {
+                assert!(
+                    (got - want).abs() <= 1e-6 * want + 1e-17,
+                    "tol {tol:e}, pair {j}: reported {got:e}, recomputed {want:e}"
+                );
+                assert!(got <= tol, "tol {tol:e}, pair {j}: residual {got:e}");
+            }
+            // The values are the Rayleigh quotients of the vectors.
+            let n = s.ncols();
+            for (j, &lam) in r.values.iter().enumerate() {
+                let x = &r.vectors[j * n..(j + 1) * n];
+                let sx = sym_spmm(s, x, 1);
+                let bx = sym_spmm(b, x, 1);
+                let num: f64 = x.iter().zip(&sx).map(|(a, c)| a * c).sum();
+                let den: f64 = x.iter().zip(&bx).map(|(a, c)| a * c).sum();
+                assert!((lam - num / den).abs() <= 1e-12 * r.values[k - 1]);
+            }
+            runs.push((tol, r));
+        }
+        let (_, tight) = &runs[0];
+        let lk = tight.values[k - 1];
+        for pair in runs.windows(2) {
+            let ((t0, a), (t1, c)) = (&pair[0], &pair[1]);
+            assert!(
+                c.solves < a.solves,
+                "tol {t1:e} took {} solves, tol {t0:e} {}",
+                c.solves,
+                a.solves
+            );
+        }
+        // At 1e-6 the eigenvalues stay within 1e-6 of lambda_k (measured: 2e-8 on 26k
+        // vertices); at 1e-3 a normwise backward error is loose enough for errors of about
+        // 1% near lambda_k (that run only shows the solves shrink further).
+        let (_, loose) = &runs[1];
+        for (j, (a, c)) in loose.values.iter().zip(&tight.values).enumerate() {
+            assert!((a - c).abs() <= 1e-6 * lk, "lambda_{j}: {a} vs {c}");
+        }
     }
 
     /// A token set before the solve stops it before the factorization; one set from

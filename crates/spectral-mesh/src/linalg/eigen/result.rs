@@ -36,7 +36,11 @@ pub(super) fn package(
     progress: &mut dyn FnMut(EigenProgress),
     cancel: &CancelToken,
 ) -> Result<PartialEigen, SparseEigenError> {
-    let orthogonality_error = b_orthogonality_error_cancellable(b, &vectors, values.len(), cancel)?;
+    let orthogonality_error =
+        crate::linalg::timing::timed(crate::linalg::timing::Phase::Check, || {
+            b_orthogonality_error_cancellable(b, &vectors, values.len(), cancel)
+        })?;
+    crate::linalg::timing::report(iterations, solves);
     let max_residual = residuals.iter().cloned().fold(0.0, f64::max);
     progress(EigenProgress::Finished {
         iterations,

@@ -114,13 +114,20 @@ impl ShiftInvert {
         for _ in 0..ATTEMPTS {
             progress(EigenProgress::Factorization { n, shift });
             let kmat = s.add_scaled(1.0, b, -shift);
-            let attempt = timed(Phase::Factor, || {
-                let a = match &analysis {
-                    Some(a) => a,
-                    None => analysis.insert(CholeskyAnalysis::new(&kmat)?),
-                };
-                a.factor(&kmat)
-            });
+            if analysis.is_none() {
+                match timed(Phase::Ordering, || CholeskyAnalysis::new(&kmat)) {
+                    Ok(a) => analysis = Some(a),
+                    Err(e) => {
+                        last_err = e.to_string();
+                        shift *= 100.0;
+                        continue;
+                    }
+                }
+            }
+            let attempt = match &analysis {
+                Some(a) => timed(Phase::Factor, || a.factor(&kmat)),
+                None => continue,
+            };
             match attempt {
                 Ok(chol) => return Ok(Self { chol, shift }),
                 Err(e) => {

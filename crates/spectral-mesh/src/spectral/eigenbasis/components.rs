@@ -4,8 +4,8 @@
 use super::params::{
     DENSE_MAX_N, DENSE_MAX_N_LARGE_K, EigenError, EigenMethod, EigenParams, sparse_options,
 };
+use super::pencil::dense_pairs;
 use super::pencil::{Factors, check_cancel};
-use super::solve::dense_pairs;
 use crate::cancel::CancelToken;
 use crate::linalg::{
     ComponentNullSpace, EigenProgress, ShiftInvert, SparseEigenOptions, SparseMatrix,

@@ -30,7 +30,9 @@ mod solver;
 pub use crate::linalg::EigenProgress;
 pub use basis::{BasisView, Eigenbasis};
 pub use certify::{CertifyReport, certify_eigenbasis};
-pub use params::{DENSE_MAX_N, DENSE_MAX_N_LARGE_K, EigenError, EigenMethod, EigenParams};
+pub use params::{
+    DENSE_MAX_N, DENSE_MAX_N_LARGE_K, EigenError, EigenMethod, EigenParams, takes_dense_path,
+};
 pub use solve::compute_eigenbasis;
 pub use solver::EigenSolver;
 

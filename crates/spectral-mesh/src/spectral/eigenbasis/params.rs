@@ -118,6 +118,18 @@ pub const DENSE_MAX_N: usize = 300;
 /// than a third of `n`.
 pub const DENSE_MAX_N_LARGE_K: usize = 1500;
 
+/// True when `method` takes the dense path for `k` pairs of a problem of `n` (free)
+/// vertices: always for [`EigenMethod::Dense`], never for
+/// [`EigenMethod::ShiftInvertBlock`], and under [`EigenMethod::Auto`] when
+/// `n <= DENSE_MAX_N`, or `3k > n` and `n <= DENSE_MAX_N_LARGE_K`.
+pub fn takes_dense_path(n: usize, k: usize, method: EigenMethod) -> bool {
+    match method {
+        EigenMethod::Dense => true,
+        EigenMethod::ShiftInvertBlock => false,
+        EigenMethod::Auto => n <= DENSE_MAX_N || (3 * k > n && n <= DENSE_MAX_N_LARGE_K),
+    }
+}
+
 /// The options of the sparse solver for `params`.
 pub(super) fn sparse_options(params: &EigenParams) -> SparseEigenOptions {
     SparseEigenOptions {

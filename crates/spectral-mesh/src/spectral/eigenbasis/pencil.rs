@@ -4,9 +4,9 @@
 
 use std::borrow::Cow;
 
-use super::params::{DENSE_MAX_N, DENSE_MAX_N_LARGE_K, EigenError, EigenMethod};
+use super::params::{EigenError, EigenMethod, takes_dense_path};
 use crate::cancel::CancelToken;
-use crate::linalg::{ShiftInvert, SparseMatrix};
+use crate::linalg::{ComponentNullSpace, ShiftInvert, SparseMatrix, dense_generalized_eigen};
 use crate::operators::Operators;
 
 /// The pencil a solve works on: `(S, B)` of the operators, or their block on the free
@@ -60,12 +60,7 @@ impl<'a> Pencil<'a> {
 
     /// True when `method` takes the dense path for `k` pairs of this pencil.
     pub(super) fn uses_dense(&self, method: EigenMethod, k: usize) -> bool {
-        let nf = self.nf();
-        match method {
-            EigenMethod::Dense => true,
-            EigenMethod::ShiftInvertBlock => false,
-            EigenMethod::Auto => nf <= DENSE_MAX_N || (3 * k > nf && nf <= DENSE_MAX_N_LARGE_K),
-        }
+        takes_dense_path(self.nf(), k, method)
     }
 }
 
@@ -85,4 +80,32 @@ pub(super) fn check_cancel(cancel: &CancelToken) -> Result<(), EigenError> {
     } else {
         Ok(())
     }
+}
+
+/// The first `k` pairs of `(S, B)` by the dense solver (all `n` computed), with the null
+/// space given by the component indicators and eigenvalue 0, as on the sparse path
+/// (unless `S` has more null vectors than indicators: then the dense basis of the zero
+/// cluster is kept).
+pub(super) fn dense_pairs(
+    s: &SparseMatrix,
+    b: &SparseMatrix,
+    k: usize,
+    tol: f64,
+) -> Result<(Vec<f64>, Vec<f64>), EigenError> {
+    let nf = s.ncols();
+    let (vals, vecs) =
+        dense_generalized_eigen(s, b).map_err(|e| EigenError::Numerical(e.to_string()))?;
+    let mut values = vals[..k].to_vec();
+    let mut vecs = vecs[..nf * k].to_vec();
+    let null = ComponentNullSpace::find(s, b, tol)?;
+    let c = null.count().min(k);
+    let lmax = vals.last().map_or(0.0, |v| v.abs());
+    if c > 0 && (null.count() == nf || vals[null.count()] > 1e-8 * lmax) {
+        for (i, col) in vecs.chunks_mut(nf).take(c).enumerate() {
+            col.iter_mut().for_each(|x| *x = 0.0);
+            null.write_indicator(i, col);
+            values[i] = 0.0;
+        }
+    }
+    Ok((values, vecs))
 }

@@ -4,12 +4,11 @@
 use super::basis::Eigenbasis;
 use super::components::solve_split;
 use super::params::{EigenError, EigenMethod, EigenParams, sparse_options};
-use super::pencil::{Factors, Pencil, check_cancel};
+use super::pencil::{Factors, Pencil, check_cancel, dense_pairs};
 use crate::cancel::CancelToken;
 use crate::linalg::{
-    ComponentNullSpace, EigenProgress, ShiftInvert, SparseMatrix, b_orthogonality_error,
-    connected_components, dense_generalized_eigen, relative_residuals,
-    sparse_generalized_eigen_with,
+    ComponentNullSpace, EigenProgress, ShiftInvert, b_orthogonality_error, connected_components,
+    relative_residuals, sparse_generalized_eigen_with,
 };
 use crate::operators::Operators;
 
@@ -141,34 +140,6 @@ pub(super) fn solve_pencil(
     };
     basis.fix_signs();
     Ok(basis)
-}
-
-/// The first `k` pairs of `(S, B)` by the dense solver (all `n` computed), with the null
-/// space given by the component indicators and eigenvalue 0, as on the sparse path
-/// (unless `S` has more null vectors than indicators: then the dense basis of the zero
-/// cluster is kept).
-pub(super) fn dense_pairs(
-    s: &SparseMatrix,
-    b: &SparseMatrix,
-    k: usize,
-    tol: f64,
-) -> Result<(Vec<f64>, Vec<f64>), EigenError> {
-    let nf = s.ncols();
-    let (vals, vecs) =
-        dense_generalized_eigen(s, b).map_err(|e| EigenError::Numerical(e.to_string()))?;
-    let mut values = vals[..k].to_vec();
-    let mut vecs = vecs[..nf * k].to_vec();
-    let null = ComponentNullSpace::find(s, b, tol)?;
-    let c = null.count().min(k);
-    let lmax = vals.last().map_or(0.0, |v| v.abs());
-    if c > 0 && (null.count() == nf || vals[null.count()] > 1e-8 * lmax) {
-        for (i, col) in vecs.chunks_mut(nf).take(c).enumerate() {
-            col.iter_mut().for_each(|x| *x = 0.0);
-            null.write_indicator(i, col);
-            values[i] = 0.0;
-        }
-    }
-    Ok((values, vecs))
 }
 
 impl Eigenbasis {

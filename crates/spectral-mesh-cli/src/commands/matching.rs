@@ -1,0 +1,288 @@
+//! `spectral-mesh match SOURCE TARGET -k 30 --zoomout 100 -o map.txt`: a point-to-point
+//! map from SOURCE to TARGET through the functional map of the two eigenbases (the
+//! library's `correspondence` module: descriptors, the exact functional map, ZoomOut).
+//!
+//! In the library's terms the TARGET is shape 1 and the SOURCE shape 2: the map written
+//! is `p2p_21` (for each source vertex a target vertex) and the functional map `C`
+//! (`k_source x k_target`) carries functions on the target to functions on the source
+//! (the pull-back by the map).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use spectral_mesh::analysis::{Analysis, AnalysisOptions};
+use spectral_mesh::correspondence::descriptors::{
+    DEFAULT_DESCRIPTOR_COUNT, DEFAULT_SUBSAMPLE_STEP, DescriptorKind,
+};
+use spectral_mesh::correspondence::energy::{
+    DEFAULT_W_COMMUTATIVITY, DEFAULT_W_DESCRIPTORS, DEFAULT_W_LAPLACIAN, DEFAULT_W_ORIENTATION,
+};
+use spectral_mesh::correspondence::{
+    DEFAULT_K, DEFAULT_ZOOMOUT_K, DEFAULT_ZOOMOUT_STEP, DescriptorParams, FmapWeights, MatchParams,
+    cumulative_curve, default_thresholds, fmap_to_p2p_12, geodesic_errors, match_shapes,
+    parse_point_map,
+};
+use spectral_mesh::geodesic::{GeodesicParams, GeodesicSolver};
+use spectral_mesh::spectral::eigenbasis::EigenParams;
+use spectral_mesh::spectral::store::npy_f64;
+use spectral_mesh::{Laplacian, Mesh};
+use spectral_mesh_render::pair::render_pair;
+use spectral_mesh_render::raster::RenderOptions;
+
+use crate::engine::{self, resolve_laplacian};
+use crate::input;
+use crate::output::{check_writable, write};
+
+/// Arguments of `match`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The mesh whose vertices are mapped (file or built-in shape).
+    pub source: String,
+    /// The mesh they are mapped onto.
+    pub target: String,
+    /// Size of both bases of the first functional map.
+    #[arg(long, short = 'k', default_value_t = DEFAULT_K)]
+    pub k: usize,
+    /// ZoomOut: refine up to this basis size (0 or <= k: no refinement).
+    #[arg(long, default_value_t = DEFAULT_ZOOMOUT_K)]
+    pub zoomout: usize,
+    /// ZoomOut step.
+    #[arg(long, default_value_t = DEFAULT_ZOOMOUT_STEP)]
+    pub step: usize,
+    /// Descriptor: wks or hks.
+    #[arg(long, default_value_t = DescriptorKind::default())]
+    pub descriptor: DescriptorKind,
+    /// Number of descriptor energies (times).
+    #[arg(long, default_value_t = DEFAULT_DESCRIPTOR_COUNT)]
+    pub descriptors: usize,
+    /// Keep every n-th descriptor.
+    #[arg(long, default_value_t = DEFAULT_SUBSAMPLE_STEP)]
+    pub subsample: usize,
+    /// Weight of descriptor preservation.
+    #[arg(long, default_value_t = DEFAULT_W_DESCRIPTORS)]
+    pub w_descr: f64,
+    /// Weight of Laplacian commutativity.
+    #[arg(long, default_value_t = DEFAULT_W_LAPLACIAN)]
+    pub w_lap: f64,
+    /// Weight of descriptor commutativity.
+    #[arg(long, default_value_t = DEFAULT_W_COMMUTATIVITY)]
+    pub w_dcomm: f64,
+    /// Weight of the orientation term (relative to the rest at the identity).
+    #[arg(long, default_value_t = DEFAULT_W_ORIENTATION)]
+    pub w_orient: f64,
+    /// Use the orientation-reversing term (for a mirrored target).
+    #[arg(long)]
+    pub orient_reversing: bool,
+    /// Landmarks: a text file of lines `SOURCE_VERTEX TARGET_VERTEX` (0-based).
+    #[arg(long)]
+    pub landmarks: Option<PathBuf>,
+    /// Discretization (default: fem).
+    #[arg(long)]
+    pub laplacian: Option<Laplacian>,
+    /// Use the shapes as given instead of scaled to unit area.
+    #[arg(long)]
+    pub no_normalize: bool,
+    /// Keep computed bases in this folder and reuse them.
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
+    /// The map: one target vertex per source vertex, 0-based, one per line.
+    #[arg(long, short = 'o')]
+    pub out: Option<PathBuf>,
+    /// The refined functional map as .npy (k_source x k_target, float64).
+    #[arg(long)]
+    pub fmap: Option<PathBuf>,
+    /// The first functional map (before ZoomOut) as .npy (k x k, float64).
+    #[arg(long)]
+    pub initial_fmap: Option<PathBuf>,
+    /// A picture (.png): both shapes side by side, the source coloured by its
+    /// coordinates, the target by the colours the map carries to it.
+    #[arg(long)]
+    pub picture: Option<PathBuf>,
+    /// A true map (same format as -o): prints the mean geodesic error on the target in
+    /// units of sqrt(area) and the cumulative curve.
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+    /// Overwrite existing outputs.
+    #[arg(long, short = 'f')]
+    pub force: bool,
+}
+
+fn load_mesh(spec: &str) -> Result<Mesh> {
+    let (mesh, _) = input::load(Some(spec))?.into_mesh("match")?;
+    Ok(mesh)
+}
+
+/// Computes the map and writes it.
+pub fn run(args: Args) -> Result<()> {
+    let t0 = Instant::now();
+    if args.out.is_none() && args.fmap.is_none() && args.picture.is_none() && args.truth.is_none() {
+        bail!("nothing to do: give -o MAP.txt, --fmap C.npy, --picture P.png or --truth MAP.txt");
+    }
+    for p in [&args.out, &args.fmap, &args.initial_fmap, &args.picture]
+        .into_iter()
+        .flatten()
+    {
+        check_writable(p, args.force)?;
+    }
+    let params = MatchParams {
+        k: args.k,
+        zoomout_k: args.zoomout,
+        zoomout_step: args.step,
+        descriptors: DescriptorParams {
+            kind: args.descriptor,
+            count: args.descriptors,
+            subsample_step: args.subsample,
+        },
+        weights: FmapWeights {
+            descriptors: args.w_descr,
+            laplacian: args.w_lap,
+            commutativity: args.w_dcomm,
+            orientation: args.w_orient,
+            orientation_reversing: args.orient_reversing,
+            ..FmapWeights::default()
+        },
+    };
+    params.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let source = load_mesh(&args.source)?;
+    let target = load_mesh(&args.target)?;
+    let kb = params.basis_size();
+    for (name, m) in [(&args.source, &source), (&args.target, &target)] {
+        if kb > m.n_vertices() {
+            bail!(
+                "{name}: {kb} eigenpairs are needed (max of -k and --zoomout), the mesh has {} vertices",
+                m.n_vertices()
+            );
+        }
+    }
+    let landmarks: Vec<(usize, usize)> = match &args.landmarks {
+        None => Vec::new(),
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("{}: cannot read", p.display()))?;
+            // Lines "source target": shape 1 is the target.
+            spectral_mesh::correspondence::parse_landmarks(
+                &text,
+                &p.display().to_string(),
+                source.n_vertices(),
+                target.n_vertices(),
+            )?
+            .into_iter()
+            .map(|(s, t)| (t, s))
+            .collect()
+        }
+    };
+    let truth = match &args.truth {
+        None => None,
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("{}: cannot read", p.display()))?;
+            Some(parse_point_map(
+                &text,
+                &p.display().to_string(),
+                source.n_vertices(),
+                target.n_vertices(),
+            )?)
+        }
+    };
+    let analysis = |mesh: Mesh| -> Result<Analysis> {
+        let input = spectral_mesh::analysis::AnalysisInput::Mesh(mesh);
+        let options = AnalysisOptions {
+            laplacian: resolve_laplacian(args.laplacian, &input)?,
+            normalize: !args.no_normalize,
+            eigen: EigenParams::default(),
+        };
+        Ok(Analysis::from_input(input, options)?)
+    };
+    let an_target = analysis(target)?;
+    let an_source = analysis(source)?;
+    let b_target = engine::basis(&an_target, kb, args.cache.as_deref())?;
+    let b_source = engine::basis(&an_source, kb, args.cache.as_deref())?;
+    let (v1, v2) = (b_target.basis.view(kb), b_source.basis.view(kb));
+    let t1 = Instant::now();
+    let res = match_shapes(
+        an_target.mesh(),
+        v1,
+        an_source.mesh(),
+        v2,
+        &landmarks,
+        &params,
+    )
+    .map_err(|e| anyhow::anyhow!("{e}"))?;
+    println!(
+        "{} ({} vertices) -> {} ({} vertices): k = {}, ZoomOut to {}; eigenpairs in {:.2} s + {:.2} s, map in {:.2} s (energy {:.4e})",
+        args.source,
+        an_source.n(),
+        args.target,
+        an_target.n(),
+        params.k,
+        res.refined.k1,
+        b_target.seconds,
+        b_source.seconds,
+        t1.elapsed().as_secs_f64(),
+        res.energy
+    );
+    if let Some(o) = &args.out {
+        let mut s = String::with_capacity(res.p2p_21.len() * 7);
+        for v in &res.p2p_21 {
+            s.push_str(&v.to_string());
+            s.push('\n');
+        }
+        write(o, s.as_bytes())?;
+        println!("map ({} lines) -> {}", res.p2p_21.len(), o.display());
+    }
+    for (o, c) in [
+        (&args.fmap, &res.refined),
+        (&args.initial_fmap, &res.initial),
+    ] {
+        if let Some(o) = o {
+            let bytes = npy_f64(&c.row_major(), &[c.k2 as u64, c.k1 as u64], false)?;
+            write(o, &bytes)?;
+            println!("functional map ({} x {}) -> {}", c.k2, c.k1, o.display());
+        }
+    }
+    if let Some(o) = &args.picture {
+        // For each target vertex a source vertex, to carry the source's colours.
+        let back = fmap_to_p2p_12(&res.refined, v1, v2).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let img = render_pair(
+            an_source.mesh(),
+            an_target.mesh(),
+            &back,
+            &RenderOptions::default(),
+        )?;
+        write(o, &img.png_bytes()?)?;
+        println!("picture -> {}", o.display());
+    }
+    if let Some(gt) = &truth {
+        let solver = GeodesicSolver::new(
+            an_target.mesh(),
+            an_target.options().laplacian,
+            &GeodesicParams::default(),
+        )
+        .map_err(|e| anyhow::anyhow!("geodesics on the target: {e}"))?;
+        let e = geodesic_errors(&solver, &res.p2p_21, gt, an_target.mesh().area(), None)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let th = default_thresholds();
+        let curve = cumulative_curve(&e.errors, &th);
+        let exact = e.errors.iter().filter(|&&x| x == 0.0).count();
+        println!(
+            "against {}: mean geodesic error {:.4e} sqrt(area) over {} vertices ({} exact, {} geodesic solves)",
+            args.truth
+                .as_ref()
+                .map_or(String::new(), |p| p.display().to_string()),
+            e.mean,
+            e.errors.len(),
+            exact,
+            e.sources
+        );
+        let at = |t: f64| th.iter().position(|&x| x >= t).map_or(1.0, |i| curve[i]);
+        println!(
+            "cumulative: {:.1}% within 0.01, {:.1}% within 0.05, {:.1}% within 0.1 sqrt(area)",
+            100.0 * at(0.01),
+            100.0 * at(0.05),
+            100.0 * at(0.1)
+        );
+    }
+    println!("done in {:.2} s", t0.elapsed().as_secs_f64());
+    Ok(())
+}

@@ -1,0 +1,230 @@
+//! Shape correspondence (the library's `correspondence` module): the functional map of two
+//! eigenbases, ZoomOut, point maps. Bases come in as eigenvalues and the `(k, n)`
+//! transpose of the eigenvectors, with the mesh whose mass matrix (of `kind`) they are
+//! orthonormal in.
+
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use spectral_mesh::correspondence::{
+    CorrespondenceError, FunctionalMap, MatchParams, fmap_to_p2p, fmap_to_p2p_12, match_shapes,
+    zoomout,
+};
+use spectral_mesh::spectral::BasisView;
+use spectral_mesh::{Mesh, Operators, SparseMatrix};
+
+use crate::arrays::{columns, mesh_from, to_rows, to_vector, values};
+use crate::errors::Failure;
+use crate::laplacian_of;
+use crate::run::run;
+
+impl From<CorrespondenceError> for Failure {
+    fn from(e: CorrespondenceError) -> Self {
+        match e {
+            CorrespondenceError::Singular => Failure::Solver(e.to_string()),
+            _ => Failure::Value(e.to_string()),
+        }
+    }
+}
+
+/// One shape: mesh, mass, eigenpairs (`n x k` column-major vectors).
+struct Shape {
+    mesh: Mesh,
+    mass: SparseMatrix,
+    values: Vec<f64>,
+    vectors: Vec<f64>,
+}
+
+impl Shape {
+    fn view(&self) -> BasisView<'_> {
+        BasisView {
+            laplacian: spectral_mesh::Laplacian::Fem,
+            n: self.mesh.n_vertices(),
+            values: &self.values,
+            vectors: &self.vectors,
+            mass: &self.mass,
+        }
+    }
+}
+
+fn shape(
+    v: &PyReadonlyArray2<'_, f64>,
+    f: &PyReadonlyArray2<'_, i64>,
+    evals: Option<&PyReadonlyArray1<'_, f64>>,
+    evecs_t: &PyReadonlyArray2<'_, f64>,
+    kind: &str,
+    which: usize,
+) -> Result<Shape, Failure> {
+    let mesh = mesh_from(v, f)?;
+    let (n, k, vectors) = columns(evecs_t, &format!("evecs{which}"))?;
+    if n != mesh.n_vertices() {
+        return Err(Failure::value(format!(
+            "evecs{which} has {n} rows but V{which} has {} vertices",
+            mesh.n_vertices()
+        )));
+    }
+    let values = match evals {
+        Some(e) => values(e, &format!("evals{which}"))?,
+        None => vec![0.0; k],
+    };
+    if values.len() != k {
+        return Err(Failure::value(format!(
+            "evals{which} has {} values but evecs{which} has {k} columns",
+            values.len()
+        )));
+    }
+    let lap = laplacian_of(kind)?;
+    let mass = Operators::new(&mesh, lap).mass;
+    Ok(Shape {
+        mesh,
+        mass,
+        values,
+        vectors,
+    })
+}
+
+fn fmap_from(c: &PyReadonlyArray2<'_, f64>) -> Result<FunctionalMap, Failure> {
+    // C arrives as its C-contiguous transpose (k1, k2): column-major k2 x k1.
+    let (k2, k1, data) = columns(c, "C")?;
+    Ok(FunctionalMap { k1, k2, c: data })
+}
+
+fn params_from(json: &str) -> Result<MatchParams, Failure> {
+    serde_json::from_str(json).map_err(|e| Failure::value(format!("parameters: {e}")))
+}
+
+/// The library's defaults of the correspondence functions, as JSON.
+#[pyfunction]
+pub fn correspondence_defaults() -> PyResult<String> {
+    serde_json::to_string(&MatchParams::default())
+        .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
+}
+
+/// The functional map `C` (`(k2, k1)`) of the energy and its value.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (v1, f1, evals1, evecs1_t, v2, f2, evals2, evecs2_t, kind, params, landmarks))]
+pub fn functional_map<'py>(
+    py: Python<'py>,
+    v1: PyReadonlyArray2<'_, f64>,
+    f1: PyReadonlyArray2<'_, i64>,
+    evals1: PyReadonlyArray1<'_, f64>,
+    evecs1_t: PyReadonlyArray2<'_, f64>,
+    v2: PyReadonlyArray2<'_, f64>,
+    f2: PyReadonlyArray2<'_, i64>,
+    evals2: PyReadonlyArray1<'_, f64>,
+    evecs2_t: PyReadonlyArray2<'_, f64>,
+    kind: &str,
+    params: &str,
+    landmarks: Vec<(usize, usize)>,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, f64)> {
+    let prep = || -> Result<(Shape, Shape, MatchParams), Failure> {
+        let s1 = shape(&v1, &f1, Some(&evals1), &evecs1_t, kind, 1)?;
+        let s2 = shape(&v2, &f2, Some(&evals2), &evecs2_t, kind, 2)?;
+        let mut p = params_from(params)?;
+        p.zoomout_k = 0;
+        Ok((s1, s2, p))
+    };
+    let (s1, s2, p) = prep().map_err(|e| e.into_pyerr(py))?;
+    let (c, energy) = run(py, move |_| {
+        let k = p.k;
+        let res = match_shapes(
+            &s1.mesh,
+            truncated(s1.view(), k),
+            &s2.mesh,
+            truncated(s2.view(), k),
+            &landmarks,
+            &p,
+        )?;
+        Ok((res.initial, res.energy))
+    })?;
+    Ok((to_rows(py, c.k2, c.k1, c.row_major())?, energy))
+}
+
+fn truncated(b: BasisView<'_>, k: usize) -> BasisView<'_> {
+    let k = k.min(b.k());
+    BasisView {
+        values: &b.values[..k],
+        vectors: &b.vectors[..k * b.n],
+        ..b
+    }
+}
+
+/// A refined map and its point map.
+type Refined<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<usize>>);
+
+/// ZoomOut from `C` to `k_final`: the refined map and `p2p_21`.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (v1, f1, evecs1_t, v2, f2, evecs2_t, kind, c, k_final, step))]
+pub fn zoomout_refine<'py>(
+    py: Python<'py>,
+    v1: PyReadonlyArray2<'_, f64>,
+    f1: PyReadonlyArray2<'_, i64>,
+    evecs1_t: PyReadonlyArray2<'_, f64>,
+    v2: PyReadonlyArray2<'_, f64>,
+    f2: PyReadonlyArray2<'_, i64>,
+    evecs2_t: PyReadonlyArray2<'_, f64>,
+    kind: &str,
+    c: PyReadonlyArray2<'_, f64>,
+    k_final: usize,
+    step: usize,
+) -> PyResult<Refined<'py>> {
+    let prep = || -> Result<(Shape, Shape, FunctionalMap), Failure> {
+        Ok((
+            shape(&v1, &f1, None, &evecs1_t, kind, 1)?,
+            shape(&v2, &f2, None, &evecs2_t, kind, 2)?,
+            fmap_from(&c)?,
+        ))
+    };
+    let (s1, s2, c) = prep().map_err(|e| e.into_pyerr(py))?;
+    let (refined, p2p) = run(py, move |_| {
+        Ok(zoomout(&c, s1.view(), s2.view(), k_final, step)?)
+    })?;
+    Ok((
+        to_rows(py, refined.k2, refined.k1, refined.row_major())?,
+        to_vector(py, p2p),
+    ))
+}
+
+/// The point map of `C`: `p2p_21` (or `p2p_12` with `to_second`).
+#[pyfunction]
+#[pyo3(signature = (c, evecs1_t, evecs2_t, adjoint, to_second))]
+pub fn point_map<'py>(
+    py: Python<'py>,
+    c: PyReadonlyArray2<'_, f64>,
+    evecs1_t: PyReadonlyArray2<'_, f64>,
+    evecs2_t: PyReadonlyArray2<'_, f64>,
+    adjoint: bool,
+    to_second: bool,
+) -> PyResult<Bound<'py, PyArray1<usize>>> {
+    let prep = || -> Result<_, Failure> {
+        let (n1, k1, x1) = columns(&evecs1_t, "evecs1")?;
+        let (n2, k2, x2) = columns(&evecs2_t, "evecs2")?;
+        Ok((fmap_from(&c)?, n1, k1, x1, n2, k2, x2))
+    };
+    let (c, n1, k1, x1, n2, k2, x2) = prep().map_err(|e| e.into_pyerr(py))?;
+    let p2p = run(py, move |_| {
+        // No mass is needed: nearest neighbours of the embeddings only.
+        let m1 = SparseMatrix::identity(0);
+        let (e1, e2) = (vec![0.0; k1], vec![0.0; k2]);
+        let b1 = BasisView {
+            laplacian: spectral_mesh::Laplacian::Fem,
+            n: n1,
+            values: &e1,
+            vectors: &x1,
+            mass: &m1,
+        };
+        let b2 = BasisView {
+            n: n2,
+            values: &e2,
+            vectors: &x2,
+            ..b1
+        };
+        Ok(if to_second {
+            fmap_to_p2p_12(&c, b1, b2)?
+        } else {
+            fmap_to_p2p(&c, b1, b2, adjoint)?
+        })
+    })?;
+    Ok(to_vector(py, p2p))
+}

@@ -1,0 +1,358 @@
+//! Shape correspondence: the exact functional map, point maps, ZoomOut and the geodesic
+//! evaluation on pairs with a known correspondence made here: a shape and a copy with
+//! shuffled vertices (asymmetric, and mirror-symmetric with the orientation term), the
+//! same surface at two resolutions, a shared mesh and its midpoint subdivision, and a
+//! near-isometric bend.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use spectral_mesh::correspondence::{
+    DescriptorParams, FmapProblem, FmapWeights, FunctionalMap, MatchParams, MatchShape,
+    cumulative_curve, default_thresholds, descriptors, fmap_to_p2p, fmap_to_p2p_12,
+    geodesic_errors, match_shapes, p2p_to_fmap, transfer, transfer_spectral,
+};
+use spectral_mesh::geodesic::{GeodesicParams, GeodesicSolver};
+use spectral_mesh::mesh::Mesh;
+use spectral_mesh::spectral::eigenbasis::{EigenParams, compute_eigenbasis};
+use spectral_mesh::{Eigenbasis, Laplacian, Operators};
+
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> u64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        self.0 >> 33
+    }
+    fn unit(&mut self) -> f64 {
+        self.next() as f64 / (1u64 << 31) as f64
+    }
+}
+
+fn basis(mesh: &Mesh, k: usize) -> Eigenbasis {
+    let ops = Operators::new(mesh, Laplacian::Fem);
+    compute_eigenbasis(
+        &ops,
+        &EigenParams {
+            k,
+            ..EigenParams::default()
+        },
+        &mut |_| {},
+    )
+    .unwrap()
+}
+
+/// An icosphere deformed without any symmetry.
+fn blob(res: u32) -> Mesh {
+    let s = spectral_mesh::shapes::build_str(&format!("sphere:res={res}")).unwrap();
+    s.map_positions(|[x, y, z]| {
+        [
+            1.6 * x + 0.35 * x * x + 0.2 * y,
+            0.9 * y + 0.25 * z * z,
+            0.7 * z + 0.3 * x * y + 0.15 * z * z * z,
+        ]
+    })
+    .unwrap()
+}
+
+/// An icosphere deformed with the one mirror symmetry x -> -x.
+fn mirror_blob(res: u32) -> Mesh {
+    let s = spectral_mesh::shapes::build_str(&format!("sphere:res={res}")).unwrap();
+    s.map_positions(|[x, y, z]| {
+        [
+            1.3 * x + 0.3 * x * x * x,
+            1.8 * y + 0.4 * y * y,
+            0.8 * z + 0.35 * y * z + 0.2 * x * x,
+        ]
+    })
+    .unwrap()
+}
+
+/// The mesh with its vertices renumbered: vertex `i` of the copy is vertex `perm[i]` of
+/// `mesh` (so `perm` is the true `p2p_21` from the copy to `mesh`).
+fn shuffled(mesh: &Mesh, seed: u64) -> (Mesh, Vec<usize>) {
+    let n = mesh.n_vertices();
+    let mut perm: Vec<usize> = (0..n).collect();
+    let mut rng = Lcg(seed);
+    for i in (1..n).rev() {
+        let j = (rng.next() as usize) % (i + 1);
+        perm.swap(i, j);
+    }
+    let mut inv = vec![0; n];
+    for (i, &p) in perm.iter().enumerate() {
+        inv[p] = i;
+    }
+    let pos: Vec<[f64; 3]> = perm.iter().map(|&p| mesh.positions()[p]).collect();
+    let tris: Vec<[usize; 3]> = mesh.triangles().iter().map(|t| t.map(|v| inv[v])).collect();
+    (Mesh::new(pos, tris).unwrap(), perm)
+}
+
+/// For each vertex of `b`, the nearest vertex of `a` in space.
+fn nearest_in_space(a: &Mesh, b: &Mesh) -> Vec<usize> {
+    b.positions()
+        .iter()
+        .map(|p| {
+            let mut best = (f64::INFINITY, 0);
+            for (i, q) in a.positions().iter().enumerate() {
+                let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
+                if d < best.0 {
+                    best = (d, i);
+                }
+            }
+            best.1
+        })
+        .collect()
+}
+
+/// 1-to-4 midpoint subdivision (old vertices keep their indices).
+fn subdivide(mesh: &Mesh) -> Mesh {
+    let mut pos = mesh.positions().to_vec();
+    let mut mid = std::collections::HashMap::new();
+    let mut tris = Vec::new();
+    let mut midpoint = |a: usize, b: usize, pos: &mut Vec<[f64; 3]>| -> usize {
+        *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+            let (p, q) = (pos[a], pos[b]);
+            pos.push([
+                0.5 * (p[0] + q[0]),
+                0.5 * (p[1] + q[1]),
+                0.5 * (p[2] + q[2]),
+            ]);
+            pos.len() - 1
+        })
+    };
+    for &[a, b, c] in mesh.triangles() {
+        let ab = midpoint(a, b, &mut pos);
+        let bc = midpoint(b, c, &mut pos);
+        let ca = midpoint(c, a, &mut pos);
+        tris.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+    }
+    Mesh::new(pos, tris).unwrap()
+}
+
+/// Runs the pipeline (shape 1 = `m1`, shape 2 = `m2`) and returns the mean geodesic error
+/// of `p2p_21` against `gt_21`, in units of `sqrt(area_1)`.
+fn run_pair(m1: &Mesh, m2: &Mesh, gt_21: &[usize], params: &MatchParams) -> f64 {
+    let k = params.basis_size();
+    let (b1, b2) = (basis(m1, k), basis(m2, k));
+    let res = match_shapes(m1, (&b1).into(), m2, (&b2).into(), &[], params).unwrap();
+    assert_eq!(res.p2p_21.len(), m2.n_vertices());
+    assert_eq!((res.refined.k1, res.refined.k2), (k, k));
+    let solver = GeodesicSolver::new(m1, Laplacian::Fem, &GeodesicParams::default()).unwrap();
+    let e = geodesic_errors(&solver, &res.p2p_21, gt_21, m1.area(), Some(400)).unwrap();
+    let curve = cumulative_curve(&e.errors, &default_thresholds());
+    assert!(curve.windows(2).all(|w| w[0] <= w[1]));
+    assert!((curve[curve.len() - 1] - 1.0).abs() < 1e-12 || e.mean > 0.01);
+    e.mean
+}
+
+fn small_params() -> MatchParams {
+    MatchParams {
+        k: 20,
+        zoomout_k: 60,
+        ..MatchParams::default()
+    }
+}
+
+#[test]
+fn shuffled_asymmetric_pair_is_recovered() {
+    let m1 = blob(3);
+    let (m2, gt) = shuffled(&m1, 7);
+    let err = run_pair(&m1, &m2, &gt, &small_params());
+    println!("shuffled blob: mean geodesic error {err:.2e} sqrt(area)");
+    assert!(err < 0.01, "mean error {err}");
+}
+
+#[test]
+fn shuffled_mirror_symmetric_pair_keeps_left_and_right() {
+    let m1 = mirror_blob(3);
+    let (m2, gt) = shuffled(&m1, 11);
+    let err = run_pair(&m1, &m2, &gt, &small_params());
+    println!("shuffled mirror blob, orientation-preserving: {err:.2e}");
+    assert!(err < 0.01, "mean error {err}");
+    // The orientation-reversing term picks the mirror image: a large error.
+    let mut rev = small_params();
+    rev.weights.orientation = 1.0;
+    rev.weights.orientation_reversing = true;
+    let err_rev = run_pair(&m1, &m2, &gt, &rev);
+    println!("shuffled mirror blob, orientation-reversing: {err_rev:.2e}");
+    assert!(
+        err_rev > 10.0 * err.max(1e-3),
+        "reversing {err_rev}, preserving {err}"
+    );
+}
+
+#[test]
+fn same_surface_at_two_resolutions() {
+    let (m1, m2) = (blob(3), blob(4));
+    let gt = nearest_in_space(&m1, &m2);
+    let err = run_pair(&m1, &m2, &gt, &small_params());
+    println!("blob res 3 <- res 4: mean geodesic error {err:.3e}");
+    assert!(err < 0.03, "mean error {err}");
+}
+
+#[test]
+fn shared_mesh_and_its_subdivision() {
+    let Some(path) = spectral_mesh_testkit::shared_mesh("cow.off") else {
+        return;
+    };
+    let m1 = spectral_mesh::io::read_mesh(&path).unwrap().mesh;
+    let m2 = subdivide(&m1);
+    let gt = nearest_in_space(&m1, &m2);
+    let err = run_pair(&m1, &m2, &gt, &small_params());
+    println!("cow <- subdivided cow: mean geodesic error {err:.3e}");
+    assert!(err < 0.03, "mean error {err}");
+    // Shuffled cow with the default parameters (k = 30, ZoomOut to 100).
+    let (m3, gt3) = shuffled(&m1, 3);
+    let err3 = run_pair(&m1, &m3, &gt3, &MatchParams::default());
+    println!("cow <- shuffled cow: mean geodesic error {err3:.2e}");
+    assert!(err3 < 0.01, "mean error {err3}");
+}
+
+#[test]
+fn near_isometric_bend() {
+    // An elongated blob bent around the z axis (radius 8): lengths along the bend are
+    // kept on the midsurface y = 0, within about 12% elsewhere.
+    let long = blob(4).map_positions(|[x, y, z]| [1.5 * x, y, z]).unwrap();
+    let r = 8.0;
+    let bent = long
+        .map_positions(|[x, y, z]| {
+            let th = x / r;
+            [(r + y) * th.sin(), (r + y) * th.cos() - r, z]
+        })
+        .unwrap();
+    let (m2, gt) = shuffled(&bent, 5);
+    let err = run_pair(&long, &m2, &gt, &small_params());
+    println!("bent blob: mean geodesic error {err:.3e}");
+    assert!(err < 0.05, "mean error {err}");
+}
+
+#[test]
+fn exact_solution_has_the_lowest_energy() {
+    let m1 = blob(3);
+    let (m2, _) = shuffled(&blob(3), 2);
+    let m2 = m2
+        .map_positions(|[x, y, z]| [x * 1.05, y, z * 0.97])
+        .unwrap();
+    let k = 12;
+    let (b1, b2) = (basis(&m1, k), basis(&m2, k));
+    let dp = DescriptorParams::default();
+    let d1 = descriptors((&b1).into(), &dp, &[0, 40]).unwrap();
+    let d2 = descriptors((&b2).into(), &dp, &[0, 40]).unwrap();
+    assert_eq!(d1.p, (100 + 200usize).div_ceil(5));
+    for weights in [
+        FmapWeights::default(),
+        FmapWeights {
+            orientation: 0.0,
+            fix_constant: false,
+            ..FmapWeights::default()
+        },
+        FmapWeights {
+            commutativity: 0.0,
+            orientation: 1.0,
+            orientation_reversing: true,
+            ..FmapWeights::default()
+        },
+    ] {
+        let problem = FmapProblem::new(
+            MatchShape {
+                mesh: &m1,
+                basis: (&b1).into(),
+                descriptors: &d1,
+            },
+            MatchShape {
+                mesh: &m2,
+                basis: (&b2).into(),
+                descriptors: &d2,
+            },
+            &weights,
+        )
+        .unwrap();
+        let c = problem.solve().unwrap();
+        let e0 = problem.energy(&c);
+        // The gradient vanishes on the free entries.
+        let g = problem.gradient(&c);
+        let gmax = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(gmax < 1e-9 * (1.0 + e0), "gradient {gmax}");
+        if weights.fix_constant {
+            assert!((c.get(0, 0) - (m2.area() / m1.area()).sqrt()).abs() < 1e-12);
+            assert!((1..k).all(|i| c.get(i, 0) == 0.0));
+        }
+        // Any perturbation of the free entries raises the energy.
+        let mut rng = Lcg(99);
+        let first = if weights.fix_constant { k } else { 0 };
+        for scale in [1e-6, 1e-3, 1e-1] {
+            for _ in 0..5 {
+                let mut p = c.clone();
+                for v in &mut p.c[first..] {
+                    *v += scale * (rng.unit() - 0.5);
+                }
+                let e = problem.energy(&p);
+                assert!(e >= e0 - 1e-12 * e0.abs(), "{e} < {e0}");
+            }
+        }
+        // The energy is quadratic: E(c + t d) - E(c) = t^2 / 2 d^T H d at the minimum.
+        let terms = problem.terms(&c);
+        assert!((terms.total() - e0).abs() <= 1e-15 * e0.abs().max(1.0));
+    }
+}
+
+#[test]
+fn point_maps_are_exact_on_the_identity() {
+    let m = blob(3);
+    let k = 30;
+    let b = basis(&m, k);
+    let n = m.n_vertices();
+    let id = FunctionalMap::identity(k, k);
+    let view = (&b).into();
+    let ident: Vec<usize> = (0..n).collect();
+    assert_eq!(fmap_to_p2p(&id, view, view, false).unwrap(), ident);
+    assert_eq!(fmap_to_p2p(&id, view, view, true).unwrap(), ident);
+    assert_eq!(fmap_to_p2p_12(&id, view, view).unwrap(), ident);
+    // The functional map of the identity is the identity (B-orthonormal basis).
+    let c = p2p_to_fmap(&ident, view, view, k, k).unwrap();
+    for j in 0..k {
+        for i in 0..k {
+            let want = if i == j { 1.0 } else { 0.0 };
+            assert!(
+                (c.get(i, j) - want).abs() < 1e-9,
+                "C[{i},{j}] = {}",
+                c.get(i, j)
+            );
+        }
+    }
+    // A shuffle: the point map's functional map sends each function to itself.
+    let (m2, perm) = shuffled(&m, 4);
+    let b2 = basis(&m2, k);
+    let c = p2p_to_fmap(&perm, view, (&b2).into(), k, k).unwrap();
+    let p2p = fmap_to_p2p(&c, view, (&b2).into(), false).unwrap();
+    assert_eq!(p2p, perm);
+    // Transfer: pointwise equals a gather; spectral transfer of an eigenvector is exact.
+    let f: Vec<f64> = m.positions().iter().map(|p| p[0]).collect();
+    let g = transfer(&perm, &f, n, 1).unwrap();
+    assert!((0..n).all(|i| g[i] == f[perm[i]]));
+    let x3 = b.vector(3).to_vec();
+    let t = transfer_spectral(&c, view, (&b2).into(), &x3, 1).unwrap();
+    let err = (0..n)
+        .map(|i| (t[i] - x3[perm[i]]).abs())
+        .fold(0.0, f64::max);
+    assert!(err < 1e-8, "spectral transfer error {err}");
+}
+
+#[test]
+fn bad_input_is_refused_with_a_message() {
+    let m = blob(2);
+    let b = basis(&m, 10);
+    let view = (&b).into();
+    let e = p2p_to_fmap(&[0, 1], view, view, 5, 5).unwrap_err();
+    assert!(e.to_string().contains("point map"), "{e}");
+    let e = p2p_to_fmap(&vec![m.n_vertices(); m.n_vertices()], view, view, 5, 5).unwrap_err();
+    assert!(e.to_string().contains("vertices"), "{e}");
+    let e = match_shapes(&m, view, &m, view, &[], &MatchParams::default()).unwrap_err();
+    assert!(e.to_string().contains("eigenpairs"), "{e}");
+    let mut p = MatchParams::default();
+    p.weights.laplacian = -1.0;
+    assert!(p.validate().unwrap_err().to_string().contains("Laplacian"));
+    let e = descriptors(view, &DescriptorParams::default(), &[m.n_vertices()]).unwrap_err();
+    assert!(e.to_string().contains("landmark"), "{e}");
+}
