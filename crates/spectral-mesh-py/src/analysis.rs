@@ -797,17 +797,7 @@ impl PyAnalysis {
         labels: Option<Vec<usize>>,
         figure: FigureArgs,
         path: Option<PathBuf>,
-        legend: bool,
-        height: Option<u32>,
-        scale: Option<f64>,
-        dpi: Option<u32>,
     ) -> PyResult<Py<PyAny>> {
-        let extra = crate::FigureExtra {
-            legend,
-            height,
-            scale,
-            dpi,
-        };
         let prepare = || -> Result<_, Failure> {
             Ok((arrays::values(&values, "values")?, figure.options()?))
         };

@@ -630,17 +630,7 @@ fn render(
     labels: Option<Vec<usize>>,
     figure: FigureArgs,
     path: Option<PathBuf>,
-    legend: bool,
-    height: Option<u32>,
-    scale: Option<f64>,
-    dpi: Option<u32>,
 ) -> PyResult<Py<PyAny>> {
-    let extra = FigureExtra {
-        legend,
-        height,
-        scale,
-        dpi,
-    };
     let prepare = || -> Result<(Mesh, Vec<f64>, FigureOptions), Failure> {
         Ok((
             mesh_from(&v, &f)?,
