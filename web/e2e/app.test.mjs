@@ -70,9 +70,10 @@ test('the first screen explains itself: field, colour bar, legend, guidance, vis
   assert.equal(Number(ticks[0]), 0);
   assert.ok(Math.abs(Number(ticks[2]) - f.header.max) <= 1e-3 * f.header.max, `${ticks} vs ${f.header.max}`);
   assert.match(await page.textContent('#colorbar-units'), /unit area/);
-  // Legend: every marker kind.
+  // Legend: the marker kinds drawn (the figure's description) and the level-set line.
   const legend = await page.textContent('#legend');
-  for (const w of ['source', 'constraint', 'maximum', 'minimum', 'saddle', 'level set']) assert.match(legend, new RegExp(w));
+  for (const w of ['source', 'maximum', 'minimum', 'level set']) assert.match(legend, new RegExp(w));
+  assert.doesNotMatch(legend, /constraint/);
   // The source marker is drawn and the source is on the visible side: the surface point
   // under its marker is the source itself (or right beside it).
   assert.equal(await page.evaluate(() => window.__markers.source), 1);

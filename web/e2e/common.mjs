@@ -4,6 +4,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import assert from 'node:assert/strict';
+import zlib from 'node:zlib';
 import { chromium } from 'playwright-core';
 
 // Headless Chromium with a fresh profile (the flags that work on a closed network; see
@@ -107,4 +108,47 @@ export function pageHelpers(getPage, { fieldTimeout, errorTimeout }) {
   }
 
   return { count, errorCount, waitField, waitError, setValue, pickPoints };
+}
+
+// A PNG file's pixels: 8-bit RGB or RGBA (colour types 2 and 6), not interlaced, as the
+// server and Chromium write them. Returns { width, height, data (RGBA bytes), ppm } with
+// `ppm` the pHYs chunk's pixels per metre (null without one).
+export function decodePng(buf) {
+  assert.equal(buf.subarray(1, 4).toString('latin1'), 'PNG', 'not a PNG');
+  let off = 8, width = 0, height = 0, type = 0, ppm = null;
+  const idat = [];
+  while (off < buf.length) {
+    const len = buf.readUInt32BE(off);
+    const name = buf.subarray(off + 4, off + 8).toString('latin1');
+    const data = buf.subarray(off + 8, off + 8 + len);
+    if (name === 'IHDR') {
+      width = data.readUInt32BE(0); height = data.readUInt32BE(4);
+      assert.equal(data[8], 8, 'bit depth'); type = data[9];
+      assert.ok(type === 2 || type === 6, `colour type ${type}`); assert.equal(data[12], 0, 'interlaced');
+    } else if (name === 'pHYs' && data[8] === 1) {
+      ppm = [data.readUInt32BE(0), data.readUInt32BE(4)];
+    } else if (name === 'IDAT') idat.push(data);
+    off += 12 + len;
+  }
+  const raw = zlib.inflateSync(Buffer.concat(idat));
+  const bpp = type === 6 ? 4 : 3, stride = width * bpp;
+  const cur = new Uint8Array(stride), prev = new Uint8Array(stride);
+  const out = new Uint8Array(width * height * 4);
+  for (let y = 0; y < height; y++) {
+    const f = raw[y * (stride + 1)];
+    const line = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
+    for (let i = 0; i < stride; i++) {
+      const a = i >= bpp ? cur[i - bpp] : 0, b = prev[i], c = i >= bpp ? prev[i - bpp] : 0;
+      let p = 0;
+      if (f === 1) p = a; else if (f === 2) p = b; else if (f === 3) p = (a + b) >> 1;
+      else if (f === 4) { const q = a + b - c, pa = Math.abs(q - a), pb = Math.abs(q - b), pc = Math.abs(q - c); p = pa <= pb && pa <= pc ? a : pb <= pc ? b : c; }
+      cur[i] = (line[i] + p) & 255;
+    }
+    for (let x = 0; x < width; x++) {
+      for (let k = 0; k < 3; k++) out[4 * (y * width + x) + k] = cur[x * bpp + k];
+      out[4 * (y * width + x) + 3] = bpp === 4 ? cur[x * bpp + 3] : 255;
+    }
+    prev.set(cur);
+  }
+  return { width, height, data: out, ppm };
 }

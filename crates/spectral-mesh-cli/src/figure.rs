@@ -20,16 +20,32 @@ pub struct FigureArgs {
     /// Colour map: hue (the paper's), viridis, turbo, diverging, grey.
     #[arg(long, default_value_t = FigureOptions::default().colormap)]
     pub colormap: Colormap,
-    /// View: front, side, top, iso, or AZIMUTH,ELEVATION in degrees [default: iso].
+    /// View: front, side, top, iso, AZIMUTH,ELEVATION in degrees, or a camera
+    /// camera:EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV (eye, target, up, vertical field of view in
+    /// degrees, as the web page's download sends it) [default: iso].
     #[arg(long)]
     pub view: Option<View>,
-    /// Picture width and height in pixels.
+    /// Picture width (and height unless --height) in pixels.
     #[arg(long, default_value_t = FigureOptions::default().size)]
     pub size: u32,
+    /// Picture height in pixels [default: the size].
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Picture pixels per screen pixel: markers, lines and text this many times their size
+    /// on the web page [default: the smaller side / 800].
+    #[arg(long)]
+    pub scale: Option<f64>,
+    /// Print resolution written into the PNG (dots per inch).
+    #[arg(long)]
+    pub dpi: Option<u32>,
+    /// Do not draw the legend.
+    #[arg(long)]
+    pub no_legend: bool,
     /// Transparent background instead of white.
     #[arg(long)]
     pub transparent: bool,
-    /// Do not mark minima (blue), maxima (red) and saddles (green).
+    /// Do not mark minima (blue triangles down), maxima (red triangles up) and saddles
+    /// (green diamonds).
     #[arg(long)]
     pub no_critical_points: bool,
     /// Do not draw the colour bar.
@@ -46,6 +62,10 @@ impl FigureArgs {
             colormap: self.colormap,
             view: self.view.unwrap_or(d.view),
             size: self.size,
+            height: self.height,
+            scale: self.scale,
+            dpi: self.dpi,
+            legend: !self.no_legend,
             transparent: self.transparent,
             critical_points: !self.no_critical_points,
             colorbar: !self.no_colorbar,

@@ -521,11 +521,21 @@ pub(crate) struct FigureArgs {
     transparent: bool,
     critical_points: bool,
     colorbar: bool,
+    legend: bool,
+    height: Option<u32>,
+    scale: Option<f64>,
+    dpi: Option<u32>,
 }
 
 impl FigureArgs {
-    /// The render crate's options; an unknown colour map or view is a `ValueError`.
+    /// The render crate's options; an unknown colour map or view, or a scale that is not
+    /// positive, is a `ValueError`.
     pub(crate) fn options(&self) -> Result<FigureOptions, Failure> {
+        if let Some(s) = self.scale
+            && !(s.is_finite() && s > 0.0)
+        {
+            return Err(Failure::value(format!("scale must be positive, got {s}")));
+        }
         Ok(FigureOptions {
             levels: self.levels,
             colormap: self
@@ -537,6 +547,10 @@ impl FigureArgs {
                 .parse::<View>()
                 .map_err(|e| Failure::value(format!("view: {e}")))?,
             size: self.size,
+            height: self.height,
+            scale: self.scale,
+            dpi: self.dpi,
+            legend: self.legend,
             transparent: self.transparent,
             critical_points: self.critical_points,
             colorbar: self.colorbar,

@@ -184,6 +184,7 @@ _FIGURE = {
     p: f"figure/{p}"
     for p in (
         "levels", "colormap", "view", "size", "transparent", "critical_points", "colorbar",
+        "legend",
     )
 }
 WHERE: dict[str, dict[str, str]] = {

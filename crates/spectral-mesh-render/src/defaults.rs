@@ -9,7 +9,7 @@ use crate::Colormap;
 use crate::figure::{FigureOptions, view_name};
 
 /// The library's defaults plus `figure` (levels, colour map, view, size, transparent,
-/// critical points, colour bar) and `colormaps`.
+/// critical points, colour bar, legend) and `colormaps`.
 pub fn to_json() -> Value {
     let mut all = spectral_mesh::defaults::to_json();
     let fig = FigureOptions::default();
@@ -21,6 +21,7 @@ pub fn to_json() -> Value {
         "transparent": fig.transparent,
         "critical_points": fig.critical_points,
         "colorbar": fig.colorbar,
+        "legend": fig.legend,
     });
     all["colormaps"] = json!(Colormap::ALL.iter().map(|c| c.name()).collect::<Vec<_>>());
     all

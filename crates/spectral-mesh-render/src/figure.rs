@@ -5,17 +5,19 @@
 use std::path::Path;
 
 use spectral_mesh::Mesh;
-use spectral_mesh::analysis::{Analysis, Field};
+use spectral_mesh::analysis::{Analysis, CriticalReport, Field};
 use spectral_mesh::experiments::file::FigureFile;
 use spectral_mesh::fields::critical_points::CriticalPoints;
 use spectral_mesh::fields::persistence::simplified_critical_points;
 use spectral_mesh::io::{IoError, MeshFormat, WriteOptions, write_atomic, write_mesh_to};
 
+use crate::description::{FieldSummary, FigureDescription, MarkSet, describe};
+use crate::overlay::{colorbar_room, draw_overlays};
 use crate::raster::{
-    Background, ColorBar, Marker, MarkerKind, RenderOptions, Scene, View, field_colors,
-    field_range, render_scene,
+    Background, ColorBar, Marker, MarkerKind, RenderOptions, Scene, View, colour_range,
+    field_colors, render_scene,
 };
-use crate::{Colormap, Image, RenderError, extract_level_sets, level_values, write_vrml};
+use crate::{Colormap, Image, RenderError, extract_level_sets, write_vrml};
 
 /// How to draw a field. `Default` is what every face draws unless told otherwise.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -27,9 +29,18 @@ pub struct FigureOptions {
     pub colormap: Colormap,
     /// View. Default iso.
     pub view: View,
-    /// Picture width and height in pixels. Default the library's
-    /// `spectral_mesh::defaults::PICTURE_SIZE`.
+    /// Picture width in pixels (and height unless `height` is given). Default the
+    /// library's `spectral_mesh::defaults::PICTURE_SIZE`.
     pub size: u32,
+    /// Picture height in pixels (default: `size`, a square).
+    pub height: Option<u32>,
+    /// Picture pixels per screen pixel: markers, lines and text are drawn this many
+    /// times their size on the page (default: `min(width, height) / 800`).
+    pub scale: Option<f64>,
+    /// Print resolution written into the PNG (its `pHYs` chunk), dots per inch.
+    pub dpi: Option<u32>,
+    /// Draw the legend. Default true.
+    pub legend: bool,
     /// Transparent background instead of white.
     pub transparent: bool,
     /// Mark minima, maxima and saddles. Default true.
@@ -45,6 +56,10 @@ impl Default for FigureOptions {
             colormap: Colormap::Hue,
             view: View::Iso,
             size: spectral_mesh::defaults::PICTURE_SIZE,
+            height: None,
+            scale: None,
+            dpi: None,
+            legend: true,
             transparent: false,
             critical_points: true,
             colorbar: true,
@@ -118,7 +133,34 @@ impl FigureOptions {
         if let Some(c) = f.colorbar {
             o.colorbar = c;
         }
+        o.height = f.height;
+        o.dpi = f.dpi;
+        if let Some(sc) = f.scale {
+            if !(sc.is_finite() && sc > 0.0 && sc <= 16.0) {
+                return Err(FigureError::Option {
+                    key: "figure.scale",
+                    message: format!("{sc}: must be in (0, 16]"),
+                });
+            }
+            o.scale = Some(sc);
+        }
+        if let Some(l) = f.legend {
+            o.legend = l;
+        }
         Ok(o)
+    }
+
+    /// Picture height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height.unwrap_or(self.size)
+    }
+
+    /// Picture pixels per screen pixel ([`FigureOptions::scale`], resolved).
+    pub fn pixel_scale(&self) -> f64 {
+        match self.scale {
+            Some(s) if s.is_finite() && s > 0.0 => s,
+            _ => (f64::from(self.size.min(self.height())) / 800.0).max(0.25),
+        }
     }
 
     /// Every key written out, for saved experiment files.
@@ -131,6 +173,10 @@ impl FigureOptions {
             transparent: Some(self.transparent),
             critical_points: Some(self.critical_points),
             colorbar: Some(self.colorbar),
+            height: self.height,
+            scale: self.scale,
+            dpi: self.dpi,
+            legend: Some(self.legend),
         }
     }
 }
@@ -146,6 +192,7 @@ pub fn view_name(v: View) -> String {
             azimuth_deg,
             elevation_deg,
         } => format!("{azimuth_deg:?},{elevation_deg:?}"),
+        View::Camera(c) => c.to_string(),
     }
 }
 
@@ -168,6 +215,8 @@ pub struct Figure<'a> {
     pub colors: Option<Vec<[f32; 3]>>,
     /// How to draw.
     pub options: FigureOptions,
+    /// What the description says of the field (range, marks, words of the colour bar).
+    pub summary: FieldSummary,
     /// Draw the vertices as discs of this radius (world units) instead of the surface: the
     /// figure of a point cloud (see [`Figure::of_analysis`]). The PLY output is then a
     /// point set (no faces) and the VRML scene a `PointSet`.
@@ -194,17 +243,20 @@ impl<'a> Figure<'a> {
                 n: mesh.n_vertices(),
             });
         }
+        let mut summary = FieldSummary::of_values(field);
         let (critical, critical_hidden) = match options.critical_points {
             true => match simplified_critical_points(mesh, field) {
                 Ok(p) => {
                     let hidden = p.hidden_minima() + p.hidden_maxima() + p.hidden_saddles();
+                    summary.persistence_threshold = Some(p.threshold);
                     (Some(p.shown), hidden)
                 }
                 Err(_) => (None, 0),
             },
             false => (None, 0),
         };
-        Ok(Self {
+        summary.hidden = critical_hidden;
+        let mut fig = Self {
             mesh,
             field,
             sources,
@@ -213,7 +265,70 @@ impl<'a> Figure<'a> {
             colors: None,
             options,
             point_radius: None,
-        })
+            summary,
+        };
+        fig.mark();
+        Ok(fig)
+    }
+
+    /// The summary's marks from the critical points and the sources (constraints kept).
+    fn mark(&mut self) {
+        let constraints: Vec<MarkSet> = self
+            .summary
+            .marks
+            .iter()
+            .filter(|m| m.kind == MarkerKind::Constraint)
+            .cloned()
+            .collect();
+        let mut marks = Vec::new();
+        if let Some(cp) = &self.critical {
+            marks.push(MarkSet {
+                kind: MarkerKind::Minimum,
+                vertices: cp.minima.clone(),
+            });
+            marks.push(MarkSet {
+                kind: MarkerKind::Maximum,
+                vertices: cp.maxima.clone(),
+            });
+            marks.push(MarkSet {
+                kind: MarkerKind::Saddle,
+                vertices: cp.saddles.iter().map(|&(v, _)| v).collect(),
+            });
+        }
+        let n = self.mesh.n_vertices();
+        marks.extend(constraints);
+        marks.push(MarkSet {
+            kind: MarkerKind::Source,
+            vertices: self.sources.iter().copied().filter(|&s| s < n).collect(),
+        });
+        marks.retain(|m| !m.vertices.is_empty());
+        self.summary.marks = marks;
+    }
+
+    /// Marks `vertices` as constrained (squares, as on the page).
+    pub fn mark_constraints(&mut self, vertices: Vec<usize>) {
+        let n = self.mesh.n_vertices();
+        self.summary
+            .marks
+            .retain(|m| m.kind != MarkerKind::Constraint);
+        let vertices: Vec<usize> = vertices.into_iter().filter(|&v| v < n).collect();
+        if !vertices.is_empty() {
+            self.summary.marks.push(MarkSet {
+                kind: MarkerKind::Constraint,
+                vertices,
+            });
+        }
+    }
+
+    /// Uses the critical points of an analysis' report (the set every face shows): its
+    /// points, how many it hides and below which persistence.
+    pub fn use_report(&mut self, r: &CriticalReport) {
+        self.critical = Some(r.points.clone());
+        self.critical_hidden = r.hidden.minima + r.hidden.maxima + r.hidden.saddles;
+        self.summary.hidden = self.critical_hidden;
+        self.summary.flat = r.flat;
+        self.summary.persistence_threshold = Some(r.persistence_threshold);
+        self.mark();
     }
 
     /// The figure of a field of `an` ([`Figure::of_field`] on its mesh); for a point cloud
@@ -224,8 +339,26 @@ impl<'a> Figure<'a> {
         field: &'a Field,
         options: FigureOptions,
     ) -> Result<Self, FigureError> {
-        let mut fig = Self::of_field(an.mesh(), field, options)?;
+        let report = match field.labels.is_none() && options.critical_points {
+            true => an.field_critical_points(field).ok(),
+            false => None,
+        };
+        let mut fig = Self::of_field(
+            an.mesh(),
+            field,
+            FigureOptions {
+                critical_points: false,
+                ..options
+            },
+        )?;
+        fig.options.critical_points = options.critical_points && field.labels.is_none();
         fig.point_radius = an.point_spacing().map(|h| POINT_RADIUS_FACTOR * h);
+        if let Some(r) = &report {
+            fig.critical = Some(r.points.clone());
+            fig.critical_hidden = r.hidden.minima + r.hidden.maxima + r.hidden.saddles;
+        }
+        // The summary every face describes (the web page's header has the same).
+        fig.summary = FieldSummary::of_field(an, field, report.as_ref());
         Ok(fig)
     }
 
@@ -236,55 +369,60 @@ impl<'a> Figure<'a> {
         field: &'a Field,
         options: FigureOptions,
     ) -> Result<Self, FigureError> {
-        match &field.labels {
+        // The source or anchor is a star, constrained vertices squares (as on the page).
+        let source: Vec<usize> = field.request.source().into_iter().collect();
+        let mut fig = match &field.labels {
             Some(labels) => {
                 let options = FigureOptions {
                     levels: 0,
                     critical_points: false,
                     ..options
                 };
-                let mut fig = Self::new(mesh, &field.values, field.marks.clone(), options)?;
+                let mut fig = Self::new(mesh, &field.values, source, options)?;
                 fig.colors = Some(crate::colormap::label_colors(labels));
-                Ok(fig)
+                fig.summary.segments = Some(labels.iter().max().map_or(0, |m| m + 1));
+                fig
             }
-            None => Self::new(mesh, &field.values, field.marks.clone(), options),
-        }
+            None => Self::new(mesh, &field.values, source, options)?,
+        };
+        fig.summary.kind = field.request.kind().into();
+        fig.summary.normalized = Some(field.normalized);
+        fig.summary.k = field.k;
+        fig.mark_constraints(field.constraints.iter().map(|c| c.vertex).collect());
+        Ok(fig)
+    }
+
+    /// The figure's description (what [`Figure::image`] draws, what the page shows).
+    pub fn description(&self) -> FigureDescription {
+        describe(&self.summary, &self.options)
     }
 
     /// The scene drawn by the PNG and VRML outputs.
     pub fn scene(&self) -> Scene<'a> {
+        self.scene_of(&self.description())
+    }
+
+    fn scene_of(&self, d: &FigureDescription) -> Scene<'a> {
         let cmap = self.options.colormap;
-        let range = field_range(self.field, cmap);
+        let range = (d.range[0], d.range[1]);
         let mut scene = Scene::new(self.mesh);
         scene.point_radius = self.point_radius;
         scene.vertex_colors = match &self.colors {
             Some(c) => c.clone(),
             None => field_colors(self.field, cmap, Some(range)),
         };
-        if self.colors.is_none() && self.options.levels > 0 && range.1 > range.0 {
-            let vals = level_values(range.0, range.1, self.options.levels);
-            scene.level_sets = extract_level_sets(self.mesh, self.field, &vals);
+        if self.colors.is_none() && !d.levels.is_empty() {
+            scene.level_sets = extract_level_sets(self.mesh, self.field, &d.levels);
         }
         let p = self.mesh.positions();
-        if let Some(cp) = &self.critical {
-            let mut add = |v: usize, kind| {
-                scene.markers.push(Marker {
-                    position: p[v],
-                    kind,
-                })
-            };
-            cp.minima.iter().for_each(|&v| add(v, MarkerKind::Minimum));
-            cp.maxima.iter().for_each(|&v| add(v, MarkerKind::Maximum));
-            cp.saddles
-                .iter()
-                .for_each(|&(v, _)| add(v, MarkerKind::Saddle));
-        }
-        for &s in &self.sources {
-            if s < p.len() {
-                scene.markers.push(Marker {
-                    position: p[s],
-                    kind: MarkerKind::Source,
-                });
+        for m in &d.marks {
+            for &v in &m.vertices {
+                if v < p.len() {
+                    scene.markers.push(Marker {
+                        position: p[v],
+                        kind: m.kind,
+                    });
+                }
             }
         }
         if self.options.colorbar && self.colors.is_none() {
@@ -297,27 +435,36 @@ impl<'a> Figure<'a> {
         scene
     }
 
-    /// The picture as RGBA pixels (what [`Figure::png`] encodes).
+    /// The picture as RGBA pixels (what [`Figure::png`] encodes): the surface seen from
+    /// the view (or the camera given), with the description's legend and colour bar.
     pub fn image(&self) -> Result<Image, FigureError> {
+        let d = self.description();
+        let mut scene = self.scene_of(&d);
+        scene.colorbar = None;
+        let fitted = !matches!(self.options.view, View::Camera(_));
         let opts = RenderOptions {
             width: self.options.size,
-            height: self.options.size,
+            height: self.options.height(),
             view: self.options.view,
             background: if self.options.transparent {
                 Background::Transparent
             } else {
                 Background::White
             },
+            scale: d.scale as f32,
+            reserve_bottom: if fitted { colorbar_room(&d) } else { 0 },
             ..RenderOptions::default()
         };
-        Ok(render_scene(&self.scene(), &opts)?)
+        let mut img = render_scene(&scene, &opts)?;
+        draw_overlays(&mut img, &d, self.options.legend);
+        Ok(img)
     }
 
-    /// The PNG picture.
+    /// The PNG picture (with the print resolution asked for in its `pHYs` chunk).
     pub fn png(&self) -> Result<Vec<u8>, FigureError> {
         let img = self.image()?;
         let mut buf = Vec::new();
-        img.write_png(&mut buf)?;
+        img.write_png_dpi(&mut buf, self.options.dpi)?;
         Ok(buf)
     }
 
@@ -333,7 +480,10 @@ impl<'a> Figure<'a> {
         let colors = self
             .colors
             .clone()
-            .unwrap_or_else(|| field_colors(self.field, self.options.colormap, None))
+            .unwrap_or_else(|| {
+                let r = colour_range(self.summary.min, self.summary.max, self.options.colormap);
+                field_colors(self.field, self.options.colormap, Some(r))
+            })
             .into_iter()
             .map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8))
             .collect::<Vec<_>>();
@@ -465,6 +615,10 @@ mod tests {
                 elevation_deg: -3.0,
             },
             size: 321,
+            height: Some(200),
+            scale: Some(2.0),
+            dpi: Some(300),
+            legend: false,
             transparent: true,
             critical_points: false,
             colorbar: false,

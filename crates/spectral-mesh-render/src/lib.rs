@@ -14,7 +14,9 @@
 
 pub mod colormap;
 pub mod defaults;
+pub mod description;
 pub mod figure;
+mod overlay;
 pub mod pair;
 pub mod plots;
 pub mod raster;
@@ -25,8 +27,8 @@ pub mod vrml;
 pub use colormap::Colormap;
 pub use figure::{Figure, FigureError, FigureOptions};
 pub use raster::{
-    Background, Camera, ColorBar, Marker, MarkerKind, Projection, RenderOptions, Scene, View,
-    field_colors, field_range, render, render_scene,
+    Background, Camera, CameraSpec, ColorBar, Marker, MarkerKind, MarkerShape, Projection,
+    RenderOptions, Scene, View, colour_range, field_colors, field_range, render, render_scene,
 };
 pub use spectral_mesh::fields::level_sets::{LevelSet, Polyline, extract_level_sets, level_values};
 pub use text::format_number;
@@ -113,6 +115,15 @@ impl Image {
         ])
     }
 
+    /// The pixel at `(x, y)` to change, or `None` outside the image.
+    pub fn pixel_mut(&mut self, x: i64, y: i64) -> Option<&mut [u8]> {
+        if x < 0 || y < 0 || x >= i64::from(self.width) || y >= i64::from(self.height) {
+            return None;
+        }
+        let o = (y as usize * self.width as usize + x as usize) * 4;
+        Some(&mut self.rgba[o..o + 4])
+    }
+
     /// Sets a pixel; coordinates outside the image are ignored.
     pub fn put(&mut self, x: i64, y: i64, c: [u8; 4]) {
         if x < 0 || y < 0 || x >= i64::from(self.width) || y >= i64::from(self.height) {
@@ -124,9 +135,23 @@ impl Image {
 
     /// Encodes the image as an 8-bit RGBA PNG.
     pub fn write_png<W: Write>(&self, w: W) -> Result<(), RenderError> {
+        self.write_png_dpi(w, None)
+    }
+
+    /// Encodes the image as an 8-bit RGBA PNG with its print resolution (`dpi` dots per
+    /// inch, written as pixels per metre in the `pHYs` chunk) when given.
+    pub fn write_png_dpi<W: Write>(&self, w: W, dpi: Option<u32>) -> Result<(), RenderError> {
         let mut enc = png::Encoder::new(w, self.width, self.height);
         enc.set_color(png::ColorType::Rgba);
         enc.set_depth(png::BitDepth::Eight);
+        if let Some(d) = dpi {
+            let ppm = (f64::from(d) / 0.0254).round() as u32;
+            enc.set_pixel_dims(Some(png::PixelDimensions {
+                xppu: ppm,
+                yppu: ppm,
+                unit: png::Unit::Meter,
+            }));
+        }
         let mut writer = enc.write_header()?;
         writer.write_image_data(&self.rgba)?;
         writer.finish()?;

@@ -50,6 +50,57 @@ pub enum View {
         /// Angle above the `xz` plane, in `[-90, 90]`.
         elevation_deg: f64,
     },
+    /// A camera placed by the user (the web page's camera on screen): a perspective view
+    /// of the whole picture, not fitted to the shape.
+    Camera(CameraSpec),
+}
+
+/// A perspective camera in world coordinates, as a 3D viewer holds it (three.js'
+/// `PerspectiveCamera` looking at the orbit target): the picture's vertical field of view
+/// is `fov_deg`, its centre is `target`, screen-up is `up` made orthogonal to the viewing
+/// direction. Text form: `camera:EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraSpec {
+    /// The eye.
+    pub eye: [f64; 3],
+    /// The point looked at (the centre of the picture).
+    pub target: [f64; 3],
+    /// Screen-up direction (need not be orthogonal to the viewing direction).
+    pub up: [f64; 3],
+    /// Vertical field of view in degrees, in `(0, 180)`.
+    pub fov_deg: f64,
+}
+
+impl CameraSpec {
+    /// `(right, up, toward_camera, distance)`: the orthonormal frame of the camera and the
+    /// distance from the eye to the target; `None` for a degenerate camera (eye on the
+    /// target, up along the viewing direction, non-finite numbers).
+    pub fn frame(&self) -> Option<([f64; 3], [f64; 3], [f64; 3], f64)> {
+        let d = sub(self.eye, self.target);
+        let dist = norm(d);
+        if !(dist.is_finite() && dist > 0.0) || !(self.fov_deg > 0.0 && self.fov_deg < 180.0) {
+            return None;
+        }
+        let toward = [d[0] / dist, d[1] / dist, d[2] / dist];
+        let r = cross(self.up, toward);
+        let rl = norm(r);
+        if !(rl.is_finite() && rl > 1e-12) {
+            return None;
+        }
+        let right = [r[0] / rl, r[1] / rl, r[2] / rl];
+        Some((right, cross(toward, right), toward, dist))
+    }
+}
+
+impl std::fmt::Display for CameraSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [e, t, u] = [self.eye, self.target, self.up];
+        write!(
+            f,
+            "camera:{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?}",
+            e[0], e[1], e[2], t[0], t[1], t[2], u[0], u[1], u[2], self.fov_deg
+        )
+    }
 }
 
 impl View {
@@ -64,6 +115,14 @@ impl View {
                 azimuth_deg,
                 elevation_deg,
             } => (azimuth_deg, elevation_deg),
+            View::Camera(c) => {
+                let d = sub(c.eye, c.target);
+                let l = norm(d).max(f64::MIN_POSITIVE);
+                (
+                    d[0].atan2(d[2]).to_degrees(),
+                    (d[1] / l).clamp(-1.0, 1.0).asin().to_degrees(),
+                )
+            }
         }
     }
 }
@@ -71,7 +130,8 @@ impl View {
 impl FromStr for View {
     type Err = RenderError;
 
-    /// `front | side | top | iso | AZ,EL` (degrees).
+    /// `front | side | top | iso | AZ,EL` (degrees) `| camera:EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV`
+    /// (eye, target, up, vertical field of view in degrees: [`CameraSpec`]).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let low = s.trim().to_ascii_lowercase();
         match low.as_str() {
@@ -80,6 +140,36 @@ impl FromStr for View {
             "top" => return Ok(View::Top),
             "iso" => return Ok(View::Iso),
             _ => {}
+        }
+        if let Some(nums) = low.strip_prefix("camera:") {
+            let bad = |why: &str| {
+                RenderError::InvalidOption(format!(
+                    "view '{s}': {why} (expected camera:EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV: eye, target, up, vertical field of view in degrees)"
+                ))
+            };
+            let v: Vec<f64> = nums
+                .split(',')
+                .map(|x| x.trim().parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| bad("not a list of numbers"))?;
+            if v.len() != 10 {
+                return Err(bad(&format!("{} numbers", v.len())));
+            }
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(bad("a number is not finite"));
+            }
+            let c = CameraSpec {
+                eye: [v[0], v[1], v[2]],
+                target: [v[3], v[4], v[5]],
+                up: [v[6], v[7], v[8]],
+                fov_deg: v[9],
+            };
+            if c.frame().is_none() {
+                return Err(bad(
+                    "the eye is on the target, up is along the viewing direction, or the field of view is not in (0, 180)",
+                ));
+            }
+            return Ok(View::Camera(c));
         }
         let bad = || RenderError::InvalidOption(format!("unknown view '{s}'"));
         let (a, e) = low.split_once(',').ok_or_else(bad)?;
@@ -172,9 +262,9 @@ pub struct RenderOptions {
     pub width: u32,
     /// Output height in pixels.
     pub height: u32,
-    /// Viewing direction.
+    /// Viewing direction (or the user's camera, [`View::Camera`]).
     pub view: View,
-    /// Projection model.
+    /// Projection model of the fitted views ([`View::Camera`] is always perspective).
     pub projection: Projection,
     /// Background.
     pub background: Background,
@@ -182,16 +272,21 @@ pub struct RenderOptions {
     pub supersample: u32,
     /// Ambient light intensity.
     pub ambient: f32,
-    /// Diffuse (Lambert) light intensity; lighting is two-sided.
+    /// Diffuse (Lambert) light intensity; lighting is two-sided, from
+    /// [`LIGHT_DIRECTION`].
     pub diffuse: f32,
-    /// Level-set line width in output pixels.
+    /// Level-set line width in pixels at scale 1.
     pub line_width: f32,
     /// Level-set line colour.
     pub line_color: [u8; 3],
-    /// Marker disc radius as a fraction of `min(width, height)`.
-    pub marker_radius: f32,
+    /// Output pixels per screen pixel: markers ([`MarkerKind::size`]), lines and text are
+    /// drawn this many times their nominal size. `0` (default): `min(width, height) / 800`.
+    pub scale: f32,
     /// Empty margin around the fitted bounding sphere, as a fraction of the viewport.
     pub margin: f32,
+    /// Rows at the bottom of the picture left out of the fitted views' viewport (room
+    /// for the colour bar's panel).
+    pub reserve_bottom: u32,
 }
 
 impl Default for RenderOptions {
@@ -203,37 +298,206 @@ impl Default for RenderOptions {
             projection: Projection::Orthographic,
             background: Background::White,
             supersample: 3,
-            ambient: 0.35,
-            diffuse: 0.65,
-            line_width: 1.5,
-            line_color: [15, 15, 15],
-            marker_radius: 0.012,
+            ambient: AMBIENT,
+            diffuse: DIFFUSE,
+            line_width: LINE_WIDTH,
+            line_color: LINE_COLOR,
+            scale: 0.0,
             margin: 0.04,
+            reserve_bottom: 0,
         }
     }
 }
 
-/// Kind of a marked point; decides its colour.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+impl RenderOptions {
+    /// Output pixels per screen pixel ([`RenderOptions::scale`], resolved).
+    pub fn pixel_scale(&self) -> f64 {
+        if self.scale > 0.0 && self.scale.is_finite() {
+            f64::from(self.scale)
+        } else {
+            (f64::from(self.width.min(self.height)) / 800.0).max(0.25)
+        }
+    }
+}
+
+/// Ambient light of every picture (the page's shader takes it from the figure
+/// description).
+pub const AMBIENT: f32 = 0.35;
+/// Diffuse light of every picture.
+pub const DIFFUSE: f32 = 0.65;
+/// Direction towards the light in camera coordinates (right, up, towards the viewer),
+/// not normalised: above left of the viewer.
+pub const LIGHT_DIRECTION: [f64; 3] = [-0.35, 0.45, 1.0];
+/// A marker is drawn when the surface at its centre is not nearer the viewer than the
+/// marker by more than `MARKER_DEPTH_BIAS * R + s * u` (`R` the bounding sphere's radius
+/// about the bounding box's centre, `s` the largest marker's size in screen pixels, `u`
+/// world units per screen pixel at the camera's target): markers at a rim stay whole. The
+/// page moves its markers this far towards the viewer.
+pub const MARKER_DEPTH_BIAS: f64 = 0.02;
+
+/// The depth bias of markers ([`MARKER_DEPTH_BIAS`]) for a shape of bounding radius
+/// `radius` seen at `units_per_pixel` world units per screen pixel.
+pub fn marker_depth_bias(radius: f64, units_per_pixel: f64) -> f64 {
+    MARKER_DEPTH_BIAS * radius + largest_marker() * units_per_pixel
+}
+
+/// The largest marker's size in screen pixels.
+pub fn largest_marker() -> f64 {
+    MarkerKind::ALL.iter().map(|k| k.size()).fold(0.0, f64::max)
+}
+
+/// Level-set line width in screen pixels.
+pub const LINE_WIDTH: f32 = 2.0;
+/// Level-set line colour.
+pub const LINE_COLOR: [u8; 3] = [15, 15, 15];
+
+/// Kind of a marked point; decides its shape and colours.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
 pub enum MarkerKind {
-    /// Local minimum: blue.
+    /// Local minimum: blue triangle pointing down.
     Minimum,
-    /// Local maximum: red.
+    /// Local maximum: red triangle pointing up.
     Maximum,
-    /// Saddle: green.
+    /// Saddle: green diamond.
     Saddle,
-    /// Source / anchor vertex: yellow.
+    /// Source / anchor vertex: yellow star with a black edge.
     Source,
+    /// A constrained vertex (harmonic maps): white square with a black edge.
+    Constraint,
+}
+
+/// The outline of a marker's shape.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MarkerShape {
+    /// Five-pointed star.
+    Star,
+    /// Square.
+    Square,
+    /// Triangle pointing up.
+    TriangleUp,
+    /// Triangle pointing down.
+    TriangleDown,
+    /// Diamond (square on its corner).
+    Diamond,
+}
+
+impl MarkerShape {
+    /// The name the page and the description use.
+    pub fn name(self) -> &'static str {
+        match self {
+            MarkerShape::Star => "star",
+            MarkerShape::Square => "square",
+            MarkerShape::TriangleUp => "triangle-up",
+            MarkerShape::TriangleDown => "triangle-down",
+            MarkerShape::Diamond => "diamond",
+        }
+    }
+
+    /// The outline, a closed polygon in the unit box `[0, 1]^2` of the marker (`y`
+    /// down), drawn centred on the point.
+    pub fn outline(self) -> Vec<[f64; 2]> {
+        let k = |x: f64, y: f64| [x / 64.0, y / 64.0];
+        match self {
+            MarkerShape::Square => vec![k(12.0, 12.0), k(52.0, 12.0), k(52.0, 52.0), k(12.0, 52.0)],
+            MarkerShape::TriangleUp => vec![k(32.0, 6.0), k(58.0, 54.0), k(6.0, 54.0)],
+            MarkerShape::TriangleDown => vec![k(6.0, 10.0), k(58.0, 10.0), k(32.0, 58.0)],
+            MarkerShape::Diamond => vec![k(32.0, 4.0), k(60.0, 32.0), k(32.0, 60.0), k(4.0, 32.0)],
+            MarkerShape::Star => (0..10)
+                .map(|i| {
+                    let r = if i % 2 == 1 { 13.0 } else { 29.0 };
+                    let a =
+                        -std::f64::consts::FRAC_PI_2 + f64::from(i) * std::f64::consts::PI / 5.0;
+                    k(32.0 + r * a.cos(), 33.0 + r * a.sin())
+                })
+                .collect(),
+        }
+    }
+
+    /// Width of the outline's stroke, as a fraction of the marker's size.
+    pub const STROKE: f64 = 5.0 / 64.0;
 }
 
 impl MarkerKind {
+    /// Every kind, in the legend's order.
+    pub const ALL: [MarkerKind; 5] = [
+        MarkerKind::Source,
+        MarkerKind::Constraint,
+        MarkerKind::Maximum,
+        MarkerKind::Minimum,
+        MarkerKind::Saddle,
+    ];
+
     /// Fill colour of the marker.
     pub fn color(self) -> [u8; 3] {
         match self {
-            MarkerKind::Minimum => [30, 80, 255],
-            MarkerKind::Maximum => [230, 20, 20],
-            MarkerKind::Saddle => [20, 190, 40],
-            MarkerKind::Source => [255, 225, 0],
+            MarkerKind::Minimum => [0x1f, 0x5f, 0xe0],
+            MarkerKind::Maximum => [0xe0, 0x30, 0x1e],
+            MarkerKind::Saddle => [0x10, 0xa0, 0x40],
+            MarkerKind::Source => [0xff, 0xd4, 0x00],
+            MarkerKind::Constraint => [0xff, 0xff, 0xff],
+        }
+    }
+
+    /// Colour of the outline.
+    pub fn stroke(self) -> [u8; 3] {
+        match self {
+            MarkerKind::Source | MarkerKind::Constraint => [0, 0, 0],
+            _ => [0xff, 0xff, 0xff],
+        }
+    }
+
+    /// The shape.
+    pub fn shape(self) -> MarkerShape {
+        match self {
+            MarkerKind::Minimum => MarkerShape::TriangleDown,
+            MarkerKind::Maximum => MarkerShape::TriangleUp,
+            MarkerKind::Saddle => MarkerShape::Diamond,
+            MarkerKind::Source => MarkerShape::Star,
+            MarkerKind::Constraint => MarkerShape::Square,
+        }
+    }
+
+    /// Side of the marker's box in screen pixels (times [`RenderOptions::pixel_scale`]).
+    pub fn size(self) -> f64 {
+        match self {
+            MarkerKind::Source => 22.0,
+            MarkerKind::Constraint => 16.0,
+            MarkerKind::Maximum | MarkerKind::Minimum => 15.0,
+            MarkerKind::Saddle => 14.0,
+        }
+    }
+
+    /// The name used in descriptions.
+    pub fn name(self) -> &'static str {
+        match self {
+            MarkerKind::Minimum => "minimum",
+            MarkerKind::Maximum => "maximum",
+            MarkerKind::Saddle => "saddle",
+            MarkerKind::Source => "source",
+            MarkerKind::Constraint => "constraint",
+        }
+    }
+
+    /// The legend's words.
+    pub fn label(self) -> &'static str {
+        match self {
+            MarkerKind::Minimum => "minimum",
+            MarkerKind::Maximum => "maximum",
+            MarkerKind::Saddle => "saddle",
+            MarkerKind::Source => "source / anchor",
+            MarkerKind::Constraint => "constraint",
+        }
+    }
+
+    /// Markers of higher layers are drawn over lower ones (sources and constraints over
+    /// critical points).
+    pub fn layer(self) -> u8 {
+        match self {
+            MarkerKind::Source | MarkerKind::Constraint => 1,
+            _ => 0,
         }
     }
 }
@@ -321,8 +585,8 @@ impl<'a> Scene<'a> {
     }
 }
 
-/// The range used for `field` when none is given: `[min, max]` of the finite values,
-/// or `[-m, m]` with `m = max |f|` for a diverging map. `(0, 1)` if nothing is finite.
+/// The range used for `field` when none is given: [`colour_range`] of the smallest and
+/// largest finite values. `(0, 1)` if nothing is finite.
 pub fn field_range(field: &[f64], colormap: Colormap) -> (f64, f64) {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
@@ -333,11 +597,22 @@ pub fn field_range(field: &[f64], colormap: Colormap) -> (f64, f64) {
     if lo > hi {
         return (0.0, 1.0);
     }
+    colour_range(lo, hi, colormap)
+}
+
+/// The one range rule of every face (pictures, the web page, level values): a field of
+/// values in `[min, max]` is coloured over `[min, max]`, or over `[-m, m]` with
+/// `m = max(|min|, |max|)` for a diverging map (white is zero). `(0, 1)` when a bound is
+/// not finite.
+pub fn colour_range(min: f64, max: f64, colormap: Colormap) -> (f64, f64) {
+    if !min.is_finite() || !max.is_finite() || min > max {
+        return (0.0, 1.0);
+    }
     if colormap.is_diverging() {
-        let m = lo.abs().max(hi.abs());
+        let m = min.abs().max(max.abs());
         return (-m, m);
     }
-    (lo, hi)
+    (min, max)
 }
 
 /// Per-vertex colours of `field` through `colormap`: `t = (f - lo) / (hi - lo)` with
@@ -414,13 +689,36 @@ impl Camera {
         if radius <= 0.0 || !radius.is_finite() {
             radius = 1.0;
         }
+        if let View::Camera(spec) = opts.view
+            && let Some((right, up, toward_camera, distance)) = spec.frame()
+        {
+            // The user's camera sees the whole picture: vertical field of view over the
+            // height, centred (as a 3D viewer's canvas).
+            let h = 0.5 * spec.fov_deg.to_radians();
+            return Self {
+                center: spec.target,
+                radius,
+                right,
+                up,
+                toward_camera,
+                scale: 0.5 * f64::from(opts.height) / h.tan(),
+                distance: Some(distance),
+                cx: 0.5 * f64::from(opts.width),
+                cy: 0.5 * f64::from(opts.height),
+            };
+        }
         let (az, el) = opts.view.angles();
         let (a, e) = (az.to_radians(), el.clamp(-90.0, 90.0).to_radians());
         let toward_camera = [e.cos() * a.sin(), e.sin(), e.cos() * a.cos()];
         let right = [a.cos(), 0.0, -a.sin()];
         let up = cross(toward_camera, right);
         let margin = f64::from(opts.margin).clamp(0.0, 0.45);
-        let half = 0.5 * f64::from(viewport_width.min(opts.height)) * (1.0 - 2.0 * margin);
+        let vh = opts
+            .height
+            .saturating_sub(opts.reserve_bottom)
+            .max(opts.height / 2)
+            .max(1);
+        let half = 0.5 * f64::from(viewport_width.min(vh)) * (1.0 - 2.0 * margin);
         let (scale, distance) = match opts.projection {
             Projection::Orthographic => (half / radius, None),
             Projection::Perspective { fov_deg } => {
@@ -437,7 +735,7 @@ impl Camera {
             scale,
             distance,
             cx: 0.5 * f64::from(viewport_width),
-            cy: 0.5 * f64::from(opts.height),
+            cy: 0.5 * f64::from(vh),
         }
     }
 
@@ -525,10 +823,11 @@ pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Image, Render
     };
 
     // Per-vertex projection and shading.
+    let [lr, lu, lt] = LIGHT_DIRECTION;
     let light = normalize([
-        -0.35 * cam.right[0] + 0.45 * cam.up[0] + cam.toward_camera[0],
-        -0.35 * cam.right[1] + 0.45 * cam.up[1] + cam.toward_camera[1],
-        -0.35 * cam.right[2] + 0.45 * cam.up[2] + cam.toward_camera[2],
+        lr * cam.right[0] + lu * cam.up[0] + lt * cam.toward_camera[0],
+        lr * cam.right[1] + lu * cam.up[1] + lt * cam.toward_camera[1],
+        lr * cam.right[2] + lu * cam.up[2] + lt * cam.toward_camera[2],
     ]);
     let normals = mesh.vertex_normals();
     let (amb, dif) = (opts.ambient.max(0.0), opts.diffuse.max(0.0));
@@ -570,7 +869,8 @@ pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Image, Render
 
     // Level-set lines.
     let ppu = cam.pixels_per_unit();
-    let line_half = 0.5 * f64::from(opts.line_width.max(0.0)) * ss_f;
+    let pscale = opts.pixel_scale();
+    let line_half = 0.5 * f64::from(opts.line_width.max(0.0)) * pscale * ss_f;
     let line_bias = (0.01 * cam.radius + 4.0 / (ppu * ss_f)) as f32;
     let lc = opts.line_color;
     for ls in &scene.level_sets {
@@ -588,18 +888,19 @@ pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Image, Render
         }
     }
 
-    // Markers.
-    let r_px = f64::from(opts.marker_radius.max(0.0)) * f64::from(opts.width.min(opts.height));
-    let r = r_px.max(1.5) * ss_f;
-    let marker_bias = (0.02 * cam.radius + 2.0 * r_px / ppu) as f32;
-    for m in &scene.markers {
+    // Markers: sources and constraints over critical points, each a shape with an
+    // outline, visible when the surface at its centre does not hide it.
+    let marker_bias = marker_depth_bias(cam.radius, pscale / ppu) as f32;
+    let mut order: Vec<&Marker> = scene.markers.iter().collect();
+    order.sort_by_key(|m| m.kind.layer());
+    for m in order {
         let [x, y, z] = cam.project(m.position);
         let (sx, sy) = (x * ss_f, y * ss_f);
         if !sx.is_finite() || !sy.is_finite() {
             continue;
         }
         if marker_visible(&buf, sx, sy, z as f32, marker_bias) {
-            draw_disc(&mut buf, sx, sy, r, ss_f, m.kind.color());
+            draw_marker(&mut buf, sx, sy, m.kind.size() * pscale * ss_f, m.kind);
         }
     }
 
@@ -846,29 +1147,72 @@ fn marker_visible(buf: &Buffers, x: f64, y: f64, z: f32, bias: f32) -> bool {
     d == f32::NEG_INFINITY || z + bias >= d
 }
 
-/// A filled disc of radius `r` samples with a dark outline.
-fn draw_disc(buf: &mut Buffers, cx: f64, cy: f64, r: f64, ss: f64, fill: [u8; 3]) {
-    let outline = (0.3 * r).max(1.2 * ss).min(0.6 * r);
-    let inner2 = (r - outline).max(0.0).powi(2);
-    let r2 = r * r;
-    let xmin = (cx - r).floor().max(0.0) as usize;
-    let ymin = (cy - r).floor().max(0.0) as usize;
-    let xmax = (cx + r).ceil().min(buf.w as f64 - 1.0);
-    let ymax = (cy + r).ceil().min(buf.h as f64 - 1.0);
-    if xmax < 0.0 || ymax < 0.0 {
+/// A marker of `size` samples (its box's side) centred at `(cx, cy)`: the shape's fill
+/// with its outline stroked on the path (half inside, half outside, as a canvas does).
+fn draw_marker(buf: &mut Buffers, cx: f64, cy: f64, size: f64, kind: MarkerKind) {
+    if size.is_nan() || size <= 0.0 {
         return;
     }
-    for py in ymin..=ymax as usize {
-        for px in xmin..=xmax as usize {
-            let (dx, dy) = (px as f64 + 0.5 - cx, py as f64 + 0.5 - cy);
-            let d2 = dx * dx + dy * dy;
-            if d2 > r2 {
+    let pts: Vec<[f64; 2]> = kind
+        .shape()
+        .outline()
+        .into_iter()
+        .map(|[u, v]| [cx + (u - 0.5) * size, cy + (v - 0.5) * size])
+        .collect();
+    let half = 0.5 * MarkerShape::STROKE * size;
+    let (fill, stroke) = (kind.color(), kind.stroke());
+    let xmin = (cx - 0.5 * size - half).floor().max(0.0);
+    let ymin = (cy - 0.5 * size - half).floor().max(0.0);
+    let xmax = (cx + 0.5 * size + half).ceil().min(buf.w as f64 - 1.0);
+    let ymax = (cy + 0.5 * size + half).ceil().min(buf.h as f64 - 1.0);
+    if xmin > xmax || ymin > ymax {
+        return;
+    }
+    for py in ymin as usize..=ymax as usize {
+        for px in xmin as usize..=xmax as usize {
+            let p = [px as f64 + 0.5, py as f64 + 0.5];
+            let c = if edge_distance(&pts, p) <= half {
+                stroke
+            } else if inside(&pts, p) {
+                fill
+            } else {
                 continue;
-            }
-            let c = if d2 <= inner2 { fill } else { [20, 20, 20] };
+            };
             buf.rgba[py * buf.w + px] = [c[0], c[1], c[2], 255];
         }
     }
+}
+
+/// Distance from `p` to the closed polygon's edges.
+pub(crate) fn edge_distance(pts: &[[f64; 2]], p: [f64; 2]) -> f64 {
+    let mut best = f64::INFINITY;
+    for i in 0..pts.len() {
+        let (a, b) = (pts[i], pts[(i + 1) % pts.len()]);
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let l2 = dx * dx + dy * dy;
+        let u = if l2 > 0.0 {
+            (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        best = best.min((a[0] + u * dx - p[0]).hypot(a[1] + u * dy - p[1]));
+    }
+    best
+}
+
+/// Whether `p` is inside the closed polygon (even-odd rule).
+pub(crate) fn inside(pts: &[[f64; 2]], p: [f64; 2]) -> bool {
+    let mut c = false;
+    for i in 0..pts.len() {
+        let (a, b) = (pts[i], pts[(i + 1) % pts.len()]);
+        if (a[1] > p[1]) != (b[1] > p[1]) {
+            let x = a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+            if p[0] < x {
+                c = !c;
+            }
+        }
+    }
+    c
 }
 
 /// Box filter of `ss × ss` samples, composited over the background.

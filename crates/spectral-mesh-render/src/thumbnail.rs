@@ -19,6 +19,7 @@ impl Thumbnails {
             levels: 10,
             critical_points: false,
             colorbar: false,
+            legend: false,
             ..FigureOptions::default()
         }
     }

@@ -71,12 +71,14 @@ fn dark_pixels(img: &spectral_mesh_render::Image) -> usize {
         .count()
 }
 
+/// Lines and markers at their screen size (scale 1) whatever the picture's size.
 fn opts(w: u32, h: u32) -> RenderOptions {
     RenderOptions {
         width: w,
         height: h,
         view: View::Front,
         supersample: 2,
+        scale: 1.0,
         ..RenderOptions::default()
     }
 }
@@ -291,7 +293,10 @@ fn markers_appear_at_projected_positions_when_visible() {
         marker(front, MarkerKind::Saddle),
         marker([-0.6, 0.0, 0.8], MarkerKind::Source),
     ];
-    let o = opts(300, 300);
+    let o = RenderOptions {
+        scale: 2.0,
+        ..opts(300, 300)
+    };
     let img = render_scene(&scene, &o).unwrap();
     let cam = scene.camera(&o);
     let at = |p: [f64; 3]| {
@@ -309,10 +314,63 @@ fn markers_appear_at_projected_positions_when_visible() {
         .chunks_exact(4)
         .any(|c| close([c[0], c[1], c[2], c[3]], blue));
     assert!(!any_blue);
-    // Dark outline: just inside the radius, on the right of the saddle marker.
-    let r = o.marker_radius as f64 * 300.0;
+    // Shapes: the saddle is a diamond (its box's corners are not filled, its edge
+    // midpoints are); the maximum a triangle pointing up (filled just above its base's
+    // ends, not at its top corners).
     let [x, y, _] = cam.project(front);
-    assert!(is_dark(px(&img, x + r - 0.6, y)));
+    let h = 0.5 * MarkerKind::Saddle.size() * 2.0;
+    let green = MarkerKind::Saddle.color();
+    assert!(!close(px(&img, x + 0.8 * h, y + 0.8 * h), green));
+    assert!(close(px(&img, x + 0.5 * h, y), green));
+    let [x, y, _] = cam.project([0.0, 0.0, 1.0]);
+    let h = 0.5 * MarkerKind::Maximum.size() * 2.0;
+    let red = MarkerKind::Maximum.color();
+    assert!(close(px(&img, x - 0.45 * h, y + 0.45 * h), red));
+    assert!(!close(px(&img, x - 0.6 * h, y - 0.6 * h), red));
+}
+
+/// A camera given by eye, target and up: the target is drawn at the centre of the whole
+/// picture, and the text form parses back to the same camera.
+#[test]
+fn a_user_camera_looks_at_its_target() {
+    let mesh = sphere(1.0, 24, 48);
+    let mut scene = Scene::new(&mesh);
+    scene.markers = vec![marker([0.0, 0.0, 1.0], MarkerKind::Maximum)];
+    let spec: View = "camera:0,0,5,0,0,1,0,1,0,30".parse().unwrap();
+    let o = RenderOptions {
+        view: spec,
+        scale: 2.0,
+        ..opts(200, 120)
+    };
+    let cam = scene.camera(&o);
+    let [x, y, _] = cam.project([0.0, 0.0, 1.0]);
+    assert!(
+        (x - 100.0).abs() < 1e-9 && (y - 60.0).abs() < 1e-9,
+        "{x} {y}"
+    );
+    // Vertical field of view: a point at the top edge of the frustum through the target.
+    let t = (15f64).to_radians().tan() * 4.0;
+    let [_, yt, _] = cam.project([0.0, t, 1.0]);
+    assert!(yt.abs() < 1e-6, "{yt}");
+    let img = render_scene(&scene, &o).unwrap();
+    let c = px(&img, 100.0, 60.0);
+    let red = MarkerKind::Maximum.color();
+    assert!(
+        (0..3).all(|i| (c[i] as i32 - red[i] as i32).abs() <= 12),
+        "{c:?}"
+    );
+    let View::Camera(c) = spec else {
+        panic!("not a camera")
+    };
+    assert_eq!(c.to_string().parse::<View>().unwrap(), spec);
+    for bad in [
+        "camera:0,0,5,0,0,5,0,1,0,30",
+        "camera:0,0,5,0,0,0,0,0,1,30",
+        "camera:0,0,5,0,0,0,0,1,0,0",
+        "camera:0,0,5",
+    ] {
+        assert!(bad.parse::<View>().is_err(), "{bad}");
+    }
 }
 
 #[test]
@@ -438,7 +496,7 @@ fn tiny_and_odd_sizes_do_not_panic() {
         for ss in [1, 4] {
             let o = RenderOptions {
                 supersample: ss,
-                marker_radius: 0.5,
+                scale: 20.0,
                 line_width: 9.0,
                 ..opts(w, h)
             };

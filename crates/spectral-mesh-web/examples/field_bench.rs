@@ -86,10 +86,15 @@ fn main() {
         let meta = BasisMeta::new(&b, Some(&mesh), &Default::default());
         save_npz(&b, Path::new(&cache), &meta).unwrap();
     }
+    // The page's figure options: 10 level sets (whose segments the reply carries).
+    let opts = spectral_mesh_render::figure::FigureOptions {
+        levels: 10,
+        ..Default::default()
+    };
     // First use builds the connectivity and the link edges (once per analysis).
     let req: FieldRequest = serde_json::from_value(requests(WHAT[0], 0, n, k)).unwrap();
     let t = Instant::now();
-    field_reply(&an, &req, 10).unwrap().unwrap();
+    field_reply(&an, &req, &opts, true).unwrap().unwrap();
     println!(
         "first field of the analysis (builds connectivity and link edges): {:.1} ms",
         t.elapsed().as_secs_f64() * 1e3
@@ -104,7 +109,7 @@ fn main() {
             let req: FieldRequest = serde_json::from_value(requests(what, i, n, k)).unwrap();
             let t = Instant::now();
             let (r, bytes) = pool.install(|| {
-                let r = field_reply(&an, &req, 10).unwrap().unwrap();
+                let r = field_reply(&an, &req, &opts, true).unwrap().unwrap();
                 let bytes = r.to_bytes().unwrap();
                 (r, bytes)
             });

@@ -14,17 +14,22 @@ use spectral_mesh::shapes::ShapeSpec;
 use spectral_mesh_render::figure::FigureOptions;
 
 /// Keys of a body that are not the request's.
-pub const FACE_KEYS: [&str; 10] = [
+pub const FACE_KEYS: [&str; 15] = [
     "laplacian",
     "normalize",
     "levels",
     "colormap",
     "view",
     "size",
+    "height",
+    "scale",
+    "dpi",
+    "legend",
     "transparent",
     "critical_points",
     "colorbar",
     "format",
+    "segments",
 ];
 
 /// A parsed field or download body.
@@ -44,6 +49,9 @@ pub struct FieldBody {
     pub figure: FigureFile,
     /// Download format (download endpoint only).
     pub format: Option<String>,
+    /// Level-set segments in the binary reply (default true; the page draws a mesh's
+    /// level sets itself and asks for none).
+    pub segments: bool,
 }
 
 /// Why a body was refused (a 400 or 422 for the client).
@@ -98,10 +106,20 @@ impl FieldBody {
         let normalize = take_bool(&mut m, "normalize")?.unwrap_or(NORMALIZE);
         let levels = take_uint(&mut m, "levels", MAX_LEVELS as u64)?.map_or(LEVELS, |l| l as usize);
         let size = take_uint(&mut m, "size", MAX_PICTURE as u64)?.map(|s| s as u32);
-        if let Some(s) = size {
-            spectral_mesh::defaults::check_picture_size(s)
-                .map_err(|e| bad(format!("size: {e}")))?;
+        let height = take_uint(&mut m, "height", MAX_PICTURE as u64)?.map(|s| s as u32);
+        for (key, v) in [("size", size), ("height", height)] {
+            if let Some(s) = v {
+                spectral_mesh::defaults::check_picture_size(s)
+                    .map_err(|e| bad(format!("{key}: {e}")))?;
+            }
         }
+        let scale = match m.remove("scale") {
+            None | Some(Value::Null) => None,
+            Some(v) => match v.as_f64() {
+                Some(x) if x.is_finite() && x > 0.0 => Some(x),
+                _ => return Err(bad(format!("scale: expected a positive number, got {v}"))),
+            },
+        };
         let figure = FigureFile {
             levels: Some(levels),
             colormap: take_str(&mut m, "colormap")?,
@@ -110,7 +128,12 @@ impl FieldBody {
             transparent: take_bool(&mut m, "transparent")?,
             critical_points: take_bool(&mut m, "critical_points")?,
             colorbar: take_bool(&mut m, "colorbar")?,
+            height,
+            scale,
+            dpi: take_uint(&mut m, "dpi", 100_000)?.map(|d| d as u32),
+            legend: take_bool(&mut m, "legend")?,
         };
+        let segments = !matches!(take_bool(&mut m, "segments")?, Some(false));
         let format = take_str(&mut m, "format")?;
         if !m.contains_key("kind") {
             return Err(bad(format!(
@@ -127,6 +150,7 @@ impl FieldBody {
             levels,
             figure,
             format,
+            segments,
         })
     }
 

@@ -8,7 +8,9 @@ use spectral_mesh::analysis::{
     Analysis, AnalysisError, CriticalReport, Field, FieldRequest, TruncationHint,
 };
 use spectral_mesh::fields::harmonic::{Constraint, FloatingComponent};
-use spectral_mesh::fields::level_sets::{level_set_segments, level_values};
+use spectral_mesh::fields::level_sets::level_set_segments;
+use spectral_mesh_render::description::{FieldSummary, FigureDescription, describe};
+use spectral_mesh_render::figure::FigureOptions;
 
 /// Where the server time of one field went, in milliseconds.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
@@ -72,7 +74,9 @@ pub struct FieldHeader {
     /// The library's sentence about them ([`Field::unreachable_message`]), `null` when
     /// every value is finite.
     pub unreachable_message: Option<String>,
-    /// The iso-values of the level sets, ascending.
+    /// The iso-values of the level sets whose segments follow, ascending (those of the
+    /// figure's description: [`spectral_mesh_render::description`], over its colour
+    /// range).
     pub levels: Vec<f64>,
     /// Segments per level set, in the order of `levels`.
     pub level_counts: Vec<u32>,
@@ -83,6 +87,10 @@ pub struct FieldHeader {
     /// the first varying one, with a warning when truncation dominates
     /// ([`spectral_mesh::analysis::TruncationHint`]); `null` for other fields.
     pub truncation: Option<TruncationHint>,
+    /// The figure of this field as the render crate describes it for the options of
+    /// the request (colour map, levels, markers, legend, colour bar): what the page
+    /// shows and what a download draws.
+    pub figure: FigureDescription,
     /// Server time.
     pub timing_ms: Timing,
 }
@@ -98,12 +106,14 @@ pub struct FieldReply {
     pub segments: Vec<f32>,
 }
 
-/// The reply to `request` on `analysis` with `levels` level sets, from the held basis
-/// only: `Ok(None)` when the request needs more eigenpairs than are held.
+/// The reply to `request` on `analysis`, described for `figure` (its level sets' segments
+/// included when `segments`), from the held basis only: `Ok(None)` when the request needs
+/// more eigenpairs than are held.
 pub fn field_reply(
     analysis: &Analysis,
     request: &FieldRequest,
-    levels: usize,
+    figure: &FigureOptions,
+    segments: bool,
 ) -> Result<Option<FieldReply>, AnalysisError> {
     let start = Instant::now();
     let Some(field) = analysis.field_if_ready(request)? else {
@@ -118,10 +128,12 @@ pub fn field_reply(
         Some(analysis.field_critical_points(&field)?)
     };
     let t_critical = start.elapsed();
-    let isos = if categorical {
-        Vec::new()
+    let summary = FieldSummary::of_field(analysis, &field, critical.as_ref());
+    let description = describe(&summary, figure);
+    let isos = if segments {
+        description.levels.clone()
     } else {
-        level_values(min, max, levels)
+        Vec::new()
     };
     let sets = level_set_segments(analysis.mesh(), &field.values, &isos);
     let total: usize = sets.iter().map(Vec::len).sum();
@@ -165,6 +177,7 @@ pub fn field_reply(
         level_counts,
         critical,
         truncation: analysis.truncation_hint(&field),
+        figure: description,
         timing_ms: Timing {
             field: ms(t_field),
             critical: ms(t_critical - t_field),

@@ -25,12 +25,6 @@ const GUIDANCE = {
   eigenfunction: 'One eigenfunction of the Laplacian (component 0 is the constant one); its level sets are nodal-like curves.',
   geodesic: 'Geodesic distance along the surface from the source (the black-edged star), by the heat method, in the mesh\'s units; the level sets are evenly spaced isolines. Click the surface to move the source. Parts the source cannot reach are grey (infinite distance).',
 };
-const QUANTITY = {
-  heat: 'heat kernel k_t(anchor, x)', distance: 'distance from the source', harmonic: 'harmonic map value',
-  'spectral-function': 'signature G(p,p)', segmentation: 'segment label', embedding: 'embedding coordinate',
-  eigenfunction: 'eigenfunction value', diffusion: 'diffusion value', hks: 'heat kernel signature',
-  geodesic: 'geodesic distance from the source',
-};
 
 const app = {
   meshId: null, n: 0, m: 0, info: null, positions: null, normals: null, triangles: null,
@@ -39,6 +33,7 @@ const app = {
   inFlight: false,
   inputTime: 0,          // performance.now() of the latest input not yet drawn
   field: null,           // { header, values: Float32Array, params }
+  figure: null,          // the figure's description shown (header.figure or /api/figure)
   constraints: null,     // explicit harmonic constraints [{vertex, value}], null: the preset
   lastControl: null,     // id of the control behind the request in flight
   framed: null,          // mesh id the camera was aimed for
@@ -66,7 +61,10 @@ window.__clientId = CLIENT_ID;
 
 // ---------- three.js scene ----------
 const view = $('view');
-const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+// No multisampling: in software GL (no GPU) it added 40 % to the time from an input to the
+// frame that shows the new field (99 ms against 70 ms, 3-torus, loaded machine); the level
+// lines are smoothed in the shader. The drawing buffer is kept for tests that read the canvas.
+const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
 renderer.setPixelRatio(window.devicePixelRatio);
 view.prepend(renderer.domElement);
 const scene = new THREE.Scene();
@@ -89,7 +87,19 @@ function resize() {
 window.addEventListener('resize', resize);
 function render() {
   if (app.isCloud) updateSplatScale();
+  updateMarkerBias();
   renderer.render(scene, camera);
+}
+// Markers come towards the viewer by the description's depth bias (f R + s u: R the
+// bounding radius, u world units per screen pixel at the target), as the pictures test
+// their visibility: a marker at a rim is drawn whole.
+const markerBias = { value: 0 };
+function updateMarkerBias() {
+  const b = app.figure?.marker_depth_bias;
+  if (!b) return;
+  const h = Math.max(renderer.domElement.clientHeight, 1);
+  const ppu = (0.5 * h / Math.tan(THREE.MathUtils.degToRad(camera.fov / 2))) / camera.position.distanceTo(controls.target);
+  markerBias.value = b[0] * radius + b[1] / ppu;
 }
 controls.addEventListener('change', render);
 const nextFrame = () => new Promise((r) => requestAnimationFrame(() => r()));
@@ -97,26 +107,25 @@ const nextFrame = () => new Promise((r) => requestAnimationFrame(() => r()));
 // first one's callbacks run before that frame is composited).
 const drawnFrame = () => nextFrame().then(nextFrame);
 
-// ---------- colour maps: one 256 x 1 texture ----------
-const STOPS = {
-  viridis: ['440154', '482878', '3e4989', '31688e', '26828e', '1f9e89', '35b779', '6ece58', 'b5de2b', 'fde725'],
-  turbo: ['30123b', '4145ab', '4675ed', '39a2fc', '1bcfd4', '24eca6', '61fc6c', 'a4fc3b', 'd1e834', 'f3c63a', 'fe9b2d', 'f36315', 'd93806', 'b11901', '7a0403'],
-  diverging: ['3b4cc0', '7092f3', 'aac7fd', 'dddddd', 'f7b89c', 'e7755b', 'b40426'],
-  // HSV hue from red through yellow, green, cyan, blue to magenta (as the server's files).
-  hue: ['ff0000', 'ffff00', '00ff00', '00ffff', '0000ff', 'ff00ff'],
-};
-function lut(name) {
-  const stops = (STOPS[name] || STOPS.viridis).map((h) => [0, 2, 4].map((i) => parseInt(h.slice(i, i + 2), 16)));
+// ---------- the figure: the render crate's description ----------
+// Every field reply carries the figure the server's pictures draw (header.figure: colour
+// stops, range, level values, lighting, markers, legend, colour bar words); a view-only
+// change asks POST /api/figure for the same description with the new options. The page
+// draws what the description says and holds no colour, range, number format or marker
+// style of its own.
+function lut(stops) {
   const data = new Uint8Array(256 * 4);
+  const rgb = (stops && stops.length ? stops : ['#cccccc']).map((h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16)));
   for (let i = 0; i < 256; i++) {
-    const s = (i / 255) * (stops.length - 1);
-    const j = Math.min(Math.floor(s), stops.length - 2), f = s - j;
-    for (let c = 0; c < 3; c++) data[4 * i + c] = Math.round(stops[j][c] + f * (stops[j + 1][c] - stops[j][c]));
+    const s = (i / 255) * (rgb.length - 1);
+    const j = Math.min(Math.floor(s), Math.max(rgb.length - 2, 0)), f = rgb.length > 1 ? s - j : 0;
+    const b = rgb[Math.min(j + 1, rgb.length - 1)];
+    for (let c = 0; c < 3; c++) data[4 * i + c] = Math.round(rgb[j][c] + f * (b[c] - rgb[j][c]));
     data[4 * i + 3] = 255;
   }
   return data;
 }
-const cmapTexture = new THREE.DataTexture(lut('viridis'), 256, 1, THREE.RGBAFormat);
+const cmapTexture = new THREE.DataTexture(lut(null), 256, 1, THREE.RGBAFormat);
 cmapTexture.magFilter = THREE.LinearFilter; cmapTexture.minFilter = THREE.LinearFilter;
 cmapTexture.needsUpdate = true;
 
@@ -124,6 +133,8 @@ const fieldMaterial = new THREE.ShaderMaterial({
   uniforms: {
     cmap: { value: cmapTexture }, lo: { value: 0 }, hi: { value: 1 },
     nLevels: { value: 10 }, showLevels: { value: 1 }, hasField: { value: 0 },
+    ambient: { value: 0.35 }, diffuse: { value: 0.65 }, lightDir: { value: new THREE.Vector3(0, 0, 1) },
+    lineWidth: { value: 2 }, lineColor: { value: new THREE.Color(0x0f0f0f) },
   },
   vertexShader: `
     attribute float scalar;
@@ -136,26 +147,34 @@ const fieldMaterial = new THREE.ShaderMaterial({
     }`,
   fragmentShader: `
     uniform sampler2D cmap;
-    uniform float lo, hi, nLevels, showLevels, hasField;
+    uniform float lo, hi, nLevels, showLevels, hasField, ambient, diffuse, lineWidth;
+    uniform vec3 lightDir, lineColor;
     varying float vS;
     varying vec3 vN;
     void main() {
       vec3 c = vec3(0.8);
+      float d = abs(dot(normalize(vN), lightDir));
       if (hasField > 0.5) {
         float u = hi > lo ? (vS - lo) / (hi - lo) : 0.5;
         c = texture2D(cmap, vec2(clamp(u, 0.0, 1.0) * (255.0 / 256.0) + 0.5 / 256.0, 0.5)).rgb;
+        c *= ambient + diffuse * d;
         if (showLevels > 0.5 && nLevels > 0.5 && hi > lo) {
-          // The server's level values: lo + (i + 1/2) (hi - lo) / nLevels, i < nLevels.
+          // The description's level values: lo + (i + 1/2) (hi - lo) / nLevels, i < nLevels,
+          // lines lineWidth pixels wide (unshaded, as the pictures draw them).
           float x = u * nLevels - 0.5;
           float r = floor(x + 0.5);
           float w = max(fwidth(x), 1e-6);
-          float line = (r >= 0.0 && r <= nLevels - 1.0) ? 1.0 - smoothstep(0.5 * w, 1.5 * w, abs(x - r)) : 0.0;
-          c = mix(c, vec3(0.06), 0.85 * line);
+          float px = abs(x - r) / w;
+          float hw = 0.5 * lineWidth;
+          float line = (r >= 0.0 && r <= nLevels - 1.0) ? 1.0 - smoothstep(hw - 0.5, hw + 0.5, px) : 0.0;
+          c = mix(c, lineColor, line);
         }
+      } else {
+        c *= ambient + diffuse * d;
       }
-      if (vS > 1e38) c = vec3(0.55);
-      float d = abs(dot(normalize(vN), normalize(vec3(0.3, 0.5, 1.0))));
-      gl_FragColor = vec4(c * (0.42 + 0.58 * d), 1.0);
+      // A geodesic distance's unreachable parts (+inf): grey, shaded.
+      if (hasField > 0.5 && vS > 1e38) c = vec3(0.55) * (ambient + diffuse * d);
+      gl_FragColor = vec4(c, 1.0);
     }`,
   side: THREE.DoubleSide,
   polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
@@ -227,53 +246,51 @@ function setLevelLines(segments) {
 }
 
 // ---------- markers: one sprite shape per kind, drawn on the surface ----------
-const MARKERS = {
-  source: { label: 'source / anchor', fill: '#ffd400', stroke: '#000', shape: 'star', size: 22 },
-  constraint: { label: 'constraint', fill: '#ffffff', stroke: '#000', shape: 'square', size: 16 },
-  maximum: { label: 'maximum', fill: '#e0301e', stroke: '#fff', shape: 'up', size: 15 },
-  minimum: { label: 'minimum', fill: '#1f5fe0', stroke: '#fff', shape: 'down', size: 15 },
-  saddle: { label: 'saddle', fill: '#10a040', stroke: '#fff', shape: 'diamond', size: 14 },
-};
-function markerCanvas(kind) {
-  const m = MARKERS[kind];
+// Shapes, colours and sizes are the description's (marker_styles): the outline polygon in
+// the marker's unit box, stroked on the path as the server's pictures draw it.
+const MARKER_TEX = {};
+let markerStyles = {};
+function markerCanvas(st) {
   const c = document.createElement('canvas'); c.width = c.height = 64;
   const g = c.getContext('2d');
   g.beginPath();
-  if (m.shape === 'square') g.rect(12, 12, 40, 40);
-  else if (m.shape === 'up') { g.moveTo(32, 6); g.lineTo(58, 54); g.lineTo(6, 54); g.closePath(); }
-  else if (m.shape === 'down') { g.moveTo(6, 10); g.lineTo(58, 10); g.lineTo(32, 58); g.closePath(); }
-  else if (m.shape === 'diamond') { g.moveTo(32, 4); g.lineTo(60, 32); g.lineTo(32, 60); g.lineTo(4, 32); g.closePath(); }
-  else {
-    for (let i = 0; i < 10; i++) {
-      const r = i % 2 ? 13 : 29, a = -Math.PI / 2 + i * Math.PI / 5;
-      g[i ? 'lineTo' : 'moveTo'](32 + r * Math.cos(a), 33 + r * Math.sin(a));
-    }
-    g.closePath();
-  }
-  g.fillStyle = m.fill; g.fill();
-  g.lineWidth = 5; g.strokeStyle = m.stroke; g.stroke();
+  st.outline.forEach(([x, y], i) => g[i ? 'lineTo' : 'moveTo'](64 * x, 64 * y));
+  g.closePath();
+  g.fillStyle = st.fill; g.fill();
+  g.lineWidth = 64 * st.stroke_width; g.strokeStyle = st.stroke; g.stroke();
   return c;
 }
-const MARKER_TEX = {};
-for (const kind of Object.keys(MARKERS)) {
-  const canvas = markerCanvas(kind);
-  const texture = new THREE.CanvasTexture(canvas);
-  texture.colorSpace = THREE.SRGBColorSpace;
-  MARKER_TEX[kind] = { texture, url: canvas.toDataURL() };
+function setMarkerStyles(styles) {
+  for (const st of styles) {
+    const key = JSON.stringify(st);
+    if (MARKER_TEX[st.kind]?.key === key) continue;
+    const canvas = markerCanvas(st);
+    const texture = new THREE.CanvasTexture(canvas); // colours passed through as drawn
+    MARKER_TEX[st.kind]?.texture.dispose();
+    MARKER_TEX[st.kind] = { texture, url: canvas.toDataURL(), key };
+    markerStyles[st.kind] = st;
+    const m = MARKER_MAT[st.kind];
+    if (m) { m.uniforms.map.value = texture; m.uniforms.size.value = st.size * renderer.getPixelRatio(); }
+  }
 }
-function buildLegend() {
+// The legend: the description's rows (the kinds drawn, the level-set line) and its note.
+function buildLegend(d) {
   const el = $('legend');
   el.innerHTML = '<div class="lg-title">Legend</div>';
-  for (const [kind, m] of Object.entries(MARKERS)) {
+  for (const e of d.legend) {
     const row = document.createElement('div');
-    row.dataset.kind = kind;
-    row.innerHTML = `<img alt="" src="${MARKER_TEX[kind].url}"><span>${m.label}</span>`;
+    row.dataset.kind = e.kind;
+    if (MARKER_TEX[e.kind]) row.innerHTML = `<img alt="" src="${MARKER_TEX[e.kind].url}"><span></span>`;
+    else row.innerHTML = `<svg width="16" height="16"><line x1="0" y1="8" x2="16" y2="8" stroke="${d.line_color}" stroke-width="${d.line_width}"/></svg><span></span>`;
+    row.querySelector('span').textContent = e.label;
     el.appendChild(row);
   }
-  const lines = document.createElement('div');
-  lines.dataset.kind = 'level';
-  lines.innerHTML = '<svg width="16" height="16"><line x1="0" y1="8" x2="16" y2="8" stroke="#111" stroke-width="2"/></svg><span>level set</span>';
-  el.appendChild(lines);
+  if (d.legend_note) {
+    const n = document.createElement('div');
+    n.className = 'lg-note'; n.textContent = d.legend_note;
+    el.appendChild(n);
+  }
+  el.hidden = !d.legend.length && !d.legend_note;
 }
 
 const MARKER_MAT = {};
@@ -288,16 +305,34 @@ function clearMarkers() {
 function addMarkers(kind, vertices) {
   window.__markers[kind] = vertices.length;
   if (!vertices.length) return;
-  const lift = app.isCloud ? 0 : 0.006 * radius;
   const pts = new Float32Array(3 * vertices.length);
   vertices.forEach((v, i) => {
-    for (let c = 0; c < 3; c++) pts[3 * i + c] = app.positions[3 * v + c] + lift * app.normals[3 * v + c];
+    for (let c = 0; c < 3; c++) pts[3 * i + c] = app.positions[3 * v + c];
   });
   const g = new THREE.BufferGeometry();
   g.setAttribute('position', new THREE.BufferAttribute(pts, 3));
-  const mat = MARKER_MAT[kind] || (MARKER_MAT[kind] = new THREE.PointsMaterial({
-    size: MARKERS[kind].size, sizeAttenuation: false, map: MARKER_TEX[kind].texture,
-    transparent: true, alphaTest: 0.3, depthTest: true,
+  if (!MARKER_TEX[kind]) return;
+  const mat = MARKER_MAT[kind] || (MARKER_MAT[kind] = new THREE.ShaderMaterial({
+    uniforms: {
+      map: { value: MARKER_TEX[kind].texture }, size: { value: markerStyles[kind].size * renderer.getPixelRatio() },
+      bias: markerBias,
+    },
+    vertexShader: `
+      uniform float size, bias;
+      void main() {
+        vec4 mv = modelViewMatrix * vec4(position, 1.0);
+        mv.xyz += normalize(-mv.xyz) * bias;
+        gl_Position = projectionMatrix * mv;
+        gl_PointSize = size;
+      }`,
+    fragmentShader: `
+      uniform sampler2D map;
+      void main() {
+        vec4 c = texture2D(map, vec2(gl_PointCoord.x, 1.0 - gl_PointCoord.y));
+        if (c.a < 0.3) discard;
+        gl_FragColor = c;
+      }`,
+    transparent: true, depthTest: true,
   }));
   const o = new THREE.Points(g, mat);
   o.renderOrder = kind === 'source' || kind === 'constraint' ? 3 : 2;
@@ -406,9 +441,9 @@ function filterText(p) {
 }
 
 // The body of a field request: the library's FieldRequest (serde form, tagged by kind)
-// plus the analysis keys and the number of level sets the server draws (none for the
-// page, which draws them in its shader; the downloads ask for them).
-function fieldRequest(p, levels) {
+// plus the analysis keys and the picture options the figure is described for (the level
+// sets' segments only for a point cloud: the page draws a mesh's in its shader).
+function fieldRequest(p) {
   const withSource = (key, r) => (p.source === null ? r : { ...r, [key]: p.source });
   let r;
   switch (p.experiment) {
@@ -422,7 +457,7 @@ function fieldRequest(p, levels) {
     case 'geodesic': r = withSource('source', { kind: 'geodesic' }); break;
     default: r = { kind: 'eigenfunction', index: p.component, k: p.k };
   }
-  return { ...r, laplacian: p.laplacian, normalize: app.defaults.analysis.normalize, levels };
+  return { ...r, laplacian: p.laplacian, normalize: app.defaults.analysis.normalize, ...figureOptions() };
 }
 
 // Why a harmonic request cannot be sent yet (null when it can).
@@ -553,6 +588,7 @@ async function setMesh(reply, fileName = null) {
   app.meshId = reply.mesh_id; app.n = reply.n; app.m = reply.m; app.info = reply.info;
   app.basisKey = null;
   app.field = null;
+  app.figure = null;
   app.framed = null;
   app.constraints = null;
   applyInputKind(reply);
@@ -765,7 +801,7 @@ async function updateOnce() {
   }
   try {
     // A mesh's level sets are drawn in the shader; a cloud's are the library's segments.
-    const body = fieldRequest(p, app.isCloud ? p.levels : 0);
+    const body = { ...fieldRequest(p), segments: app.isCloud };
     const needsBasis = !NO_BASIS.has(body.kind);
     const id = app.meshId;
     if (needsBasis && !(await ensureBasis(p))) return; // superseded by a newer input
@@ -785,8 +821,15 @@ async function updateOnce() {
     app.field.body = body;
     clearErrors();
     drawField();
+    // The view options changed while the field was computed: describe it for them.
+    const sent = { colormap: body.colormap, levels: body.levels, critical_points: body.critical_points };
+    if (JSON.stringify(sent) !== JSON.stringify(figureOptions())) {
+      api('POST', '/api/figure', { summary: app.figure.summary, options: figureOptions() })
+        .then((d) => { applyDescription(d); render(); }).catch((err) => showError('colormap', err.message));
+    }
     await drawnFrame();
     const t2 = performance.now();
+    window.__drawnAt = t2;
     const h = app.field.header;
     const timing = { total_ms: t2 - t0, fetch_ms: t1 - t0, draw_ms: t2 - t1, server_ms: h.timing_ms.total, experiment: p.experiment, control };
     window.__timings.push(timing);
@@ -812,51 +855,68 @@ function fmt(x) {
   return Math.abs(x) >= 1e4 || (Math.abs(x) < 1e-3 && x !== 0) ? x.toExponential(2) : x.toPrecision(4);
 }
 
-function drawColorbar() {
-  const h = app.field?.header;
+// The picture options the description is asked for (the View panel's controls).
+function figureOptions() {
+  return {
+    colormap: $('colormap').value,
+    levels: $('show-levels').checked ? parseInt($('levels').value, 10) : 0,
+    critical_points: $('show-critical').checked,
+  };
+}
+
+// The colour bar of the description: its stops, title, tick labels and units line.
+function drawColorbar(d) {
   const c = $('colorbar-canvas');
   const g = c.getContext('2d');
-  const data = lut($('colormap').value);
   const img = g.createImageData(256, 1);
-  img.data.set(data);
+  img.data.set(lut(d?.stops));
   for (let y = 0; y < c.height; y++) g.putImageData(img, 0, y);
-  if (!h) return;
-  const { lo, hi } = colourRange(h);
-  const quantity = QUANTITY[h.kind] || h.kind;
-  $('colorbar-title').textContent = h.categorical ? `${quantity} (${h.max + 1} segments)` : quantity;
-  const ticks = hi > lo ? [lo, (lo + hi) / 2, hi] : [lo];
-  $('colorbar-ticks').innerHTML = ticks.map((v) => `<span>${fmt(v)}</span>`).join('');
-  const levels = $('show-levels').checked && !h.categorical ? parseInt($('levels').value, 10) : 0;
-  const flat = h.critical?.flat ? ' · constant field' : '';
-  const input = h.point_cloud ? 'point cloud (point-cloud Laplacian) · ' : '';
-  $('colorbar-units').textContent = `${input}${h.normalized ? 'shape scaled to unit area' : 'original size'} · ${h.laplacian}` +
-    `${h.k ? `, k = ${h.k}` : ''}${levels ? ` · ${levels} level sets, spacing ${fmt((h.max - h.min) / levels)}` : ''}${flat}`;
+  const cb = d?.colorbar;
+  $('colorbar').hidden = !cb;
+  if (!cb) return;
+  $('colorbar-title').textContent = cb.title;
+  const ticks = $('colorbar-ticks');
+  ticks.replaceChildren(...cb.ticks.map((t) => { const e = document.createElement('span'); e.textContent = t.label; return e; }));
+  $('colorbar-units').textContent = cb.units;
 }
 
-function colourRange(h) {
-  let lo = h.min, hi = h.max;
-  if ($('colormap').value === 'diverging' && lo < 0 && hi > 0) { const m = Math.max(-lo, hi); lo = -m; hi = m; }
-  return { lo, hi };
+// Where the overlays sit: the description's layout (the pictures place theirs the same).
+function placeOverlays(lay) {
+  const px = (v) => `${v}px`;
+  Object.assign($('legend').style, { top: px(lay.legend_inset), right: px(lay.legend_inset) });
+  Object.assign($('colorbar').style, { left: px(lay.colorbar_inset), bottom: px(lay.colorbar_inset), width: px(lay.colorbar_width) });
+  $('colorbar-canvas').style.height = px(lay.colorbar_height);
 }
 
-// Colours, levels, lines: uniforms only.
-function applyView() {
-  const h = app.field?.header;
+// Shows a figure description: colour texture, range, levels, line, lighting (uniforms
+// only), markers, legend and colour bar.
+function applyDescription(d) {
+  app.figure = d;
+  window.__figure = d;
   const u = fieldMaterial.uniforms;
-  if (h) {
-    const { lo, hi } = colourRange(h);
-    u.lo.value = lo; u.hi.value = hi;
+  // What did not change is not redone: a new field of the same look costs uniforms only
+  // (no texture upload, no legend or colour bar repaint in the frames after it).
+  const changed = (k, v) => { const j = JSON.stringify(v); if (shown[k] === j) return false; shown[k] = j; return true; };
+  if (changed('stops', d.stops)) {
+    cmapTexture.image.data.set(lut(d.stops));
+    cmapTexture.needsUpdate = true;
   }
-  u.nLevels.value = parseInt($('levels').value, 10);
-  u.showLevels.value = $('show-levels').checked && !(h && h.categorical) ? 1 : 0;
-  if (levelObj) levelObj.visible = $('show-levels').checked;
-  drawColorbar();
+  u.lo.value = d.range[0]; u.hi.value = d.range[1];
+  u.nLevels.value = d.levels.length;
+  u.showLevels.value = d.levels.length ? 1 : 0;
+  u.lineWidth.value = d.line_width * renderer.getPixelRatio();
+  u.lineColor.value.set(d.line_color);
+  u.ambient.value = d.lighting.ambient; u.diffuse.value = d.lighting.diffuse;
+  u.lightDir.value.set(...d.lighting.direction);
+  if (levelObj) levelObj.visible = d.levels.length > 0;
+  levelMaterial.color.set(d.line_color);
+  setMarkerStyles(d.marker_styles);
+  if (changed('layout', d.layout)) placeOverlays(d.layout);
+  if (changed('legend', [d.legend, d.legend_note])) buildLegend(d);
+  if (changed('colorbar', [d.stops, d.colorbar])) drawColorbar(d);
+  drawMarkers();
 }
-
-function setColormap(name) {
-  cmapTexture.image.data.set(lut(name));
-  cmapTexture.needsUpdate = true;
-}
+const shown = {};
 
 function drawField() {
   if (!app.field || !meshObj) return;
@@ -870,8 +930,7 @@ function drawField() {
   fieldMaterial.uniforms.hasField.value = 1;
   if (app.isCloud) setLevelLines(app.field.segments);
   frameSource(header.source);
-  applyView();
-  drawMarkers();
+  applyDescription(header.figure);
   showK(header);
   renderConstraintList();
   const el = $('critical');
@@ -911,16 +970,14 @@ function hiddenNote(cp) {
 // constraint removed or added is shown at once, not when the next map arrives).
 function drawMarkers() {
   clearMarkers();
-  const h = app.field?.header;
-  const cp = h?.critical;
-  if (h && $('show-critical').checked && cp) {
-    addMarkers('minimum', cp.points.minima);
-    addMarkers('maximum', cp.points.maxima);
-    addMarkers('saddle', cp.points.saddles.map(([v]) => v));
+  const d = app.figure;
+  for (const m of d?.marks || []) {
+    if (m.kind === 'constraint') continue;
+    addMarkers(m.kind, m.vertices.filter((v) => v < app.n));
   }
+  const h = app.field?.header;
   const constraints = $('experiment').value === 'harmonic' ? shownConstraints() : (h?.constraints || []);
   if (app.positions) addMarkers('constraint', constraints.map((c) => c.vertex).filter((v) => v < app.n));
-  if (h && h.source !== null && h.source !== undefined) addMarkers('source', [h.source]);
 }
 
 // ---------- picking ----------
@@ -986,11 +1043,30 @@ window.__screenOf = (v) => {
 };
 
 // ---------- downloads ----------
+// The camera on screen in the render crate's text form (eye, target, up, vertical field
+// of view): the download draws what the page shows.
+function cameraText() {
+  const n = (v) => [v.x, v.y, v.z].map(String).join(',');
+  return `camera:${n(camera.position)},${n(controls.target)},${n(camera.up)},${camera.fov}`;
+}
+// A download: the field request with the picture options on screen, the camera, and the
+// size (the canvas times the chosen scale) and print resolution chosen.
+function downloadBody(format) {
+  const c = renderer.domElement;
+  const scale = Number($('dl-scale').value) || 1;
+  const dpi = Math.round(Number($('dl-dpi').value));
+  return {
+    ...fieldRequest(params()), format, view: cameraText(),
+    size: Math.round(c.clientWidth * scale), height: Math.round(c.clientHeight * scale), scale,
+    ...(dpi > 0 ? { dpi } : {}),
+  };
+}
 function downloadUrl(format) {
-  const body = { ...fieldRequest(params(), parseInt($('levels').value, 10)), colormap: $('colormap').value };
+  const body = downloadBody(format);
   const q = new URLSearchParams({ format, body: JSON.stringify(body) });
   return `/api/mesh/${app.meshId}/download?${q}`;
 }
+window.__downloadBody = downloadBody;
 document.querySelectorAll('#downloads a').forEach((a) => {
   a.addEventListener('click', async (e) => {
     e.preventDefault();
@@ -1018,15 +1094,22 @@ function onInput(e) {
   refreshParamVisibility();
   requestUpdate();
 }
-// View-only changes: no request, recoloured on the GPU; timed from the input to the frame.
+// View-only changes: no field request; the figure's description for the new options
+// (one small request), recoloured on the GPU; timed from the input to the frame.
+let viewSeq = 0;
 async function onViewInput(e) {
   // A cloud's level sets are the server's segments: a new number of levels is a request.
-  if (app.isCloud && e.target.id === 'levels') { onInput(e); return; }
-  const t0 = performance.now();
-  if (e.target.id === 'colormap') setColormap($('colormap').value);
+  if (app.isCloud && (e.target.id === 'levels' || e.target.id === 'show-levels')) { onInput(e); return; }
+  const t0 = e?.timeStamp > 0 ? Math.min(e.timeStamp, performance.now()) : performance.now();
   $('levels-val').textContent = $('levels').value;
-  applyView();
-  if (e.target.id === 'show-critical') drawMarkers();
+  const seq = ++viewSeq;
+  try {
+    if (app.figure) {
+      const d = await api('POST', '/api/figure', { summary: app.figure.summary, options: figureOptions() });
+      // A newer view change asked meanwhile: its description is the one drawn.
+      if (seq === viewSeq) applyDescription(d);
+    }
+  } catch (err) { showError(e.target.id, err.message); }
   render();
   await drawnFrame();
   window.__timings.push({ total_ms: performance.now() - t0, server_ms: 0, control: e.target.id });
@@ -1084,10 +1167,9 @@ function applyDefaults(d) {
 
 async function init() {
   try { applyDefaults(await api('GET', '/api/defaults')); } catch (e) { showError('shape-spec', e.message); return; }
-  buildLegend();
   resize();
   refreshParamVisibility();
-  drawColorbar();
+  drawColorbar(null);
   try {
     const s = await api('GET', '/api/shapes');
     for (const sh of s.shapes) {

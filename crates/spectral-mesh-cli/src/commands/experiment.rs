@@ -474,21 +474,21 @@ pub fn run_harmonic(
         laplacian,
     )?;
     for (i, map) in run.maps.iter().enumerate() {
-        let sources: Vec<usize> = map.constraints.iter().map(|c| c.vertex).collect();
+        let constrained: Vec<usize> = map.constraints.iter().map(|c| c.vertex).collect();
         let mut fig = Figure::new(
             an.mesh(),
             &map.field,
-            sources,
+            Vec::new(),
             FigureOptions {
                 critical_points: false,
                 ..o.figure
             },
         )?;
         fig.point_radius = an.point_spacing().map(|h| POINT_RADIUS_FACTOR * h);
+        fig.mark_constraints(constrained);
         if o.figure.critical_points {
-            fig.critical = Some(map.critical.points.clone());
-            let h = &map.critical.hidden;
-            fig.critical_hidden = h.minima + h.maxima + h.saddles;
+            fig.options.critical_points = true;
+            fig.use_report(&map.critical);
         }
         for p in &paths[3 * i..3 * i + 3] {
             fig.write(p)?;

@@ -29,7 +29,7 @@ pub struct Args {
     /// Output format: png, wrl, ply or txt.
     #[arg(long)]
     pub format: Option<String>,
-    /// Vertices to mark as sources (yellow).
+    /// Vertices to mark as sources (yellow stars, as the web page draws them).
     #[arg(long = "mark")]
     pub marks: Vec<usize>,
     /// Overwrite the output if it exists.

@@ -819,6 +819,10 @@ class Analysis:
         transparent: bool = FIGURE["transparent"],
         critical_points: bool = FIGURE["critical_points"],
         colorbar: bool = FIGURE["colorbar"],
+        legend: bool = FIGURE["legend"],
+        height: int | None = None,
+        scale: float | None = None,
+        dpi: int | None = None,
     ) -> npt.NDArray[np.uint8] | None:
         """Draw a field on this mesh; see :func:`spectral_mesh.render`. ``marks=None``
         marks the vertices of the last field request (its source, anchor or constraints)
@@ -826,5 +830,6 @@ class Analysis:
         if marks is None:
             marks = self._info.get("marks", []) if values is self._last else []
         args = _render_args(values, self.n, marks, labels, levels, colormap, view, size,
-                            transparent, critical_points, colorbar, path)
+                            transparent, critical_points, colorbar, path,
+                            legend=legend, height=height, scale=scale, dpi=dpi)
         return self._a.render(*args)

@@ -561,7 +561,8 @@ def _marks(marks: int | Sequence[int] | None) -> list[int]:
 
 def _render_args(values: Any, n: int, marks: Any, labels: Any, levels: Any, colormap: Any,
                  view: Any, size: Any, transparent: Any, critical_points: Any,
-                 colorbar: Any, path: Any) -> tuple[Any, ...]:
+                 colorbar: Any, path: Any, *, legend: Any = True, height: Any = None,
+                 scale: Any = None, dpi: Any = None) -> tuple[Any, ...]:
     """The native render's arguments after the mesh (values, marks, labels, the picture
     options as one dict, path), checked and converted: the one way of :func:`render` and
     :meth:`Analysis.render` (``n`` vertices)."""
@@ -575,6 +576,10 @@ def _render_args(values: Any, n: int, marks: Any, labels: Any, levels: Any, colo
         "transparent": bool(transparent),
         "critical_points": bool(critical_points),
         "colorbar": bool(colorbar),
+        "legend": bool(legend),
+        "height": None if height is None else _arrays.count(height, "height", 1),
+        "scale": None if scale is None else _arrays.real(scale, "scale"),
+        "dpi": None if dpi is None else _arrays.count(dpi, "dpi", 1),
     }
     return vals, marks, labels, figure, None if path is None else os.fspath(path)
 
@@ -594,6 +599,10 @@ def render(
     transparent: bool = FIGURE["transparent"],
     critical_points: bool = FIGURE["critical_points"],
     colorbar: bool = FIGURE["colorbar"],
+    legend: bool = FIGURE["legend"],
+    height: int | None = None,
+    scale: float | None = None,
+    dpi: int | None = None,
 ):
     """Draw a per-vertex field on the mesh, the way the CLI and the web app draw it.
 
@@ -602,17 +611,25 @@ def render(
     returned; without it the picture is returned as a ``(size, size, 4)`` uint8 RGBA
     array (``matplotlib.pyplot.imshow`` shows it).
 
-    ``values``: ``(n,)`` real. ``marks``: vertices drawn as yellow dots (a source, an
-    anchor, constraints). ``labels``: ``(n,)`` non-negative integers (a segmentation):
+    ``values``: ``(n,)`` real. ``marks``: vertices drawn as stars (a source, an
+    anchor). ``labels``: ``(n,)`` non-negative integers (a segmentation):
     one colour per label instead of the colour map, no level sets. ``levels``: number of
     evenly spaced level sets drawn (0 = none). ``colormap``: ``"hue"`` (the paper's, red
     through magenta), ``"viridis"``, ``"turbo"``, ``"diverging"``, ``"grey"``. ``view``:
-    ``"front"``, ``"side"``, ``"top"``, ``"iso"`` or ``(azimuth, elevation)`` in degrees.
-    ``critical_points``: mark minima (blue), maxima (red) and saddles (green).
+    ``"front"``, ``"side"``, ``"top"``, ``"iso"``, ``(azimuth, elevation)`` in degrees, or
+    a camera ``"camera:EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV"`` (eye, target, up, vertical field of
+    view in degrees; the web page's download sends its camera so). ``size`` is the width,
+    ``height`` the height (default ``size``); ``scale``: picture pixels per screen pixel of
+    the markers, lines and text (default the smaller side / 800); ``dpi``: print
+    resolution written into the PNG. ``critical_points``: mark minima (blue triangles
+    down), maxima (red triangles up) and saddles (green diamonds). ``legend``: draw the
+    legend (top right; the colour bar is at the bottom left). The same options as the
+    command line's ``render`` give the same picture.
     """
     V, F = _arrays.mesh(V, F)
     args = _render_args(values, V.shape[0], marks, labels, levels, colormap, view, size,
-                        transparent, critical_points, colorbar, path)
+                        transparent, critical_points, colorbar, path,
+                        legend=legend, height=height, scale=scale, dpi=dpi)
     return _native.render(V, F, *args)
 
 

@@ -30,6 +30,10 @@ Figure = TypedDict(
         "transparent": bool,
         "critical_points": bool,
         "colorbar": bool,
+        "legend": bool,
+        "height": int | None,
+        "scale": float | None,
+        "dpi": int | None,
     },
 )
 

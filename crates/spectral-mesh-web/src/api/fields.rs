@@ -73,11 +73,13 @@ pub(super) async fn compute(
         StatusCode::UNPROCESSABLE_ENTITY,
     )
     .await?;
+    let figure = body.figure_options()?;
     let (s2, an) = (s.clone(), analysis.clone());
     let (reply, bytes) = tokio::task::spawn_blocking(move || -> ApiResult<_> {
         let before = an.memory_bytes();
         let reply = s2.on_field_threads(|| -> ApiResult<_> {
-            let Some(r) = field_reply(&an, &body.request, body.levels)? else {
+            let segments = body.segments && body.levels > 0;
+            let Some(r) = field_reply(&an, &body.request, &figure, segments)? else {
                 return Ok(None);
             };
             let bytes = if encode {

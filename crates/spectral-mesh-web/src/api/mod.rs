@@ -16,6 +16,7 @@ mod basis;
 mod defaults;
 mod downloads;
 mod fields;
+mod figure;
 mod guard;
 mod meshes;
 mod reading;
@@ -24,6 +25,7 @@ mod static_files;
 use basis::{basis_status, cancel_basis, start_basis};
 use downloads::{download_get, download_post};
 use fields::field;
+use figure::figure;
 use guard::guard;
 use meshes::{geometry, health, load_mesh, mesh_info, shapes};
 use static_files::{app_js, index, orbit_js, style_css, three_js};
@@ -48,6 +50,7 @@ pub fn router(state: Arc<AppState>) -> Router {
         .route("/api/health", get(health))
         .route("/api/defaults", get(defaults::defaults))
         .route("/api/shapes", get(shapes))
+        .route("/api/figure", post(figure))
         .route("/api/mesh", post(load_mesh))
         .route("/api/mesh/{id}", get(mesh_info))
         .route("/api/mesh/{id}/geometry", get(geometry))

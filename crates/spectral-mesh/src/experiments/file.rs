@@ -57,6 +57,18 @@ pub struct FigureFile {
     /// Draw the colour bar.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub colorbar: Option<bool>,
+    /// Picture height in pixels (default: `size`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<u32>,
+    /// Picture pixels per screen pixel (markers, lines, text).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+    /// Print resolution of the PNG, dots per inch.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dpi: Option<u32>,
+    /// Draw the legend.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub legend: Option<bool>,
 }
 
 /// The point-cloud Laplacian's parameters (`[point_cloud]`), for an input that is a point
@@ -377,6 +389,16 @@ impl ExperimentFile {
             if let Some(s) = f.size {
                 crate::defaults::values::check_picture_size(s)
                     .map_err(|e| key_err("figure.size", e))?;
+            }
+            if let Some(s) = f.height
+                && !(16..=8192).contains(&s)
+            {
+                return Err(key_err("figure.height", format!("{s}: must be 16..8192")));
+            }
+            if let Some(d) = f.dpi
+                && !(1..=100_000).contains(&d)
+            {
+                return Err(key_err("figure.dpi", format!("{d}: must be 1..100000")));
             }
         }
         if let Some(p) = &self.point_cloud {
