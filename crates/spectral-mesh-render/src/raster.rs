@@ -71,14 +71,17 @@ pub struct CameraSpec {
     pub fov_deg: f64,
 }
 
+/// A camera's `(right, up, toward_camera, distance)`: see [`CameraSpec::frame`].
+pub type CameraFrame = ([f64; 3], [f64; 3], [f64; 3], f64);
+
 impl CameraSpec {
     /// `(right, up, toward_camera, distance)`: the orthonormal frame of the camera and the
     /// distance from the eye to the target; `None` for a degenerate camera (eye on the
     /// target, up along the viewing direction, non-finite numbers).
-    pub fn frame(&self) -> Option<([f64; 3], [f64; 3], [f64; 3], f64)> {
+    pub fn frame(&self) -> Option<CameraFrame> {
         let d = sub(self.eye, self.target);
         let dist = norm(d);
-        if !(dist.is_finite() && dist > 0.0) || !(self.fov_deg > 0.0 && self.fov_deg < 180.0) {
+        if !(dist.is_finite() && dist > 0.0 && self.fov_deg > 0.0 && self.fov_deg < 180.0) {
             return None;
         }
         let toward = [d[0] / dist, d[1] / dist, d[2] / dist];

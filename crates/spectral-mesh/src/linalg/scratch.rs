@@ -156,7 +156,6 @@ mod tests {
                     .iter()
                     .all(|&fresh| fresh)
             );
-    
         });
     }
 
