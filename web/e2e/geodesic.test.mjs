@@ -57,7 +57,7 @@ test('geodesic distance: a click sets the source, the distance is 0 there, evenl
   // one a curve on the surface; the text download is the page's field.
   const server = await page.evaluate(async ([body, l]) => {
     const id = new URL(window.__downloadUrl('txt'), location.href).pathname.split('/')[3];
-    const res = await fetch(`/api/mesh/${id}/field`, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify({ ...body, levels: l }) });
+    const res = await fetch(`/api/mesh/${id}/field`, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify({ ...body, levels: l, segments: true }) });
     const buf = await res.arrayBuffer();
     const hl = new DataView(buf).getUint32(0, true);
     const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buf, 4, hl)));

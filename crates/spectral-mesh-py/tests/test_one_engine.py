@@ -198,6 +198,23 @@ WHERE: dict[str, dict[str, str]] = {
     "eigsh": {"seed": "analysis/seed", "method": "analysis/method"},
     "save_basis": {"kind": "analysis/kind"},
     "geodesic_distance": {"kind": "analysis/kind"},
+    "functional_map": {
+        "k": "correspondence/k",
+        "kind": "analysis/kind",
+        "descriptor": "correspondence/descriptors/kind",
+        "n_descr": "correspondence/descriptors/count",
+        "subsample_step": "correspondence/descriptors/subsample_step",
+        "w_descr": "correspondence/weights/descriptors",
+        "w_lap": "correspondence/weights/laplacian",
+        "w_dcomm": "correspondence/weights/commutativity",
+        "w_orient": "correspondence/weights/orientation",
+        "fix_constant": "correspondence/weights/fix_constant",
+    },
+    "zoomout": {
+        "k_final": "correspondence/zoomout_k",
+        "step": "correspondence/zoomout_step",
+        "kind": "analysis/kind",
+    },
     "render": _FIGURE,
     "batch": {
         "k": "batch/k",
@@ -255,6 +272,9 @@ NOT_LIBRARY = {
     "batch": {"retries", "retry_failed", "force"},
     "load_basis": {"with_mass"},
     "Analysis.field": {"return_info"},
+    # Which map and which way (pyFM's keywords), and what is returned.
+    "functional_map": {"orient_reversing", "return_energy"},
+    "p2p": {"adjoint", "to_second"},
     "Analysis.from_file": {"use_normals"},
 }
 

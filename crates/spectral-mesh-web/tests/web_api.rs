@@ -454,6 +454,7 @@ async fn every_kind_with_defaults_is_the_librarys_field() {
         json!({"kind": "embedding"}),
         json!({"kind": "eigenfunction"}),
         json!({"kind": "green"}),
+        json!({"kind": "geodesic"}),
     ];
     let mut kinds = std::collections::BTreeSet::new();
     for body in bodies {

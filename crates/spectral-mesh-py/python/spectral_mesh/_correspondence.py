@@ -21,7 +21,7 @@ from . import _arrays, _native
 from ._api import eigenbasis
 from ._defaults import KIND
 
-_D: dict = json.loads(_native.correspondence_defaults())
+_D: dict = _native.defaults()["correspondence"]
 #: The library's defaults of the correspondence functions (``k``, ``zoomout_k``,
 #: ``zoomout_step``, ``descriptors``, ``weights``).
 CORRESPONDENCE: dict = _D

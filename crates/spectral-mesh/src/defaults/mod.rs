@@ -117,6 +117,7 @@ pub fn to_json() -> Value {
             "thumbnail": bp.thumbnail,
             "geodesic": bp.geodesic,
         },
+        "correspondence": serde_json::to_value(crate::correspondence::MatchParams::default()).unwrap_or(Value::Null),
         "pictures": {
             "levels": LEVELS,
             "max_levels": MAX_LEVELS,

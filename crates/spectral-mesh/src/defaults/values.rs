@@ -82,3 +82,7 @@ pub mod server {
     /// Inputs and analyses unused for this many seconds are dropped (0: never).
     pub const IDLE_SECONDS: u64 = 3600;
 }
+
+/// Default `m` of the heat method's time step `t = m h^2` (`h` the mean edge length;
+/// potpourri3d's `t_coef`): geodesic field requests and [`crate::geodesic::GeodesicParams`].
+pub const DEFAULT_GEODESIC_TIME_FACTOR: f64 = 1.0;

@@ -117,7 +117,7 @@ pub struct GeodesicParams {
 impl Default for GeodesicParams {
     fn default() -> Self {
         Self {
-            time_factor: crate::analysis::request::DEFAULT_GEODESIC_TIME_FACTOR,
+            time_factor: crate::defaults::values::DEFAULT_GEODESIC_TIME_FACTOR,
             convention: Convention::Crane,
             robust: RobustParams::default(),
         }

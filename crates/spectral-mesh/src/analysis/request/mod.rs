@@ -44,9 +44,7 @@ pub const DEFAULT_PERSISTENCE: f64 = 0.05;
 /// Default index of single eigenfunctions and embedding coordinates: the first pair after
 /// the constant one.
 pub const DEFAULT_COMPONENT: usize = 1;
-/// Default `m` of the heat method's time step `t = m h^2` (`h` the mean edge length;
-/// potpourri3d's `t_coef`): geodesic field requests and [`crate::geodesic::GeodesicParams`].
-pub const DEFAULT_GEODESIC_TIME_FACTOR: f64 = 1.0;
+pub use crate::defaults::values::DEFAULT_GEODESIC_TIME_FACTOR;
 /// Longest filter or signature text accepted (a bound on what a client can make us parse).
 pub const MAX_SPEC_LEN: usize = 1000;
 
