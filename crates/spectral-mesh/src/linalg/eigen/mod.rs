@@ -268,15 +268,22 @@ fn indicators_only(
 
 /// The block size of the sparse solver for `k` pairs of a problem of dimension `dim`
 /// (when the options leave it to the solver): `k / 12` rounded down to a multiple of 4,
-/// between 4 and 16, so 4 for k = 30-95, 8 for k = 96-143, 12 for k = 144-191 and 16
-/// from k = 192. A smaller block needs fewer solves for the same tolerance (the Krylov
-/// space grows by smaller steps between restarts; at k = 50 on 26k vertices blocks of 4
-/// took 168 solves where 8 took 216) but gives thinner matrix products; a multiple of 4
-/// keeps the products' column tiles full. Measured on 26k vertices, whole `eigs`
-/// command: blocks of 4 at k = 50 and 8 at k = 128 took about 0.75 of the time of the
-/// earlier rule's 8 and 10; from k = 200 the rule is unchanged (16).
+/// at most 16, so 4 for k = 48-95, 8 for k = 96-143, 12 for k = 144-191 and 16 from
+/// k = 192; below k = 48, 8. A smaller block needs fewer solves for the same tolerance
+/// (the Krylov space grows by smaller steps between restarts; at k = 50 on 26k vertices
+/// blocks of 4 took 168 solves where 8 took 216) but gives thinner matrix products; a
+/// multiple of 4 keeps the products' column tiles full. Measured on 26k vertices, whole
+/// `eigs` command: blocks of 4 at k = 50 and 8 at k = 128 took about 0.83 of the time of
+/// the earlier rule's 8 and 10. Below k = 48 the block stays 8: there the wanted set ends
+/// after few restarts, and a block of 4 missed one copy of the sphere's 9-fold eigenvalue
+/// at k = 25 (a block Krylov space holds a multiplicity above twice its block only by
+/// rounding; the certificate, `--certify`, catches such a miss).
 pub fn default_block_size(dim: usize, k: usize) -> usize {
-    (k / 12 / 4 * 4).clamp(4, 16).min(dim)
+    match k / 12 / 4 * 4 {
+        0 => 8,
+        b => b.min(16),
+    }
+    .min(dim)
 }
 
 /// Columns of the sparse solver's search space for `k` pairs of a problem of dimension
