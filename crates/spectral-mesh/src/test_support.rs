@@ -46,6 +46,49 @@ pub(crate) fn unit_square() -> Mesh {
     .unwrap()
 }
 
+/// The regular octahedron with vertices `+-e_x, +-e_y, +-e_z` (indices `2 a` and `2 a + 1`
+/// for the positive and negative end of axis `a`), one triangle per octant, every one
+/// oriented outward.
+pub(crate) fn octahedron() -> (Vec<[f64; 3]>, Vec<[usize; 3]>) {
+    let mut positions = Vec::new();
+    for axis in 0..3 {
+        for sign in [1.0, -1.0] {
+            let mut p = [0.0; 3];
+            p[axis] = sign;
+            positions.push(p);
+        }
+    }
+    let mut triangles = Vec::new();
+    for octant in 0..8 {
+        let [x, y, z] = [0, 1, 2].map(|a| 2 * a + ((octant >> a) & 1));
+        // An odd number of negative ends mirrors the octant: reverse the winding.
+        let odd = (octant as u32).count_ones() % 2 == 1;
+        triangles.push(if odd { [y, x, z] } else { [x, y, z] });
+    }
+    (positions, triangles)
+}
+
+/// An `m x m` grid of vertices (index `j * m + i`, at `position(i, j)`), each cell split
+/// into two triangles along its diagonal from `(i, j)` to `(i + 1, j + 1)`, counter-clockwise
+/// when `i` and `j` run along x and y.
+pub(crate) fn grid(m: usize, mut position: impl FnMut(usize, usize) -> [f64; 3]) -> Mesh {
+    let mut p = Vec::with_capacity(m * m);
+    for j in 0..m {
+        for i in 0..m {
+            p.push(position(i, j));
+        }
+    }
+    let mut t = Vec::new();
+    for j in 0..m.saturating_sub(1) {
+        for i in 0..m - 1 {
+            let a = j * m + i;
+            t.push([a, a + 1, a + m + 1]);
+            t.push([a, a + m + 1, a + m]);
+        }
+    }
+    Mesh::new(p, t).unwrap()
+}
+
 /// A deterministic stream of numbers in `[0, 1)` from `seed` (Knuth's MMIX linear
 /// congruential generator, the high bits): reproducible test inputs, not statistics.
 pub(crate) fn lcg(seed: u64) -> impl FnMut() -> f64 {

@@ -184,27 +184,10 @@ mod tests {
     #[test]
     fn orientation_is_made_consistent() {
         // An octahedron with every other triangle flipped.
-        let mut tris = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
+        let (pos, mut tris) = crate::test_support::octahedron();
         for t in tris.iter_mut().step_by(2) {
             t.swap(0, 1);
         }
-        let pos = vec![
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
         let before = Topology::new(&Mesh::new(pos.clone(), tris.clone()).unwrap());
         assert!(before.inconsistently_oriented_edges > 0);
         orient(&mut tris);

@@ -568,22 +568,7 @@ mod tests {
     #[test]
     fn open_mesh_gives_open_polyline() {
         // A 4x4 grid of squares; field x; level through the interior.
-        let n = 5;
-        let mut p = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                p.push([i as f64, j as f64, 0.0]);
-            }
-        }
-        let mut t = Vec::new();
-        for j in 0..n - 1 {
-            for i in 0..n - 1 {
-                let a = j * n + i;
-                t.push([a, a + 1, a + n + 1]);
-                t.push([a, a + n + 1, a + n]);
-            }
-        }
-        let mesh = Mesh::new(p, t).unwrap();
+        let mesh = crate::test_support::grid(5, |i, j| [i as f64, j as f64, 0.0]);
         let field: Vec<f64> = mesh.positions().iter().map(|q| q[0] + 0.1 * q[1]).collect();
         // Value exactly at vertex values (x = 2 on row 0) and in between.
         for v in [2.0, 1.7, 0.35, 3.95] {

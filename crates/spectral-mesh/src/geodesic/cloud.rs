@@ -5,7 +5,7 @@
 use rayon::prelude::*;
 
 use crate::linalg::SparseMatrix;
-use crate::mesh::{PointCloud, cross, dot, norm, normalize, sub};
+use crate::mesh::{PointCloud, cross, norm, normalize, plane_coordinates};
 use crate::operators::point_cloud::{NormalSource, nearest_neighbors, pca_normal};
 
 /// Neighbours of the least-squares gradient of each point by default.
@@ -55,13 +55,7 @@ impl TangentGradient {
                 let e1 = normalize(perpendicular(nrm));
                 let e2 = cross(nrm, e1);
                 let nb: Vec<usize> = nb_pca[i].iter().take(k).copied().collect();
-                let x: Vec<[f64; 2]> = nb
-                    .iter()
-                    .map(|&j| {
-                        let d = sub(pts[j], p);
-                        [dot(d, e1), dot(d, e2)]
-                    })
-                    .collect();
+                let x = plane_coordinates(pts, &nb, p, [e1, e2]);
                 (nb.clone(), least_squares(&x))
             })
             .collect();
@@ -249,6 +243,7 @@ fn perpendicular(d: [f64; 3]) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::{dot, sub};
 
     #[test]
     fn gradient_of_a_linear_function_is_exact_and_divergence_is_its_adjoint() {

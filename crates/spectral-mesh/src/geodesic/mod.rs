@@ -1048,14 +1048,7 @@ fn check_time_factor(params: &GeodesicParams) -> Result<(), GeodesicError> {
 
 /// Mean length of the distinct edges of `triangles` over `positions` (0 without edges).
 fn mean_edge_length_of(positions: &[[f64; 3]], triangles: &[[usize; 3]]) -> f64 {
-    let mut e: Vec<(usize, usize)> = Vec::with_capacity(3 * triangles.len());
-    for t in triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            e.push((a.min(b), a.max(b)));
-        }
-    }
-    e.par_sort_unstable();
+    let mut e = crate::mesh::sorted_edges(triangles);
     e.dedup();
     let s: f64 = e
         .iter()
@@ -1094,14 +1087,7 @@ pub fn distinct_mean_edge_length(mesh: &Mesh) -> f64 {
 
 /// `true` for the vertices of edges with exactly one triangle.
 fn boundary_vertices(mesh: &Mesh) -> Vec<bool> {
-    let mut e: Vec<(usize, usize)> = Vec::with_capacity(3 * mesh.n_triangles());
-    for t in mesh.triangles() {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            e.push((a.min(b), a.max(b)));
-        }
-    }
-    e.par_sort_unstable();
+    let e = crate::mesh::sorted_edges(mesh.triangles());
     let mut out = vec![false; mesh.n_vertices()];
     let mut i = 0;
     while i < e.len() {

@@ -22,7 +22,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use super::{IoError, atomic_write, read_file};
+use super::{IoError, atomic_write, read_with};
 
 /// Parses a per-vertex field (format in the module documentation). `origin` labels every
 /// error (a file name, `<upload>`, ...); `n`, when given, is the number of values expected
@@ -88,19 +88,20 @@ pub fn read_field_text(text: &str, origin: &str, n: Option<usize>) -> Result<Vec
 
 /// Reads a per-vertex field file ([`read_field_text`]); errors name the path.
 pub fn read_field(path: &Path, n: Option<usize>) -> Result<Vec<f64>, IoError> {
-    let (bytes, name) = read_file(path)?;
-    let text = std::str::from_utf8(&bytes).map_err(|e| {
-        let line = 1 + bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count();
-        IoError::Invalid {
-            path: name.clone(),
-            line: Some(line),
-            message: "the file is not UTF-8 text".to_string(),
-        }
-    })?;
-    read_field_text(text, &name, n)
+    read_with(path, |bytes, name| {
+        let text = std::str::from_utf8(bytes).map_err(|e| {
+            let line = 1 + bytes[..e.valid_up_to()]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count();
+            IoError::Invalid {
+                path: name.to_string(),
+                line: Some(line),
+                message: "the file is not UTF-8 text".to_string(),
+            }
+        })?;
+        read_field_text(text, name, n)
+    })
 }
 
 /// The text of a field file: one value per line, shortest round-trip notation. Refuses

@@ -242,27 +242,28 @@ pub struct WriteOptions {
 /// Reads a mesh file; the format comes from the extension, or from the content when the
 /// extension is missing or wrong.
 pub fn read_mesh(path: &Path) -> Result<LoadedMesh, IoError> {
-    let (bytes, name) = read_file(path)?;
-    read_mesh_from_bytes(&bytes, &name)
+    read_with(path, read_mesh_from_bytes)
 }
 
-/// The bytes of a file and its name for messages (the one read of every reader here).
-pub(crate) fn read_file(path: &Path) -> Result<(Vec<u8>, String), IoError> {
+/// Reads the file at `path` and parses its bytes with `parse`, which gets the path as the
+/// name for its messages (the one read of every reader here).
+pub(crate) fn read_with<T>(
+    path: &Path,
+    parse: impl FnOnce(&[u8], &str) -> Result<T, IoError>,
+) -> Result<T, IoError> {
     let name = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|source| IoError::Io {
         path: name.clone(),
         action: "read",
         source,
     })?;
-    Ok((bytes, name))
+    parse(&bytes, &name)
 }
 
 /// Reads a mesh from memory. `name_hint` is a file name: its extension gives the format
 /// (content sniffing otherwise, as in [`read_mesh`]) and it labels every message.
 pub fn read_mesh_from_bytes(bytes: &[u8], name_hint: &str) -> Result<LoadedMesh, IoError> {
-    let ctx = Ctx {
-        name: name_hint.to_string(),
-    };
+    let ctx = Ctx::new(name_hint);
     let by_name = MeshFormat::from_path(Path::new(name_hint));
     let by_content = sniff(bytes);
     let mut warnings = Vec::new();
@@ -461,6 +462,13 @@ pub(crate) struct Ctx {
 }
 
 impl Ctx {
+    /// The context of the file or buffer called `name`.
+    pub(crate) fn new(name: &str) -> Self {
+        Self {
+            name: name.to_string(),
+        }
+    }
+
     pub(crate) fn invalid(&self, line: Option<usize>, message: impl Into<String>) -> IoError {
         IoError::Invalid {
             path: self.name.clone(),

@@ -204,20 +204,17 @@ pub(crate) fn read(bytes: &[u8], ctx: &Ctx) -> Result<LoadedMesh, IoError> {
             unknown.into_iter().collect::<Vec<_>>().join(", ")
         ));
     }
-    if lines_or_points > 0 {
-        warnings.push(format!(
-            "{lines_or_points} line or point element(s) ignored"
-        ));
-    }
-    if w_ignored > 0 {
-        warnings.push(format!(
-            "{w_ignored} vertex weight(s) (4th coordinate) ignored"
-        ));
-    }
-    if bad_colors > 0 {
-        warnings.push(format!(
-            "{bad_colors} vertex colour(s) with a NaN or infinite component; colours dropped"
-        ));
+    for (count, what) in [
+        (lines_or_points, "line or point element(s) ignored"),
+        (w_ignored, "vertex weight(s) (4th coordinate) ignored"),
+        (
+            bad_colors,
+            "vertex colour(s) with a NaN or infinite component; colours dropped",
+        ),
+    ] {
+        if count > 0 {
+            warnings.push(format!("{count} {what}"));
+        }
     }
     let vertex_colors = if bad_colors == 0 && !colors.is_empty() && colors.len() == positions.len()
     {

@@ -23,7 +23,7 @@ use std::fmt;
 use std::path::Path;
 
 use super::ply;
-use super::{Ctx, IoError, LoadedMesh, MeshFormat, read_file, read_mesh_from_bytes, sniff};
+use super::{Ctx, IoError, LoadedMesh, MeshFormat, read_mesh_from_bytes, read_with, sniff};
 use crate::mesh::{PointCloud, norm};
 
 /// The point-cloud file formats.
@@ -95,15 +95,12 @@ impl Input {
 /// Reads a point-cloud file (text points, or a PLY file; a PLY file's faces, if any, are
 /// ignored with a warning).
 pub fn read_points(path: &Path) -> Result<LoadedPoints, IoError> {
-    let (bytes, name) = read_file(path)?;
-    read_points_from_bytes(&bytes, &name)
+    read_with(path, read_points_from_bytes)
 }
 
 /// Reads a point cloud from memory; `name_hint` labels messages.
 pub fn read_points_from_bytes(bytes: &[u8], name_hint: &str) -> Result<LoadedPoints, IoError> {
-    let ctx = Ctx {
-        name: name_hint.to_string(),
-    };
+    let ctx = Ctx::new(name_hint);
     if bytes.is_empty() {
         return Err(ctx.invalid(None, "the file is empty"));
     }
@@ -134,16 +131,13 @@ pub fn read_points_from_bytes(bytes: &[u8], name_hint: &str) -> Result<LoadedPoi
 /// mesh when it has faces and points otherwise; every other file is read by
 /// [`super::read_mesh`] (with its behaviour and messages).
 pub fn read_input(path: &Path) -> Result<Input, IoError> {
-    let (bytes, name) = read_file(path)?;
-    read_input_from_bytes(&bytes, &name)
+    read_with(path, read_input_from_bytes)
 }
 
 /// [`read_input`] on a buffer; `name_hint` is a file name (its extension guides the choice,
 /// and it labels messages).
 pub fn read_input_from_bytes(bytes: &[u8], name_hint: &str) -> Result<Input, IoError> {
-    let ctx = Ctx {
-        name: name_hint.to_string(),
-    };
+    let ctx = Ctx::new(name_hint);
     let hint = Path::new(name_hint);
     let by_points_ext = PointFormat::from_path(hint).is_some();
     let mesh_ext = MeshFormat::from_path(hint);

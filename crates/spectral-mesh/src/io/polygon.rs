@@ -1,6 +1,6 @@
 //! Polygon triangulation used by every reader.
 
-use crate::mesh::{cross, dot, norm, normalize, sub};
+use crate::mesh::{cross, norm, normalize, plane_coordinates, sub};
 
 /// Largest polygon triangulated by ear clipping; bigger ones get a fan.
 const MAX_EAR_CLIPPING: usize = 64;
@@ -72,13 +72,7 @@ pub fn triangulate_polygon(
     let u = normalize(cross(helper, n));
     let v = cross(n, u);
     let origin = positions[poly[0]];
-    let pts: Vec<[f64; 2]> = poly
-        .iter()
-        .map(|&i| {
-            let d = sub(positions[i], origin);
-            [dot(d, u), dot(d, v)]
-        })
-        .collect();
+    let pts = plane_coordinates(positions, poly, origin, [u, v]);
     let eps = 1e-14 * extent * extent;
     let mut rem: Vec<usize> = (0..k).collect();
     while rem.len() > 3 {

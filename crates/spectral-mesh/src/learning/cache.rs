@@ -7,13 +7,12 @@
 //! `L_shape`, ...; `scipy.sparse.csc_matrix((data, indices, indptr), shape=shape)`), all
 //! float64 (int64 indices); `meta`, a JSON document as a uint8 array ([`CacheMeta`]).
 
-use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use super::{LearningError, LearningOperators, LearningParams, LearningShape, compute_operators};
 use crate::cancel::CancelToken;
-use crate::linalg::{EigenProgress, SparseMatrix};
-use crate::spectral::store::{StoreError, check_npy_size, npy_f64, npy_i64, npy_u8};
+use crate::linalg::EigenProgress;
+use crate::spectral::store::{NpzReader, NpzWriter, StoreError, csc_npy, io_err, npy_1d, npy_f64};
 
 /// Version of the archive layout; a change makes every older file a cache miss.
 pub const CACHE_FORMAT_VERSION: u32 = 1;
@@ -74,29 +73,6 @@ pub fn cache_file_name(content_hash: &str, key: &str) -> String {
     )
 }
 
-fn io_err(path: &Path) -> impl Fn(std::io::Error) -> StoreError + '_ {
-    move |source| StoreError::Io {
-        path: path.display().to_string(),
-        source,
-    }
-}
-
-fn csc_arrays(name: &str, m: &SparseMatrix) -> std::io::Result<[(String, Vec<u8>); 4]> {
-    let to_i64 = |v: &[usize]| v.iter().map(|&x| x as i64).collect::<Vec<i64>>();
-    Ok([
-        (
-            format!("{name}_data"),
-            npy_f64(m.values(), &[m.nnz() as u64], false)?,
-        ),
-        (format!("{name}_indices"), npy_i64(&to_i64(m.row_idx()))?),
-        (format!("{name}_indptr"), npy_i64(&to_i64(m.col_ptr()))?),
-        (
-            format!("{name}_shape"),
-            npy_i64(&[m.nrows() as i64, m.ncols() as i64])?,
-        ),
-    ])
-}
-
 /// Writes `ops` to `path` (atomically: a temporary file renamed into place) with `meta`.
 pub fn save_operators(
     ops: &LearningOperators,
@@ -130,24 +106,17 @@ pub fn save_operators(
         ("gradX", &ops.grad_x),
         ("gradY", &ops.grad_y),
     ] {
-        arrays.extend(csc_arrays(name, m).map_err(&e)?);
+        arrays.extend(csc_npy(name, m).map_err(&e)?);
     }
-    arrays.push(("meta".into(), npy_u8(&meta_json).map_err(&e)?));
+    arrays.push(("meta".into(), npy_1d(&meta_json).map_err(&e)?));
     crate::io::write_atomic_with(path, |file| {
-        let mut zip = zip::ZipWriter::new(std::io::BufWriter::new(file));
+        let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
         // Stored, not deflated (as NumPy's `savez`): the cache is read far more often than
         // it is written, and deflate shrinks floating-point data little.
-        let stored = zip::write::SimpleFileOptions::default()
-            .compression_method(zip::CompressionMethod::Stored)
-            .last_modified_time(zip::DateTime::default())
-            .large_file(true);
         for (name, bytes) in &arrays {
-            zip.start_file(format!("{name}.npy"), stored)
-                .map_err(std::io::Error::other)?;
-            zip.write_all(bytes)?;
+            npz.add(name, bytes, false)?;
         }
-        let mut inner = zip.finish().map_err(std::io::Error::other)?;
-        inner.flush()
+        npz.finish()
     })
     .map_err(|err| e(err.source))
 }
@@ -156,94 +125,33 @@ pub fn save_operators(
 /// array is checked (sizes against the metadata, CSC structure, finiteness) so that a
 /// damaged file gives [`StoreError::Format`], never a panic.
 pub fn load_operators(path: &Path) -> Result<(LearningOperators, CacheMeta), StoreError> {
-    let fmt = |reason: String| StoreError::Format {
-        path: path.display().to_string(),
-        reason,
-    };
-    let file = std::fs::File::open(path).map_err(io_err(path))?;
-    let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
-        .map_err(|err| fmt(format!("not a zip archive ({err})")))?;
-    let mut read = |name: &str| -> Result<npyz::NpyFile<std::io::Cursor<Vec<u8>>>, StoreError> {
-        let mut entry = zip
-            .by_name(&format!("{name}.npy"))
-            .map_err(|_| fmt(format!("missing array '{name}'")))?;
-        let mut bytes = Vec::new();
-        entry
-            .read_to_end(&mut bytes)
-            .map_err(|err| fmt(format!("array '{name}': {err}")))?;
-        check_npy_size(&bytes).map_err(|reason| fmt(format!("array '{name}': {reason}")))?;
-        npyz::NpyFile::new(std::io::Cursor::new(bytes))
-            .map_err(|err| fmt(format!("array '{name}': {err}")))
-    };
-    let meta_bytes = read("meta")?
-        .into_vec::<u8>()
-        .map_err(|err| fmt(format!("array 'meta': {err}")))?;
-    let meta: CacheMeta = serde_json::from_slice(&meta_bytes)
-        .map_err(|err| fmt(format!("meta is not valid JSON ({err})")))?;
+    let mut npz = NpzReader::open(path)?;
+    let meta: CacheMeta = npz.meta()?;
     let (n, k) = (meta.n, meta.k);
     let mut f64s = |name: &str, len: usize, fortran: bool| -> Result<Vec<f64>, StoreError> {
-        let f = read(name)?;
-        if f.order()
-            != (if fortran {
-                npyz::Order::Fortran
-            } else {
-                npyz::Order::C
-            })
-        {
-            return Err(fmt(format!("array '{name}' is not in the order written")));
+        let f = npz.array(name)?;
+        let order = if fortran {
+            npyz::Order::Fortran
+        } else {
+            npyz::Order::C
+        };
+        if f.order() != order {
+            return Err(npz.error(format!("array '{name}' is not in the order written")));
         }
-        let v = f
-            .into_vec::<f64>()
-            .map_err(|err| fmt(format!("array '{name}': {err}")))?;
+        let v = npz.f64s_of(f, name)?;
         if v.len() != len {
-            return Err(fmt(format!(
-                "array '{name}' has {} values, not {len}",
-                v.len()
-            )));
+            return Err(npz.error(format!("array '{name}' has {} values, not {len}", v.len())));
         }
-        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-            return Err(fmt(format!("'{name}' entry {i} is {}", v[i])));
-        }
+        npz.check_finite(&v, name)?;
         Ok(v)
     };
     let frames_flat = f64s("frames", 9 * n, false)?;
     let mass = f64s("mass", n, false)?;
     let evals = f64s("evals", k, false)?;
     let evecs = f64s("evecs", n * k, true)?;
-    let mut csc = |name: &str| -> Result<SparseMatrix, StoreError> {
-        let data_name = format!("{name}_data");
-        let f = read(&data_name)?;
-        let data = f
-            .into_vec::<f64>()
-            .map_err(|err| fmt(format!("array '{data_name}': {err}")))?;
-        let mut ints = |suffix: &str| -> Result<Vec<usize>, StoreError> {
-            let an = format!("{name}_{suffix}");
-            read(&an)?
-                .into_vec::<i64>()
-                .map_err(|err| fmt(format!("array '{an}': {err}")))?
-                .into_iter()
-                .map(|x| usize::try_from(x).map_err(|_| fmt(format!("negative entry in '{an}'"))))
-                .collect()
-        };
-        let indices = ints("indices")?;
-        let indptr = ints("indptr")?;
-        let shape = ints("shape")?;
-        let bad = || fmt(format!("'{name}' is not a valid {n} x {n} CSC matrix"));
-        if shape != [n, n]
-            || indptr.len() != n + 1
-            || indptr.first() != Some(&0)
-            || indptr.last() != Some(&indices.len())
-            || indptr.windows(2).any(|w| w[0] > w[1])
-            || indices.len() != data.len()
-            || data.iter().any(|x| !x.is_finite())
-        {
-            return Err(bad());
-        }
-        SparseMatrix::from_csc(n, n, indptr, indices, data).ok_or_else(bad)
-    };
-    let laplacian = csc("L")?;
-    let grad_x = csc("gradX")?;
-    let grad_y = csc("gradY")?;
+    let laplacian = npz.square_csc("L", n)?;
+    let grad_x = npz.square_csc("gradX", n)?;
+    let grad_y = npz.square_csc("gradY", n)?;
     let frames = frames_flat
         .chunks_exact(9)
         .map(|c| [[c[0], c[1], c[2]], [c[3], c[4], c[5]], [c[6], c[7], c[8]]])

@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use crate::linalg::SparseMatrix;
-use crate::mesh::{dot, sub};
+use crate::mesh::plane_coordinates;
 
 /// The 2 x 2 symmetric matrix `[[a, b], [b, c]]`'s inverse, or its pseudo-inverse when it
 /// is singular to working precision (`det <= 1e-12 trace^2`: neighbours all on one line
@@ -55,13 +55,7 @@ pub fn gradient_matrices(
         .map(|i| {
             let [x, y, _] = frames[i];
             let nb: Vec<usize> = neighbors[i].iter().copied().filter(|&j| j != i).collect();
-            let e: Vec<[f64; 2]> = nb
-                .iter()
-                .map(|&j| {
-                    let d = sub(positions[j], positions[i]);
-                    [dot(d, x), dot(d, y)]
-                })
-                .collect();
+            let e = plane_coordinates(positions, &nb, positions[i], [x, y]);
             let (mut a, mut b, mut c) = (reg, 0.0, reg);
             for v in &e {
                 a += v[0] * v[0];

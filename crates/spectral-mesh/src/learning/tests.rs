@@ -30,27 +30,15 @@ fn on_plane(u: f64, v: f64) -> [f64; 3] {
 fn flat_mesh(m: usize) -> Mesh {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let h = 1.0 / (m - 1) as f64;
-    let mut p = Vec::new();
-    for j in 0..m {
-        for i in 0..m {
-            let interior = i > 0 && j > 0 && i + 1 < m && j + 1 < m;
-            let (du, dv) = if interior {
-                (0.3 * h * (rng.next() - 0.5), 0.3 * h * (rng.next() - 0.5))
-            } else {
-                (0.0, 0.0)
-            };
-            p.push(on_plane(i as f64 * h + du, j as f64 * h + dv));
-        }
-    }
-    let mut t = Vec::new();
-    for j in 0..m - 1 {
-        for i in 0..m - 1 {
-            let a = j * m + i;
-            t.push([a, a + 1, a + m + 1]);
-            t.push([a, a + m + 1, a + m]);
-        }
-    }
-    Mesh::new(p, t).unwrap()
+    crate::test_support::grid(m, |i, j| {
+        let interior = i > 0 && j > 0 && i + 1 < m && j + 1 < m;
+        let (du, dv) = if interior {
+            (0.3 * h * (rng.next() - 0.5), 0.3 * h * (rng.next() - 0.5))
+        } else {
+            (0.0, 0.0)
+        };
+        on_plane(i as f64 * h + du, j as f64 * h + dv)
+    })
 }
 
 fn flat_cloud(n: usize) -> PointCloud {
@@ -61,6 +49,13 @@ fn flat_cloud(n: usize) -> PointCloud {
 
 fn run(shape: LearningShape<'_>, params: &LearningParams) -> LearningOperators {
     compute_operators(shape, None, params, &mut |_| {}, &CancelToken::new()).unwrap()
+}
+
+/// The operators of `shape` and their gradients' error on a linear function ([`linear_error`]).
+fn fit(shape: LearningShape<'_>, params: &LearningParams) -> (LearningOperators, f64) {
+    let ops = run(shape, params);
+    let err = linear_error(&ops, shape.positions());
+    (ops, err)
 }
 
 /// `max_i |(G_x f)_i - a . X_i|` and the same for Y, for `f = a . p`, relative to `|a|`.
@@ -88,8 +83,7 @@ fn exact() -> LearningParams {
 #[test]
 fn gradients_are_exact_on_linear_functions_of_a_flat_mesh() {
     let mesh = flat_mesh(12);
-    let ops = run(LearningShape::Mesh(&mesh), &exact());
-    let err = linear_error(&ops, mesh.positions());
+    let (ops, err) = fit(LearningShape::Mesh(&mesh), &exact());
     assert!(err < 1e-12, "mesh: {err:e}");
     // The frames' normal is the plane's (either side).
     let (s, t, _) = plane();
@@ -99,16 +93,14 @@ fn gradients_are_exact_on_linear_functions_of_a_flat_mesh() {
     }
     // DiffusionNet's regularization (1e-5, absolute) moves the fit a little on this
     // unit-sized patch, and no more than its size relative to the normal matrix.
-    let reg = run(LearningShape::Mesh(&mesh), &LearningParams::default());
-    let err = linear_error(&reg, mesh.positions());
+    let (_, err) = fit(LearningShape::Mesh(&mesh), &LearningParams::default());
     assert!(err > 1e-9 && err < 1e-2, "regularized: {err:e}");
 }
 
 #[test]
 fn gradients_are_exact_on_linear_functions_of_a_flat_point_cloud() {
     let cloud = flat_cloud(300);
-    let ops = run(LearningShape::Cloud(&cloud), &exact());
-    let err = linear_error(&ops, cloud.positions());
+    let (ops, err) = fit(LearningShape::Cloud(&cloud), &exact());
     assert!(err < 1e-11, "cloud: {err:e}");
     // 30 neighbours each, plus the diagonal.
     assert_eq!(ops.grad_x.nnz(), 300 * 31);

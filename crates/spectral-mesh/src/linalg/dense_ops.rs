@@ -17,15 +17,16 @@ fn view_mut(x: &mut [f64], rows: usize, cols: usize) -> MatMut<'_, f64> {
     MatMut::from_column_major_slice_mut(&mut x[..rows * cols], rows, cols)
 }
 
-/// `A^T B` for `A` (`n x ca`) and `B` (`n x cb`): a `ca x cb` column-major matrix.
-pub fn gram(a: &[f64], b: &[f64], n: usize, ca: usize, cb: usize) -> Vec<f64> {
-    let mut out = vec![0.0; ca * cb];
-    if n > 0 && ca > 0 && cb > 0 {
+/// `A B` of two views as a new column-major matrix (zeros when a dimension is 0).
+fn multiply(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Vec<f64> {
+    let (rows, cols) = (a.nrows(), b.ncols());
+    let mut out = vec![0.0; rows * cols];
+    if rows > 0 && cols > 0 && a.ncols() > 0 {
         matmul(
-            view_mut(&mut out, ca, cb),
+            view_mut(&mut out, rows, cols),
             Accum::Replace,
-            view(a, n, ca).transpose(),
-            view(b, n, cb),
+            a,
+            b,
             1.0,
             Par::rayon(0),
         );
@@ -33,20 +34,14 @@ pub fn gram(a: &[f64], b: &[f64], n: usize, ca: usize, cb: usize) -> Vec<f64> {
     out
 }
 
+/// `A^T B` for `A` (`n x ca`) and `B` (`n x cb`): a `ca x cb` column-major matrix.
+pub fn gram(a: &[f64], b: &[f64], n: usize, ca: usize, cb: usize) -> Vec<f64> {
+    multiply(view(a, n, ca).transpose(), view(b, n, cb))
+}
+
 /// `A B` for `A` (`rows x inner`) and `B` (`inner x cols`): `rows x cols`.
 pub fn product(a: &[f64], b: &[f64], rows: usize, inner: usize, cols: usize) -> Vec<f64> {
-    let mut out = vec![0.0; rows * cols];
-    if rows > 0 && cols > 0 && inner > 0 {
-        matmul(
-            view_mut(&mut out, rows, cols),
-            Accum::Replace,
-            view(a, rows, inner),
-            view(b, inner, cols),
-            1.0,
-            Par::rayon(0),
-        );
-    }
-    out
+    multiply(view(a, rows, inner), view(b, inner, cols))
 }
 
 /// `A B^T` for `A` (`rows x inner`) and `B` (`cols x inner`): `rows x cols`.
@@ -57,18 +52,7 @@ pub fn product_transposed(
     inner: usize,
     cols: usize,
 ) -> Vec<f64> {
-    let mut out = vec![0.0; rows * cols];
-    if rows > 0 && cols > 0 && inner > 0 {
-        matmul(
-            view_mut(&mut out, rows, cols),
-            Accum::Replace,
-            view(a, rows, inner),
-            view(b, cols, inner).transpose(),
-            1.0,
-            Par::rayon(0),
-        );
-    }
-    out
+    multiply(view(a, rows, inner), view(b, cols, inner).transpose())
 }
 
 /// How [`solve_symmetric`] solved its system.

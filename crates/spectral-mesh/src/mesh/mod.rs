@@ -275,6 +275,38 @@ pub(crate) fn sorted_triangle(t: [usize; 3]) -> [usize; 3] {
     s
 }
 
+/// The sides of every triangle as `(low, high)` vertex pairs, sorted: an edge appears once
+/// per triangle that has it (consecutive equal pairs), so `dedup` gives the distinct edges.
+pub(crate) fn sorted_edges(triangles: &[[usize; 3]]) -> Vec<(usize, usize)> {
+    use rayon::slice::ParallelSliceMut;
+    let mut e: Vec<(usize, usize)> = Vec::with_capacity(3 * triangles.len());
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            e.push((a.min(b), a.max(b)));
+        }
+    }
+    e.par_sort_unstable();
+    e
+}
+
+/// The coordinates of the points `positions[i]`, `i` in `indices`, relative to `origin` in
+/// the frame `(e1, e2)` of a plane (the dot products with `e1` and `e2`).
+pub(crate) fn plane_coordinates(
+    positions: &[[f64; 3]],
+    indices: &[usize],
+    origin: [f64; 3],
+    [e1, e2]: [[f64; 3]; 2],
+) -> Vec<[f64; 2]> {
+    indices
+        .iter()
+        .map(|&i| {
+            let d = sub(positions[i], origin);
+            [dot(d, e1), dot(d, e2)]
+        })
+        .collect()
+}
+
 /// `a - b`.
 pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]

@@ -224,6 +224,14 @@ pub struct Repaired {
     pub log: Vec<String>,
 }
 
+/// Removes the triangles `which` (ascending) and logs how many `what` went, if any.
+fn remove_faces(tris: &mut Vec<[usize; 3]>, which: &[usize], what: &str, log: &mut Vec<String>) {
+    if !which.is_empty() {
+        remove_indices(tris, which);
+        log.push(format!("removed {} {what}", which.len()));
+    }
+}
+
 /// Repairs `mesh` in this order: duplicate faces, zero-area triangles, non-manifold
 /// vertices, orientation, unreferenced vertices (each step switchable in `opts`).
 ///
@@ -239,26 +247,16 @@ pub fn repair(mesh: &Mesh, opts: &RepairOptions) -> Result<Repaired, MeshError> 
 
     if opts.remove_duplicate_faces {
         let dups = duplicate_faces(&tris);
-        if !dups.is_empty() {
-            remove_indices(&mut tris, &dups);
-            log.push(format!(
-                "removed {} duplicate face(s) (same three vertices as an earlier face)",
-                dups.len()
-            ));
-        }
+        let what = "duplicate face(s) (same three vertices as an earlier face)";
+        remove_faces(&mut tris, &dups, what, &mut log);
     }
     if opts.remove_degenerate_faces {
         let d = mesh.diagonal();
         let threshold = DEGENERATE_AREA_FACTOR * d * d;
         let current = Mesh::new(positions.clone(), tris.clone())?;
         let degen = degenerate_faces(&current, threshold);
-        if !degen.is_empty() {
-            remove_indices(&mut tris, &degen);
-            log.push(format!(
-                "removed {} zero-area triangle(s) (area <= {threshold:e})",
-                degen.len()
-            ));
-        }
+        let what = format!("zero-area triangle(s) (area <= {threshold:e})");
+        remove_faces(&mut tris, &degen, &what, &mut log);
     }
     if opts.split_non_manifold_vertices {
         let current = Mesh::new(positions.clone(), tris.clone())?;

@@ -89,14 +89,7 @@ pub fn cotan_stiffness(mesh: &Mesh) -> SparseMatrix {
 
 /// The uniform (graph) Laplacian: `-1` per edge, the degree on the diagonal.
 pub fn uniform_laplacian(mesh: &Mesh) -> SparseMatrix {
-    let mut e: Vec<(usize, usize)> = Vec::with_capacity(3 * mesh.n_triangles());
-    for tri in mesh.triangles() {
-        for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
-            e.push((a.min(b), a.max(b)));
-        }
-    }
-    e.sort_unstable();
+    let mut e = crate::mesh::sorted_edges(mesh.triangles());
     e.dedup();
     let w: Vec<(usize, usize, f64)> = e.into_iter().map(|(i, j)| (i, j, 1.0)).collect();
     assemble_laplacian(mesh.n_vertices(), &w)

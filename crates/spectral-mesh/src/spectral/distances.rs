@@ -24,8 +24,8 @@
 use rayon::prelude::*;
 
 use super::BasisView;
-use super::filters::{Filter, FilterError};
-use super::heat::{ROW_BLOCK, parallel_worth};
+use super::filters::{Filter, FilterError, positive_weight};
+use super::heat::accumulate_columns;
 
 /// Errors of the distance functions.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
@@ -91,52 +91,17 @@ fn weighted_sq_from(x: &[f64], n: usize, w: &[f64], source: usize) -> Vec<f64> {
 /// taken four at a time with each row's sum in a register (the same additions in the
 /// same order as one column at a time, so the same bits, in a third of the time).
 fn weighted_squares(x: &[f64], n: usize, w: &[f64], source: Option<usize>) -> Vec<f64> {
-    let mut d = vec![0.0; n];
-    // (column, weight, value at the source; 0 without one: x - 0 is x to the bit).
-    let used: Vec<(usize, f64, f64)> = w
+    // (column, (weight, value at the source; 0 without one: x - 0 is x to the bit)).
+    let used: Vec<(usize, (f64, f64))> = w
         .iter()
         .enumerate()
         .filter(|&(_, &wj)| wj != 0.0)
-        .map(|(j, &wj)| (j, wj, source.map_or(0.0, |s| x[j * n + s])))
+        .map(|(j, &wj)| (j, (wj, source.map_or(0.0, |s| x[j * n + s]))))
         .collect();
-    let work = |(b, chunk): (usize, &mut [f64])| {
-        let start = b * ROW_BLOCK;
-        let len = chunk.len();
-        let col = |j: usize| &x[j * n + start..j * n + start + len];
-        let mut groups = used.chunks_exact(4);
-        for g in &mut groups {
-            let rows = chunk
-                .iter_mut()
-                .zip(col(g[0].0))
-                .zip(col(g[1].0))
-                .zip(col(g[2].0))
-                .zip(col(g[3].0));
-            for ((((di, &x0), &x1), &x2), &x3) in rows {
-                let mut t = *di;
-                let e = x0 - g[0].2;
-                t += g[0].1 * e * e;
-                let e = x1 - g[1].2;
-                t += g[1].1 * e * e;
-                let e = x2 - g[2].2;
-                t += g[2].1 * e * e;
-                let e = x3 - g[3].2;
-                t += g[3].1 * e * e;
-                *di = t;
-            }
-        }
-        for &(j, wj, xs) in groups.remainder() {
-            for (di, xi) in chunk.iter_mut().zip(col(j)) {
-                let e = xi - xs;
-                *di += wj * e * e;
-            }
-        }
-    };
-    if parallel_worth(n, w.len()) {
-        d.par_chunks_mut(ROW_BLOCK).enumerate().for_each(work);
-    } else {
-        d.chunks_mut(ROW_BLOCK).enumerate().for_each(work);
-    }
-    d
+    accumulate_columns(x, n, w.len(), &used, |t, xi, (wj, xs)| {
+        let e = xi - xs;
+        t + wj * e * e
+    })
 }
 
 /// Filtered spectral distances from `source` to every vertex (`n` values), O(nk):
@@ -336,21 +301,13 @@ pub fn weights_of_pairs(
     }
     let mut w = vec![0.0; eigenvalues.len()];
     for ((&j, &l), &g) in used.iter().zip(&values).zip(given) {
-        if !(g.is_finite() && g > 0.0) {
-            return Err(FilterError::NotPositive {
-                filter: name.to_string(),
-                index: j,
-                value: l,
-                weight: g,
-            });
-        }
-        w[j] = g;
+        w[j] = positive_weight(&name, j, l, g)?;
     }
     Ok(w)
 }
 
 /// Refuses weights that are not one per pair of the basis.
-fn check_weights(basis: BasisView<'_>, w: &[f64]) -> Result<(), DistanceError> {
+pub(super) fn check_weights(basis: BasisView<'_>, w: &[f64]) -> Result<(), DistanceError> {
     if w.len() == basis.values.len() {
         Ok(())
     } else {
@@ -439,6 +396,7 @@ pub fn wfem_diffusion_kernel_row<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::spectral::heat::ROW_BLOCK;
 
     /// A weight function evaluated outside the filter language sees the filters' non-zero
     /// eigenvalues, is checked as the filters are, and gives their distances to the bit.

@@ -2,8 +2,8 @@
 //! Euclidean distance between embedded points is the filtered spectral distance.
 
 use super::BasisView;
-use super::distances::DistanceError;
-use super::filters::{Filter, FilterError};
+use super::distances::{DistanceError, check_weights};
+use super::filters::Filter;
 use crate::mesh::{Mesh, MeshError};
 
 /// Errors of the embeddings.
@@ -75,19 +75,6 @@ pub fn embedding_component<'a>(
     }
     let s = w[component].sqrt();
     Ok(basis.vector(component).iter().map(|x| s * x).collect())
-}
-
-fn check_weights(basis: BasisView<'_>, w: &[f64]) -> Result<(), DistanceError> {
-    if w.len() == basis.values.len() {
-        Ok(())
-    } else {
-        Err(FilterError::InvalidParameter(format!(
-            "{} weights for a basis of {} pairs",
-            w.len(),
-            basis.values.len()
-        ))
-        .into())
-    }
 }
 
 /// The mesh with the same triangles whose positions are the first three coordinates of

@@ -166,25 +166,40 @@ pub(crate) fn parallel_worth(n: usize, k: usize) -> bool {
 
 /// `y = X c` for the column-major `n x k` matrix `x`, parallel over blocks of rows.
 ///
-/// Columns with `c_j = 0` are skipped; the others are added in order, four at a time:
-/// each row's sum stays in a register over the four columns, with the same additions in
-/// the same order as one column at a time, so the same bits, in a third of the time (one
-/// pass over the block of `y` per four columns instead of per column).
+/// Columns with `c_j = 0` are skipped; the others are added in order (see
+/// [`accumulate_columns`]).
 pub(crate) fn combine_columns(x: &[f64], n: usize, c: &[f64]) -> Vec<f64> {
-    let mut y = vec![0.0; n];
     let used: Vec<(usize, f64)> = c
         .iter()
         .copied()
         .enumerate()
         .filter(|&(_, cj)| cj != 0.0)
         .collect();
+    accumulate_columns(x, n, c.len(), &used, |t, xi, cj| t + cj * xi)
+}
+
+/// `y(p) = add(... add(add(0, x_j1(p), a_j1), x_j2(p), a_j2) ..., x_jm(p), a_jm)` for
+/// every row `p` of the column-major `n x k` matrix `x`, over the columns `used = [(j,
+/// a_j)]` in order: the one kernel of [`combine_columns`] and the distances. Parallel over
+/// blocks of rows (when `n x k` is worth it); the columns are taken four at a time with
+/// each row's sum in a register, the same additions in the same order as one column at a
+/// time, so the same bits, in a third of the time (one pass over the block of `y` per four
+/// columns instead of per column).
+pub(crate) fn accumulate_columns<A: Copy + Sync>(
+    x: &[f64],
+    n: usize,
+    k: usize,
+    used: &[(usize, A)],
+    add: impl Fn(f64, f64, A) -> f64 + Sync,
+) -> Vec<f64> {
+    let mut y = vec![0.0; n];
     let work = |(b, chunk): (usize, &mut [f64])| {
         let start = b * ROW_BLOCK;
         let len = chunk.len();
         let col = |j: usize| &x[j * n + start..j * n + start + len];
         let mut groups = used.chunks_exact(4);
         for g in &mut groups {
-            let (c0, c1, c2, c3) = (g[0].1, g[1].1, g[2].1, g[3].1);
+            let (a0, a1, a2, a3) = (g[0].1, g[1].1, g[2].1, g[3].1);
             let rows = chunk
                 .iter_mut()
                 .zip(col(g[0].0))
@@ -192,21 +207,16 @@ pub(crate) fn combine_columns(x: &[f64], n: usize, c: &[f64]) -> Vec<f64> {
                 .zip(col(g[2].0))
                 .zip(col(g[3].0));
             for ((((yi, &x0), &x1), &x2), &x3) in rows {
-                let mut t = *yi;
-                t += c0 * x0;
-                t += c1 * x1;
-                t += c2 * x2;
-                t += c3 * x3;
-                *yi = t;
+                *yi = add(add(add(add(*yi, x0, a0), x1, a1), x2, a2), x3, a3);
             }
         }
-        for &(j, cj) in groups.remainder() {
-            for (yi, xi) in chunk.iter_mut().zip(col(j)) {
-                *yi += cj * xi;
+        for &(j, aj) in groups.remainder() {
+            for (yi, &xi) in chunk.iter_mut().zip(col(j)) {
+                *yi = add(*yi, xi, aj);
             }
         }
     };
-    if parallel_worth(n, c.len()) {
+    if parallel_worth(n, k) {
         y.par_chunks_mut(ROW_BLOCK).enumerate().for_each(work);
     } else {
         y.chunks_mut(ROW_BLOCK).enumerate().for_each(work);

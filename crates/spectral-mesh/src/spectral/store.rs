@@ -138,7 +138,8 @@ impl BasisMeta {
     }
 }
 
-fn io_err(path: &Path) -> impl Fn(std::io::Error) -> StoreError + '_ {
+/// Maps an I/O error about `path` to [`StoreError::Io`].
+pub(crate) fn io_err(path: &Path) -> impl Fn(std::io::Error) -> StoreError + '_ {
     move |source| StoreError::Io {
         path: path.display().to_string(),
         source,
@@ -203,32 +204,37 @@ pub fn write_npy_f64(
     write_npy(out, data, shape, fortran, BasisDtype::Float64)
 }
 
-pub(crate) fn npy_i64(data: &[i64]) -> std::io::Result<Vec<u8>> {
+/// A one-dimensional NumPy `.npy` file of `data` in its native dtype (`<i8` for `i64`,
+/// `|u1` for `u8`).
+pub(crate) fn npy_1d<T: npyz::AutoSerialize + Copy>(data: &[T]) -> std::io::Result<Vec<u8>> {
     let mut buf = Vec::new();
-    {
-        let mut w = npyz::WriteOptions::new()
-            .default_dtype()
-            .shape(&[data.len() as u64])
-            .writer(&mut buf)
-            .begin_nd()?;
-        w.extend(data.iter().copied())?;
-        w.finish()?;
-    }
+    let mut w = npyz::WriteOptions::new()
+        .default_dtype()
+        .shape(&[data.len() as u64])
+        .writer(&mut buf)
+        .begin_nd()?;
+    w.extend(data.iter().copied())?;
+    w.finish()?;
     Ok(buf)
 }
 
-pub(crate) fn npy_u8(data: &[u8]) -> std::io::Result<Vec<u8>> {
-    let mut buf = Vec::new();
-    {
-        let mut w = npyz::WriteOptions::new()
-            .default_dtype()
-            .shape(&[data.len() as u64])
-            .writer(&mut buf)
-            .begin_nd()?;
-        w.extend(data.iter().copied())?;
-        w.finish()?;
-    }
-    Ok(buf)
+/// The four `.npy` files of a sparse matrix in SciPy's CSC layout, named `{prefix}_data`,
+/// `{prefix}_indices`, `{prefix}_indptr` and `{prefix}_shape` (float64 values, int64
+/// indices; [`NpzReader::square_csc`] reads them back).
+pub(crate) fn csc_npy(prefix: &str, m: &SparseMatrix) -> std::io::Result<[(String, Vec<u8>); 4]> {
+    let to_i64 = |v: &[usize]| v.iter().map(|&x| x as i64).collect::<Vec<i64>>();
+    Ok([
+        (
+            format!("{prefix}_data"),
+            npy_f64(m.values(), &[m.nnz() as u64], false)?,
+        ),
+        (format!("{prefix}_indices"), npy_1d(&to_i64(m.row_idx()))?),
+        (format!("{prefix}_indptr"), npy_1d(&to_i64(m.col_ptr()))?),
+        (
+            format!("{prefix}_shape"),
+            npy_1d(&[m.nrows() as i64, m.ncols() as i64])?,
+        ),
+    ])
 }
 
 /// Writes `basis` to `path` as an `.npz` archive (the eigenvectors and the mass stored, the small
@@ -270,8 +276,6 @@ fn save_npz_as(
         path: path.display().to_string(),
         reason: err.to_string(),
     })?;
-    let m = &basis.mass;
-    let to_i64 = |v: &[usize]| v.iter().map(|&x| x as i64).collect::<Vec<i64>>();
     // The small arrays are compressed; the eigenvectors (n x k doubles, which deflate
     // shrinks by only about a fifth at a cost of seconds per 100 MB) are stored and
     // streamed into the archive without a copy, as NumPy's `savez` stores every array.
@@ -280,50 +284,27 @@ fn save_npz_as(
     let mut small: Vec<(&str, Vec<u8>)> = vec![("eigenvalues", values_npy)];
     // The mass arrays (about 7n values and indices) are stored, as NumPy stores them:
     // deflating them took 11% of a whole `eigs` command (26k vertices, k = 50).
-    let mut mass: Vec<(&str, Vec<u8>)> = Vec::new();
-    if vectors {
-        mass.extend([
-            (
-                "mass_data",
-                npy_f64(m.values(), &[m.nnz() as u64], false).map_err(&e)?,
-            ),
-            ("mass_indices", npy_i64(&to_i64(m.row_idx())).map_err(&e)?),
-            ("mass_indptr", npy_i64(&to_i64(m.col_ptr())).map_err(&e)?),
-            (
-                "mass_shape",
-                npy_i64(&[m.nrows() as i64, m.ncols() as i64]).map_err(&e)?,
-            ),
-        ]);
-    }
+    let mass: Vec<(String, Vec<u8>)> = if vectors {
+        csc_npy("mass", &basis.mass).map_err(&e)?.into()
+    } else {
+        Vec::new()
+    };
     small.extend([
         (
             "residuals",
             npy_f64(&basis.residuals, &[basis.residuals.len() as u64], false).map_err(&e)?,
         ),
-        ("meta", npy_u8(&meta_json).map_err(&e)?),
+        ("meta", npy_1d(&meta_json).map_err(&e)?),
     ]);
     crate::io::write_atomic_with(path, |file| {
-        let mut zip = zip::ZipWriter::new(std::io::BufWriter::new(file));
-        let date = zip::DateTime::default();
-        let deflated = zip::write::SimpleFileOptions::default()
-            .compression_method(zip::CompressionMethod::Deflated)
-            .last_modified_time(date)
-            .large_file(true);
-        let stored = zip::write::SimpleFileOptions::default()
-            .compression_method(zip::CompressionMethod::Stored)
-            .last_modified_time(date)
-            .large_file(true);
+        let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
         let (first, rest) = small.split_at(1);
         for (name, bytes) in first {
-            zip.start_file(format!("{name}.npy"), deflated)
-                .map_err(std::io::Error::other)?;
-            zip.write_all(bytes)?;
+            npz.add(name, bytes, true)?;
         }
         if vectors {
-            zip.start_file("eigenvectors.npy", stored)
-                .map_err(std::io::Error::other)?;
             write_npy(
-                &mut zip,
+                npz.start("eigenvectors", false)?,
                 &basis.vectors[..n * k],
                 &[n as u64, k as u64],
                 true,
@@ -331,42 +312,221 @@ fn save_npz_as(
             )?;
         }
         for (name, bytes) in &mass {
-            zip.start_file(format!("{name}.npy"), stored)
-                .map_err(std::io::Error::other)?;
-            zip.write_all(bytes)?;
+            npz.add(name, bytes, false)?;
         }
         let rest = rest.iter().map(|(name, b)| (*name, b.as_slice()));
         let extra = extra.iter().map(|(name, b)| (name.as_str(), b.as_slice()));
         for (name, bytes) in rest.chain(extra) {
-            zip.start_file(format!("{name}.npy"), deflated)
-                .map_err(std::io::Error::other)?;
-            zip.write_all(bytes)?;
+            npz.add(name, bytes, true)?;
         }
-        let mut inner = zip.finish().map_err(std::io::Error::other)?;
-        inner.flush()
+        npz.finish()
     })
     .map_err(|err| e(err.source))
+}
+
+/// An `.npz` archive being written, the one writer of the eigenbasis archives and of the
+/// learning cache: every array is an entry `name.npy`, stored or deflated, dated
+/// 1980-01-01 (as NumPy's `savez`), so that the same arrays give the same bytes.
+pub(crate) struct NpzWriter<W: Write + std::io::Seek> {
+    zip: zip::ZipWriter<W>,
+}
+
+impl<W: Write + std::io::Seek> NpzWriter<W> {
+    /// An empty archive written to `out`.
+    pub(crate) fn new(out: W) -> Self {
+        Self {
+            zip: zip::ZipWriter::new(out),
+        }
+    }
+
+    /// Starts the entry of the array `name`, deflated or stored; its `.npy` bytes are
+    /// written to the returned writer.
+    pub(crate) fn start(&mut self, name: &str, deflate: bool) -> std::io::Result<&mut impl Write> {
+        let method = if deflate {
+            zip::CompressionMethod::Deflated
+        } else {
+            zip::CompressionMethod::Stored
+        };
+        let options = zip::write::SimpleFileOptions::default()
+            .compression_method(method)
+            .last_modified_time(zip::DateTime::default())
+            .large_file(true);
+        self.zip
+            .start_file(format!("{name}.npy"), options)
+            .map_err(std::io::Error::other)?;
+        Ok(&mut self.zip)
+    }
+
+    /// Adds the array `name` from its `.npy` bytes.
+    pub(crate) fn add(&mut self, name: &str, npy: &[u8], deflate: bool) -> std::io::Result<()> {
+        self.start(name, deflate)?.write_all(npy)
+    }
+
+    /// Writes the archive's directory and flushes the output.
+    pub(crate) fn finish(self) -> std::io::Result<()> {
+        let mut out = self.zip.finish().map_err(std::io::Error::other)?;
+        out.flush()
+    }
 }
 
 /// The `meta` array of an `.npz` archive as raw JSON bytes, without reading the other
 /// arrays (a quick look at what an archive holds).
 pub fn read_npz_meta(path: &Path) -> Result<Vec<u8>, StoreError> {
-    let e = io_err(path);
-    let fmt = |reason: String| StoreError::Format {
-        path: path.display().to_string(),
+    NpzReader::open(path)?.meta_bytes()
+}
+
+fn format_error(archive: &str, reason: String) -> StoreError {
+    StoreError::Format {
+        path: archive.to_string(),
         reason,
-    };
-    let file = std::fs::File::open(path).map_err(&e)?;
-    let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
-        .map_err(|err| fmt(format!("not a zip archive ({err})")))?;
-    let mut entry = zip
-        .by_name("meta.npy")
-        .map_err(|_| fmt("missing array 'meta'".to_string()))?;
-    let mut bytes = Vec::new();
-    entry.read_to_end(&mut bytes).map_err(&e)?;
-    npyz::NpyFile::new(std::io::Cursor::new(bytes))
-        .and_then(|f| f.into_vec::<u8>())
-        .map_err(|err| fmt(format!("array 'meta': {err}")))
+    }
+}
+
+/// An `.npz` archive opened for reading, the one reader of the eigenbasis archives and of
+/// the learning cache ([`crate::learning::cache`]). Every array's header is checked
+/// against its bytes before it is parsed ([`check_npy_size`]), and every failure is a
+/// [`StoreError::Format`] naming the archive.
+pub(crate) struct NpzReader<R> {
+    zip: zip::ZipArchive<R>,
+    name: String,
+}
+
+impl NpzReader<std::io::BufReader<std::fs::File>> {
+    /// Opens the archive at `path`.
+    pub(crate) fn open(path: &Path) -> Result<Self, StoreError> {
+        let file = std::fs::File::open(path).map_err(io_err(path))?;
+        Self::new(std::io::BufReader::new(file), &path.display().to_string())
+    }
+}
+
+impl<R: Read + std::io::Seek> NpzReader<R> {
+    /// Reads the archive's directory; `name` labels the errors.
+    pub(crate) fn new(reader: R, name: &str) -> Result<Self, StoreError> {
+        let zip = zip::ZipArchive::new(reader)
+            .map_err(|err| format_error(name, format!("not a zip archive ({err})")))?;
+        Ok(Self {
+            zip,
+            name: name.to_string(),
+        })
+    }
+
+    /// A [`StoreError::Format`] about this archive.
+    pub(crate) fn error(&self, reason: String) -> StoreError {
+        format_error(&self.name, reason)
+    }
+
+    /// The array `name` (the entry `name.npy`), its size checked.
+    pub(crate) fn array(
+        &mut self,
+        name: &str,
+    ) -> Result<npyz::NpyFile<std::io::Cursor<Vec<u8>>>, StoreError> {
+        let mut bytes = Vec::new();
+        let mut entry = self
+            .zip
+            .by_name(&format!("{name}.npy"))
+            .map_err(|_| format_error(&self.name, format!("missing array '{name}'")))?;
+        entry
+            .read_to_end(&mut bytes)
+            .map_err(|err| format_error(&self.name, format!("array '{name}': {err}")))?;
+        drop(entry);
+        check_npy_size(&bytes).map_err(|reason| self.error(format!("array '{name}': {reason}")))?;
+        npyz::NpyFile::new(std::io::Cursor::new(bytes))
+            .map_err(|err| self.error(format!("array '{name}': {err}")))
+    }
+
+    /// The `meta` array's bytes (a JSON document).
+    pub(crate) fn meta_bytes(&mut self) -> Result<Vec<u8>, StoreError> {
+        self.array("meta")?
+            .into_vec::<u8>()
+            .map_err(|err| self.error(format!("array 'meta': {err}")))
+    }
+
+    /// The `meta` array parsed.
+    pub(crate) fn meta<T: serde::de::DeserializeOwned>(&mut self) -> Result<T, StoreError> {
+        serde_json::from_slice(&self.meta_bytes()?)
+            .map_err(|err| self.error(format!("meta is not valid JSON ({err})")))
+    }
+
+    /// The values of `file` (the array `name`): float64, or float32 widened (an archive
+    /// saved with [`BasisDtype::Float32`]).
+    pub(crate) fn f64s_of(
+        &self,
+        file: npyz::NpyFile<std::io::Cursor<Vec<u8>>>,
+        name: &str,
+    ) -> Result<Vec<f64>, StoreError> {
+        let is_f32 = matches!(file.dtype(), npyz::DType::Plain(t)
+            if t.type_char() == npyz::TypeChar::Float && t.size_field() == 4);
+        let values = if is_f32 {
+            file.into_vec::<f32>()
+                .map(|v| v.into_iter().map(f64::from).collect())
+        } else {
+            file.into_vec::<f64>()
+        };
+        values.map_err(|err| self.error(format!("array '{name}': {err}")))
+    }
+
+    /// The values of the array `name` (see [`Self::f64s_of`]).
+    pub(crate) fn f64s(&mut self, name: &str) -> Result<Vec<f64>, StoreError> {
+        let file = self.array(name)?;
+        self.f64s_of(file, name)
+    }
+
+    /// An error unless every value is finite.
+    pub(crate) fn check_finite(&self, values: &[f64], name: &str) -> Result<(), StoreError> {
+        match values.iter().position(|x| !x.is_finite()) {
+            Some(i) => Err(self.error(format!("'{name}' entry {i} is {}", values[i]))),
+            None => Ok(()),
+        }
+    }
+
+    /// The int64 array `name` as indices (an error on a negative entry).
+    pub(crate) fn indices(&mut self, name: &str) -> Result<Vec<usize>, StoreError> {
+        let values = self
+            .array(name)?
+            .into_vec::<i64>()
+            .map_err(|err| self.error(format!("array '{name}': {err}")))?;
+        values
+            .into_iter()
+            .map(|x| {
+                usize::try_from(x).map_err(|_| self.error(format!("negative entry in '{name}'")))
+            })
+            .collect()
+    }
+
+    /// The `n x n` sparse matrix written by [`csc_npy`] under `prefix`, checked completely
+    /// (shape, index pointer, finite values) before it is built.
+    pub(crate) fn square_csc(
+        &mut self,
+        prefix: &str,
+        n: usize,
+    ) -> Result<SparseMatrix, StoreError> {
+        let data_name = format!("{prefix}_data");
+        let data = self.f64s(&data_name)?;
+        let indices = self.indices(&format!("{prefix}_indices"))?;
+        let indptr = self.indices(&format!("{prefix}_indptr"))?;
+        let shape = self.indices(&format!("{prefix}_shape"))?;
+        if shape != [n, n] {
+            return Err(self.error(format!("'{prefix}' has shape {shape:?}, not {n} x {n}")));
+        }
+        self.check_finite(&data, &data_name)?;
+        // `SparseMatrix::from_csc` slices with each column's range before it has seen the
+        // whole index pointer: check it completely first.
+        let bad = || {
+            self.error(format!(
+                "the '{prefix}' arrays are not valid CSC ({prefix}_indptr must rise from 0 to \
+                 the number of entries, one per column plus one)"
+            ))
+        };
+        if indptr.len() != n + 1
+            || indptr.first() != Some(&0)
+            || indptr.last() != Some(&indices.len())
+            || indptr.windows(2).any(|w| w[0] > w[1])
+            || indices.len() != data.len()
+        {
+            return Err(bad());
+        }
+        SparseMatrix::from_csc(n, n, indptr, indices, data).ok_or_else(bad)
+    }
 }
 
 /// Reads an archive written by [`save_npz`] (or by NumPy with the same arrays; the
@@ -384,75 +544,33 @@ pub fn load_npz_from_reader<R: Read + std::io::Seek>(
     reader: R,
     name: &str,
 ) -> Result<(Eigenbasis, BasisMeta), StoreError> {
-    let fmt = |reason: String| StoreError::Format {
-        path: name.to_string(),
-        reason,
-    };
-    let mut zip =
-        zip::ZipArchive::new(reader).map_err(|err| fmt(format!("not a zip archive ({err})")))?;
-    let mut read = |name: &str| -> Result<npyz::NpyFile<std::io::Cursor<Vec<u8>>>, StoreError> {
-        let mut entry = zip
-            .by_name(&format!("{name}.npy"))
-            .map_err(|_| fmt(format!("missing array '{name}'")))?;
-        let mut bytes = Vec::new();
-        entry
-            .read_to_end(&mut bytes)
-            .map_err(|err| fmt(format!("array '{name}': {err}")))?;
-        check_npy_size(&bytes).map_err(|reason| fmt(format!("array '{name}': {reason}")))?;
-        npyz::NpyFile::new(std::io::Cursor::new(bytes))
-            .map_err(|err| fmt(format!("array '{name}': {err}")))
-    };
-    // float64, or float32 (an archive saved with `BasisDtype::Float32`), widened.
-    let f64s = |f: npyz::NpyFile<std::io::Cursor<Vec<u8>>>, name: &str| {
-        let is_f32 = matches!(f.dtype(), npyz::DType::Plain(t)
-            if t.type_char() == npyz::TypeChar::Float && t.size_field() == 4);
-        if is_f32 {
-            f.into_vec::<f32>()
-                .map(|v| v.into_iter().map(f64::from).collect::<Vec<f64>>())
-                .map_err(|err| fmt(format!("array '{name}': {err}")))
-        } else {
-            f.into_vec::<f64>()
-                .map_err(|err| fmt(format!("array '{name}': {err}")))
-        }
-    };
-    let i64s = |f: npyz::NpyFile<std::io::Cursor<Vec<u8>>>, name: &str| {
-        f.into_vec::<i64>()
-            .map_err(|err| fmt(format!("array '{name}': {err}")))
-    };
-    let finite = |v: &[f64], name: &str| match v.iter().position(|x| !x.is_finite()) {
-        Some(i) => Err(fmt(format!("'{name}' entry {i} is {}", v[i]))),
-        None => Ok(()),
-    };
-    let meta_bytes = read("meta")?
-        .into_vec::<u8>()
-        .map_err(|err| fmt(format!("array 'meta': {err}")))?;
-    let meta: BasisMeta = serde_json::from_slice(&meta_bytes)
-        .map_err(|err| fmt(format!("meta is not valid JSON ({err})")))?;
-    let values = f64s(read("eigenvalues")?, "eigenvalues")?;
-    let vf = read("eigenvectors")?;
+    let mut npz = NpzReader::new(reader, name)?;
+    let meta: BasisMeta = npz.meta()?;
+    let values = npz.f64s("eigenvalues")?;
+    let vf = npz.array("eigenvectors")?;
     let shape = vf.shape().to_vec();
     let order = vf.order();
     if shape.len() != 2 {
-        return Err(fmt(format!("eigenvectors have shape {shape:?}")));
+        return Err(npz.error(format!("eigenvectors have shape {shape:?}")));
     }
     let (Ok(n), Ok(k)) = (usize::try_from(shape[0]), usize::try_from(shape[1])) else {
-        return Err(fmt(format!("eigenvectors have shape {shape:?}")));
+        return Err(npz.error(format!("eigenvectors have shape {shape:?}")));
     };
     if n == 0 || k == 0 || n != meta.n || k != meta.k {
-        return Err(fmt(format!(
+        return Err(npz.error(format!(
             "eigenvectors {n} x {k}, but the metadata says n = {}, k = {} (both at least 1)",
             meta.n, meta.k
         )));
     }
-    let raw = f64s(vf, "eigenvectors")?;
+    let raw = npz.f64s_of(vf, "eigenvectors")?;
     if k != values.len() || n.checked_mul(k) != Some(raw.len()) {
-        return Err(fmt(format!(
+        return Err(npz.error(format!(
             "eigenvectors {n} x {k} do not match {} eigenvalues",
             values.len()
         )));
     }
-    finite(&values, "eigenvalues")?;
-    finite(&raw, "eigenvectors")?;
+    npz.check_finite(&values, "eigenvalues")?;
+    npz.check_finite(&raw, "eigenvectors")?;
     let vectors = match order {
         npyz::Order::Fortran => raw,
         npyz::Order::C => {
@@ -465,44 +583,13 @@ pub fn load_npz_from_reader<R: Read + std::io::Seek>(
             v
         }
     };
-    let data = f64s(read("mass_data")?, "mass_data")?;
-    let to_usize = |v: Vec<i64>, name: &str| -> Result<Vec<usize>, StoreError> {
-        v.into_iter()
-            .map(|x| usize::try_from(x).map_err(|_| fmt(format!("negative entry in '{name}'"))))
-            .collect()
-    };
-    let indices = to_usize(i64s(read("mass_indices")?, "mass_indices")?, "mass_indices")?;
-    let indptr = to_usize(i64s(read("mass_indptr")?, "mass_indptr")?, "mass_indptr")?;
-    let mshape = to_usize(i64s(read("mass_shape")?, "mass_shape")?, "mass_shape")?;
-    if mshape.len() != 2 || mshape[0] != n || mshape[1] != n {
-        return Err(fmt(format!("mass shape {mshape:?} does not match n = {n}")));
-    }
-    finite(&data, "mass_data")?;
-    // `SparseMatrix::from_csc` slices with each column's range before it has seen the
-    // whole index pointer: check it completely first.
-    if indptr.len() != n + 1
-        || indptr.first() != Some(&0)
-        || indptr.last() != Some(&indices.len())
-        || indptr.windows(2).any(|w| w[0] > w[1])
-        || indices.len() != data.len()
-    {
-        return Err(fmt(
-            "the mass matrix arrays are not valid CSC (mass_indptr must rise from 0 to the \
-             number of entries, one per column plus one)"
-                .to_string(),
-        ));
-    }
-    let mass = SparseMatrix::from_csc(n, n, indptr, indices, data)
-        .ok_or_else(|| fmt("the mass matrix arrays are not valid CSC".to_string()))?;
-    let residuals = match read("residuals") {
-        Ok(f) => f64s(f, "residuals")?,
+    let mass = npz.square_csc("mass", n)?;
+    let residuals = match npz.array("residuals") {
+        Ok(f) => npz.f64s_of(f, "residuals")?,
         Err(_) => Vec::new(),
     };
     if !(residuals.is_empty() || residuals.len() == k) {
-        return Err(fmt(format!(
-            "{} residuals for {k} eigenpairs",
-            residuals.len()
-        )));
+        return Err(npz.error(format!("{} residuals for {k} eigenpairs", residuals.len())));
     }
     let basis = Eigenbasis {
         laplacian: meta.laplacian,
@@ -519,7 +606,7 @@ pub fn load_npz_from_reader<R: Read + std::io::Seek>(
 /// than the file holds (`npyz` multiplies the shape unchecked and reserves that many
 /// elements): the shape's product times the item size must fit in the bytes after the
 /// header.
-pub(crate) fn check_npy_size(bytes: &[u8]) -> Result<(), String> {
+fn check_npy_size(bytes: &[u8]) -> Result<(), String> {
     let bad = |m: &str| Err(format!("not a valid .npy array ({m})"));
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return bad("no NUMPY magic");

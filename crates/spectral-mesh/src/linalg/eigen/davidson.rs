@@ -22,7 +22,7 @@
 
 use faer::Mat;
 
-use super::dense::{gram, product, sub_product, sym_eig};
+use super::dense::{gram, product, scaled_gram_eig, sub_product, sym_eig};
 use super::kernels::{
     b_orthogonality_error_cancellable, relative_residuals, residuals_from, sym_spmm,
 };
@@ -40,30 +40,8 @@ fn svqb(w: &mut Vec<f64>, n: usize, c: usize, b: &SparseMatrix) -> Result<usize,
         return Ok(0);
     }
     let bw = sym_spmm(b, &w[..n * c], c);
-    let mut g = gram(&w[..n * c], &bw, n, c, c);
-    // Scale to unit diagonal so that the drop threshold is relative per column.
-    let mut d = vec![0.0; c];
-    for (i, di) in d.iter_mut().enumerate() {
-        let gii = g[(i, i)];
-        if !gii.is_finite() {
-            return Err(SparseEigenError::NonFinite);
-        }
-        *di = if gii > 0.0 { 1.0 / gii.sqrt() } else { 0.0 };
-    }
-    for j in 0..c {
-        for i in 0..c {
-            g[(i, j)] *= d[i] * d[j];
-        }
-    }
-    for j in 0..c {
-        for i in 0..j {
-            let v = 0.5 * (g[(i, j)] + g[(j, i)]);
-            g[(i, j)] = v;
-            g[(j, i)] = v;
-        }
-    }
-    let (lam, u) = sym_eig(g.as_ref())?;
-    let lmax = lam.iter().cloned().fold(0.0, f64::max);
+    // Scaled to unit diagonal so that the drop threshold is relative per column.
+    let (d, lam, u, lmax) = scaled_gram_eig(gram(&w[..n * c], &bw, n, c, c), 0.0)?;
     let keep: Vec<usize> = (0..c)
         .filter(|&i| lam[i] > 1e-10 * lmax && lmax > 0.0)
         .collect();
@@ -79,6 +57,26 @@ fn svqb(w: &mut Vec<f64>, n: usize, c: usize, b: &SparseMatrix) -> Result<usize,
     Ok(keep.len())
 }
 
+/// Restarts the search space with its first `keep` Ritz vectors: the first `m` columns of
+/// `v` (`n` rows; `m` the order of `y`) become `V Y[:, :keep]`, and `H` becomes
+/// `diag(theta[:keep])`.
+fn restart_with_ritz_vectors(
+    v: &mut [f64],
+    h: &mut Mat<f64>,
+    y: &Mat<f64>,
+    theta: &[f64],
+    n: usize,
+    keep: usize,
+) {
+    let m = y.nrows();
+    let vk = product(&v[..n * m], y.as_ref().subcols(0, keep), n);
+    v[..n * keep].copy_from_slice(&vk);
+    h.fill(0.0);
+    for (j, &t) in theta[..keep].iter().enumerate() {
+        h[(j, j)] = t;
+    }
+}
+
 /// B-orthogonalizes the `c` columns of `w` against the `m` columns of `v` (one classical
 /// Gram-Schmidt pass as two matrix products).
 fn orth_against(w: &mut [f64], v: &[f64], n: usize, m: usize, c: usize, b: &SparseMatrix) {
@@ -88,24 +86,6 @@ fn orth_against(w: &mut [f64], v: &[f64], n: usize, m: usize, c: usize, b: &Spar
     let bw = sym_spmm(b, &w[..n * c], c);
     let coef = gram(&v[..n * m], &bw, n, m, c);
     sub_product(w, v, coef.as_ref(), n);
-}
-
-/// Makes a new block: orthogonal to `v[:, :m]`, B-orthonormal. Columns that lie in the span
-/// of `v` are dropped. Returns the column count.
-fn new_block(
-    w: &mut Vec<f64>,
-    v: &[f64],
-    n: usize,
-    m: usize,
-    c: usize,
-    b: &SparseMatrix,
-) -> Result<usize, SparseEigenError> {
-    // Normalize columns first (B-norm) so that "dropped" is a relative notion.
-    let mut c = svqb_diag_normalize(w, n, c, b);
-    orth_against(w, v, n, m, c, b);
-    c = svqb(w, n, c, b)?;
-    orth_against(w, v, n, m, c, b);
-    svqb(w, n, c, b)
 }
 
 /// Scales each column to unit B-norm and removes zero columns; returns the count.
@@ -198,7 +178,7 @@ pub(super) fn davidson(
     chol.solve_many_in_place(&mut bw, p);
     solves += p;
     w = bw;
-    let c = new_block(&mut w, &v, n, 0, p, b)?;
+    let c = new_block(&mut w, &[], 0, &v, 0, n, p, b)?;
     append(&mut v, &mut h, &mut m, &w, c, n, s)?;
     let mut last = (m - c, c);
     let mut restarted = false;
@@ -332,18 +312,7 @@ pub(super) fn davidson(
                 .max(m_max / 2)
                 .min(m_max - c.max(1))
                 .min(m);
-            let mut yk = Mat::<f64>::zeros(m, keep);
-            for j in 0..keep {
-                for i in 0..m {
-                    yk[(i, j)] = y[(i, j)];
-                }
-            }
-            let xk = product(&v[..n * m], yk.as_ref(), n);
-            v[..n * keep].copy_from_slice(&xk);
-            h.fill(0.0);
-            for j in 0..keep {
-                h[(j, j)] = theta[j];
-            }
+            restart_with_ritz_vectors(&mut v, &mut h, &y, &theta, n, keep);
             m = keep;
             // The basis is no longer a Krylov space: the next block expands residuals.
             restarted = true;
@@ -356,7 +325,7 @@ pub(super) fn davidson(
             w.truncate(n * c);
         }
         let mut got = if c > 0 {
-            new_block(&mut w, &v, n, m, c, b)?
+            new_block(&mut w, &[], 0, &v, m, n, c, b)?
         } else {
             0
         };
@@ -369,7 +338,7 @@ pub(super) fn davidson(
             chol.solve_many_in_place(&mut bw, cr);
             solves += cr;
             w = bw;
-            got = new_block(&mut w, &v, n, m, cr, b)?;
+            got = new_block(&mut w, &[], 0, &v, m, n, cr, b)?;
         }
         append(&mut v, &mut h, &mut m, &w, got, n, s)?;
         last = (m - got, got);
@@ -391,9 +360,12 @@ struct Ctx<'a> {
     cancel: &'a CancelToken,
 }
 
-/// Makes a new block orthogonal to `xl[:, :nl]` and `v[:, :m]`, B-orthonormal.
+/// Makes a new block orthogonal to `xl[:, :nl]` (the locked vectors; none without
+/// locking) and `v[:, :m]`, B-orthonormal. Columns are B-normalized first, so that
+/// "dropped" is a relative notion; columns that lie in the span of `xl` and `v` are
+/// dropped. Returns the column count.
 #[allow(clippy::too_many_arguments)]
-fn new_block_locked(
+fn new_block(
     w: &mut Vec<f64>,
     xl: &[f64],
     nl: usize,
@@ -450,7 +422,7 @@ fn locked(
     };
     let c0 = p.min(ma_max);
     let mut w = random_block(rng, c0, &mut solves);
-    let c = new_block_locked(&mut w, &xl, 0, &v, 0, n, c0, b)?;
+    let c = new_block(&mut w, &xl, 0, &v, 0, n, c0, b)?;
     append(&mut v, &mut h, &mut m, &w, c, n, s)?;
 
     let mut iteration = 0usize;
@@ -563,32 +535,21 @@ fn locked(
         if m + c.max(1) > ma_max {
             let keep = ma_max.saturating_sub(c.max(1)).min(m);
             if nf == 0 {
-                let mut yk = Mat::<f64>::zeros(m, keep);
-                for j in 0..keep {
-                    for i in 0..m {
-                        yk[(i, j)] = y[(i, j)];
-                    }
-                }
-                let vk = product(&v[..n * m], yk.as_ref(), n);
-                v[..n * keep].copy_from_slice(&vk);
-                h.fill(0.0);
-                for j in 0..keep {
-                    h[(j, j)] = theta[j];
-                }
+                restart_with_ritz_vectors(&mut v, &mut h, &y, &theta, n, keep);
             }
             m = keep;
         }
         c = c.min(ma_max - m).min(n - nl - m);
         w.truncate(n * c);
         let mut got = if c > 0 {
-            new_block_locked(&mut w, &xl, nl, &v, m, n, c, b)?
+            new_block(&mut w, &xl, nl, &v, m, n, c, b)?
         } else {
             0
         };
         if got == 0 && m < ma_max && nl + m < n {
             let cr = p.min(ma_max - m).min(n - nl - m);
             w = random_block(rng, cr, &mut solves);
-            got = new_block_locked(&mut w, &xl, nl, &v, m, n, cr, b)?;
+            got = new_block(&mut w, &xl, nl, &v, m, n, cr, b)?;
         }
         append(&mut v, &mut h, &mut m, &w, got, n, s)?;
     }

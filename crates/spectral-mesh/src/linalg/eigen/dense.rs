@@ -131,6 +131,57 @@ fn sym_evd(h: MatRef<'_, f64>, par: Par) -> Option<(Vec<f64>, Mat<f64>)> {
     Some((vals, u))
 }
 
+/// `A B` of two small matrices (the projected problems' sizes), sequential.
+pub(super) fn small_product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let mut out = Mat::<f64>::zeros(a.nrows(), b.ncols());
+    if a.nrows() > 0 && a.ncols() > 0 && b.ncols() > 0 {
+        matmul(out.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
+    }
+    out
+}
+
+/// The eigen-decomposition of SVQB (Stathopoulos and Wu): the Gram matrix `g` of `c`
+/// columns scaled to unit diagonal (`D g D`, `D = diag(1 / sqrt(g_ii))`, 0 for a diagonal
+/// entry `<= floor2`) and symmetrized. Returns `D`'s diagonal, the eigenvalues (ascending),
+/// the eigenvectors and the largest eigenvalue (at least 0); a non-finite diagonal entry
+/// is [`SparseEigenError::NonFinite`].
+pub(super) type ScaledGramEig = (Vec<f64>, Vec<f64>, Mat<f64>, f64);
+
+/// See [`ScaledGramEig`].
+pub(super) fn scaled_gram_eig(
+    mut g: Mat<f64>,
+    floor2: f64,
+) -> Result<ScaledGramEig, SparseEigenError> {
+    let c = g.nrows();
+    let mut d = vec![0.0; c];
+    for (i, di) in d.iter_mut().enumerate() {
+        let gii = g[(i, i)];
+        if !gii.is_finite() {
+            return Err(SparseEigenError::NonFinite);
+        }
+        *di = if gii > floor2 && gii > 0.0 {
+            1.0 / gii.sqrt()
+        } else {
+            0.0
+        };
+    }
+    for j in 0..c {
+        for i in 0..c {
+            g[(i, j)] *= d[i] * d[j];
+        }
+    }
+    for j in 0..c {
+        for i in 0..j {
+            let a = 0.5 * (g[(i, j)] + g[(j, i)]);
+            g[(i, j)] = a;
+            g[(j, i)] = a;
+        }
+    }
+    let (lam, u) = sym_eig(g.as_ref())?;
+    let lmax = lam.iter().cloned().fold(0.0, f64::max);
+    Ok((d, lam, u, lmax))
+}
+
 /// [`sym_evd`] sequentially, for the small projected problems of the iterations.
 pub(super) fn sym_eig(h: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), SparseEigenError> {
     sym_evd(h, Par::Seq).ok_or(SparseEigenError::NonFinite)

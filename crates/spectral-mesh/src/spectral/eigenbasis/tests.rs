@@ -5,25 +5,21 @@ use super::*;
 use crate::cancel::CancelToken;
 use crate::operators::{Laplacian, Operators};
 
-fn iterative(k: usize) -> EigenParams {
+/// The default parameters with `k` pairs by `method`.
+fn params(k: usize, method: EigenMethod) -> EigenParams {
     EigenParams {
         k,
-        method: EigenMethod::ShiftInvertBlock,
+        method,
         ..Default::default()
     }
 }
 
+fn iterative(k: usize) -> EigenParams {
+    params(k, EigenMethod::ShiftInvertBlock)
+}
+
 fn check_against_dense(ops: &Operators, k: usize) {
-    let dense = compute_eigenbasis(
-        ops,
-        &EigenParams {
-            k,
-            method: EigenMethod::Dense,
-            ..Default::default()
-        },
-        &mut |_| {},
-    )
-    .unwrap();
+    let dense = compute_eigenbasis(ops, &params(k, EigenMethod::Dense), &mut |_| {}).unwrap();
     let it = compute_eigenbasis(ops, &iterative(k), &mut |_| {}).unwrap();
     let scale = dense.values[k - 1].abs().max(1e-300);
     for j in 0..k {
@@ -93,15 +89,21 @@ fn sphere_multiplicities() {
     check_against_dense(&ops, 60);
 }
 
-#[test]
-fn components_give_zero_eigenvalues() {
+/// The FEM operators of three disjoint unit icospheres (level 2): three components, every
+/// eigenvalue of multiplicity 3 times that of one sphere.
+fn three_spheres() -> Operators {
     let s = icosphere(2, 1.0);
     let mesh = union(&[
         (s.clone(), [0.0; 3]),
         (s.clone(), [3.0, 0.0, 0.0]),
         (s, [0.0, 3.0, 0.0]),
     ]);
-    let ops = Operators::new(&mesh, Laplacian::Fem);
+    Operators::new(&mesh, Laplacian::Fem)
+}
+
+#[test]
+fn components_give_zero_eigenvalues() {
+    let ops = three_spheres();
     let b = compute_eigenbasis(&ops, &iterative(8), &mut |_| {}).unwrap();
     for j in 0..3 {
         assert!(b.values[j].abs() < 1e-8, "{:?}", b.values);
@@ -114,24 +116,9 @@ fn components_give_zero_eigenvalues() {
 fn multiplicities_larger_than_the_block_are_complete() {
     // Three identical spheres: every eigenvalue has multiplicity 3 (2l + 1), up to 15
     // here, with blocks of 4; the result must equal the dense one pair for pair.
-    let s = icosphere(2, 1.0);
-    let mesh = union(&[
-        (s.clone(), [0.0; 3]),
-        (s.clone(), [3.0, 0.0, 0.0]),
-        (s, [0.0, 3.0, 0.0]),
-    ]);
-    let ops = Operators::new(&mesh, Laplacian::Fem);
+    let ops = three_spheres();
     let k = 40;
-    let dense = compute_eigenbasis(
-        &ops,
-        &EigenParams {
-            k,
-            method: EigenMethod::Dense,
-            ..Default::default()
-        },
-        &mut |_| {},
-    )
-    .unwrap();
+    let dense = compute_eigenbasis(&ops, &params(k, EigenMethod::Dense), &mut |_| {}).unwrap();
     let it = compute_eigenbasis(
         &ops,
         &EigenParams {
@@ -183,25 +170,10 @@ fn davidson_and_krylov_schur_agree() {
 fn k_larger_than_n_is_an_error() {
     let mesh = icosphere(0, 1.0);
     let ops = Operators::new(&mesh, Laplacian::Fem);
-    let e = compute_eigenbasis(
-        &ops,
-        &EigenParams {
-            k: 13,
-            ..Default::default()
-        },
-        &mut |_| {},
-    );
+    let e = compute_eigenbasis(&ops, &params(13, EigenMethod::Auto), &mut |_| {});
     assert_eq!(e.unwrap_err(), EigenError::TooMany { k: 13, n: 12 });
     // Auto on a tiny mesh with k = n works (dense path).
-    let b = compute_eigenbasis(
-        &ops,
-        &EigenParams {
-            k: 12,
-            ..Default::default()
-        },
-        &mut |_| {},
-    )
-    .unwrap();
+    let b = compute_eigenbasis(&ops, &params(12, EigenMethod::Auto), &mut |_| {}).unwrap();
     assert_eq!(b.k(), 12);
     // The iterative path also handles k = n.
     let b2 = compute_eigenbasis(&ops, &iterative(12), &mut |_| {}).unwrap();

@@ -270,22 +270,33 @@ impl Filter {
                 out.push(0.0);
                 continue;
             }
-            let w = ev.eval(l, &band);
-            if !(w.is_finite() && w > 0.0) {
-                return Err(FilterError::NotPositive {
-                    filter: self.to_string(),
-                    index: i,
-                    value: l,
-                    weight: w,
-                });
-            }
             any = true;
-            out.push(w);
+            out.push(positive_weight(self, i, l, ev.eval(l, &band))?);
         }
         if !any {
             return Err(FilterError::EmptySpectrum);
         }
         Ok(out)
+    }
+}
+
+/// `weight`, the weight of the pair `index` (eigenvalue `value`) under `filter`, when it is
+/// strictly positive and finite; otherwise [`FilterError::NotPositive`].
+pub(crate) fn positive_weight(
+    filter: &dyn std::fmt::Display,
+    index: usize,
+    value: f64,
+    weight: f64,
+) -> Result<f64, FilterError> {
+    if weight.is_finite() && weight > 0.0 {
+        Ok(weight)
+    } else {
+        Err(FilterError::NotPositive {
+            filter: filter.to_string(),
+            index,
+            value,
+            weight,
+        })
     }
 }
 

@@ -56,7 +56,7 @@ use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 use self::orthonormalize::{LanczosStep, orthonormalize};
 use super::deflation::{ComponentNullSpace, DenseDeflation};
-use super::dense::{LEAF_ROWS, gram, product, sub_product, sym_eig};
+use super::dense::{LEAF_ROWS, gram, product, small_product, sub_product, sym_eig};
 use super::kernels::{residuals_from, sym_spmm, sym_spmm_into};
 use super::result::{PartialEigen, package};
 use super::rng::Rng;
@@ -314,15 +314,7 @@ fn purify(
     let x = &mut front[n * nl..n * (nl + a)];
     let q = &back[..n * qc];
     // P^T P = W diag(s) W^T, W = P^T U diag(s)^(-1/2) from P P^T = U diag(s) U^T.
-    let mut ppt = Mat::<f64>::zeros(qc, qc);
-    matmul(
-        ppt.as_mut(),
-        Accum::Replace,
-        p.as_ref(),
-        p.transpose(),
-        1.0,
-        Par::Seq,
-    );
+    let ppt = small_product(p.as_ref(), p.transpose());
     let (s, u) = sym_eig(ppt.as_ref())?;
     let keep: Vec<usize> = (0..qc).filter(|&l| s[l] > 1e-300).collect();
     let r = keep.len();
@@ -386,17 +378,7 @@ fn project(
             y[(r, c)] = y_asc[(r, ma - 1 - c)];
         }
     }
-    let mut rho = Mat::<f64>::zeros(qc, ma);
-    if qc > 0 && ma > 0 {
-        matmul(
-            rho.as_mut(),
-            Accum::Replace,
-            rrow.as_ref().submatrix(0, nl, qc, ma),
-            y.as_ref(),
-            1.0,
-            Par::Seq,
-        );
-    }
+    let rho = small_product(rrow.as_ref().submatrix(0, nl, qc, ma), y.as_ref());
     let gz = timed(Phase::Estimate, || {
         if qc > 0 {
             let q = &v[n * m..n * (m + qc)];

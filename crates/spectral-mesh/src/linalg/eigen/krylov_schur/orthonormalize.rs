@@ -2,10 +2,9 @@
 //! classical Gram-Schmidt passes (DGKS) and scaled SVQB, with random refills for
 //! directions that became dependent (see the parent module).
 
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatMut, Par};
+use faer::{Accum, Mat, MatMut};
 
-use super::super::dense::{gram, matmul_rows, sub_product, sym_eig, view};
+use super::super::dense::{gram, matmul_rows, scaled_gram_eig, small_product, sub_product, view};
 use super::super::kernels::{sym_spmm, sym_spmm_into};
 use super::super::rng::Rng;
 use super::super::types::{SparseEigenError, check};
@@ -105,36 +104,11 @@ fn svqb_r(
             break;
         }
         let bw = b_times(b, w, n, cur, bw_given.take());
-        let mut g = gram(&w[..n * cur], &bw, n, cur, cur);
+        let g = gram(&w[..n * cur], &bw, n, cur, cur);
         if pass == 0 {
             min_diag = (0..cur).map(|i| g[(i, i)]).fold(f64::INFINITY, f64::min);
         }
-        let mut d = vec![0.0; cur];
-        for (i, di) in d.iter_mut().enumerate() {
-            let gii = g[(i, i)];
-            if !gii.is_finite() {
-                return Err(SparseEigenError::NonFinite);
-            }
-            *di = if gii > floor2 && gii > 0.0 {
-                1.0 / gii.sqrt()
-            } else {
-                0.0
-            };
-        }
-        for j in 0..cur {
-            for i in 0..cur {
-                g[(i, j)] *= d[i] * d[j];
-            }
-        }
-        for j in 0..cur {
-            for i in 0..j {
-                let a = 0.5 * (g[(i, j)] + g[(j, i)]);
-                g[(i, j)] = a;
-                g[(j, i)] = a;
-            }
-        }
-        let (lam, u) = sym_eig(g.as_ref())?;
-        let lmax = lam.iter().cloned().fold(0.0, f64::max);
+        let (d, lam, u, lmax) = scaled_gram_eig(g, floor2)?;
         let keep: Vec<usize> = (0..cur)
             .rev()
             .filter(|&i| lmax > 0.0 && lam[i] > 1e-14 * lmax)
@@ -170,16 +144,7 @@ fn svqb_r(
         }
         w[..n * kept].copy_from_slice(&q);
         scratch::give(q);
-        let mut r2 = Mat::<f64>::zeros(kept, c);
-        matmul(
-            r2.as_mut(),
-            Accum::Replace,
-            rq.as_ref(),
-            r.as_ref(),
-            1.0,
-            Par::Seq,
-        );
-        r = r2;
+        r = small_product(rq.as_ref(), r.as_ref());
         cur = kept;
     }
     Ok((cur, r, min_diag))
@@ -322,27 +287,9 @@ pub(super) fn orthonormalize(
         // matters, so project the orthonormalized block once more (W_in = V (C + Cp R) + Q R).
         let cp = project_once(w, basis, n, j, cur, b, None);
         pb.deflate(w, cur);
-        let mut add = Mat::<f64>::zeros(j, c);
-        matmul(
-            add.as_mut(),
-            Accum::Replace,
-            cp.as_ref(),
-            r.as_ref(),
-            1.0,
-            Par::Seq,
-        );
-        coef += add;
+        coef += small_product(cp.as_ref(), r.as_ref());
         let (kept2, rq2, _) = svqb_r(w, n, cur, b, 0.0, None)?;
-        let mut r2 = Mat::<f64>::zeros(kept2, c);
-        matmul(
-            r2.as_mut(),
-            Accum::Replace,
-            rq2.as_ref(),
-            r.as_ref(),
-            1.0,
-            Par::Seq,
-        );
-        r = r2;
+        r = small_product(rq2.as_ref(), r.as_ref());
         cur = kept2;
     }
     // Refill dropped directions with random ones (not part of W_in: zero rows of R).
