@@ -20,7 +20,6 @@ usage: eigs_slepc.py MESH.off K [--mass fem|voronoi-cot|cot] [--tol T] [--save O
        eigs_slepc.py --check   (exit status 0 when slepc4py, petsc4py and SciPy import)
 """
 import argparse
-import resource
 import sys
 import time
 from pathlib import Path
@@ -65,15 +64,13 @@ def main():
         print(f"slepc4py is not importable ({e}); run bench/setup-slepc.sh", file=sys.stderr)
         sys.exit(3)
     import numpy as np
-    from eigs_scipy import operators, read_off, save_basis
+    from eigs_scipy import operators, quality, read_off, save_basis, shift
 
     v, f = read_off(a.mesh)
     t0 = time.perf_counter()
     S, B = operators(v, f, a.mass)
     t_ops = time.perf_counter() - t0
-    sn = abs(S).sum(axis=0).max()
-    bn = abs(B).sum(axis=0).max()
-    sigma = a.sigma if a.sigma is not None else -max(0.01 / B.sum(), 1e-10 * sn / bn)
+    sigma, sn, bn = shift(S, B, a.sigma)
     n = len(v)
 
     def petsc(m):
@@ -125,11 +122,7 @@ def main():
     secs = time.perf_counter() - t1
     order = np.argsort(lam)[: a.k]
     lam, X = lam[order], np.asfortranarray(X[:, order])
-    R = S @ X - (B @ X) * lam
-    res = np.linalg.norm(R, axis=0) / ((sn + np.abs(lam) * bn) * np.linalg.norm(X, axis=0))
-    G = X.T @ (B @ X)
-    orth = abs(G - np.eye(a.k)).max()
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    res, orth, peak = quality(S, B, lam, X, sn, bn)
     print(f"mesh={a.mesh} n={n} k={a.k} route={route} tol={a.tol:g} seconds={secs:.3f} "
           f"assembly={t_ops:.3f} max_residual={res.max():.2e} orth_error={orth:.2e} "
           f"lambda_k={lam[-1]:.12e} peak_rss_mib={peak:.0f} nconv={nconv} "

@@ -35,21 +35,11 @@ from scipy.sparse.csgraph import connected_components
 
 import potpourri3d as pp3d
 
+# The OFF reader the benches and the other conformance scripts share.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
+from eigs_scipy import read_off  # noqa: E402
+
 TOL = 1e-6
-
-
-def read_plain_off(path):
-    """Reads the plain OFF our CLI writes (header, counts, coordinates, triangles)."""
-    with open(path) as f:
-        tokens = [t for line in f for t in line.split("#", 1)[0].split()]
-    assert tokens[0] == "OFF", f"{path}: not a plain OFF"
-    nv, nf = int(tokens[1]), int(tokens[2])
-    pos = 4
-    V = np.array(tokens[pos : pos + 3 * nv], dtype=np.float64).reshape(nv, 3)
-    pos += 3 * nv
-    F = np.array(tokens[pos : pos + 4 * nf], dtype=np.int64).reshape(nf, 4)
-    assert (F[:, 0] == 3).all(), f"{path}: not all faces are triangles"
-    return V, F[:, 1:].copy()
 
 
 def components(n, F):
@@ -82,7 +72,7 @@ def compare_mesh(cli, mesh, workdir):
     proc = subprocess.run([cli, "convert", mesh, off, "--force"], capture_output=True, text=True)
     if proc.returncode != 0:
         return {"mesh": name, "status": "refused by spectral-mesh", "reason": proc.stderr.strip()}
-    V, F = read_plain_off(off)
+    V, F = read_off(off, triangles=True)
     n = V.shape[0]
     used = np.zeros(n, dtype=bool)
     used[F.ravel()] = True
@@ -122,7 +112,7 @@ def exact_table(cli, meshes, workdir):
         name = os.path.basename(mesh)
         off = os.path.join(workdir, name + ".tri.off")
         subprocess.run([cli, "convert", mesh, off, "--force"], check=True, capture_output=True)
-        V, F = read_plain_off(off)
+        V, F = read_off(off, triangles=True)
         algo = geodesic.PyGeodesicAlgorithmExact(V, F)
         exact, _ = algo.geodesicDistances(np.array([0]), None)
         keep = np.isfinite(exact) & (exact > 0) & (exact < 1e300)

@@ -52,6 +52,36 @@ pub struct BasisArgs {
     pub cloud: CloudArgs,
 }
 
+/// The eigenbasis of a field command: [`BasisArgs`] and the shape scaled to unit area
+/// unless `--no-normalize` (every field command; `eigs` reports the basis of the shape as
+/// given).
+#[derive(Debug, Clone, clap::Args)]
+pub struct FieldBasisArgs {
+    #[command(flatten)]
+    pub basis: BasisArgs,
+    /// Use the basis as given instead of the shape scaled to unit area.
+    #[arg(long)]
+    pub no_normalize: bool,
+}
+
+impl FieldBasisArgs {
+    /// The analysis of `input` ([`BasisArgs::analysis`]), at unit area unless
+    /// `--no-normalize`.
+    pub fn analysis(&self, input: AnalysisInput) -> Result<Analysis> {
+        self.basis.analysis(input, !self.no_normalize)
+    }
+
+    /// What a command's summary line says of the scale: `", unit-area shape"`, or nothing
+    /// with `--no-normalize`.
+    pub fn scale_note(&self) -> &'static str {
+        if self.no_normalize {
+            ""
+        } else {
+            ", unit-area shape"
+        }
+    }
+}
+
 /// The point-cloud Laplacian's parameters, shared by every command that reads an input.
 /// Unset options take the library's defaults ([`PointCloudParams::default`], shown in the
 /// help); given with a mesh they are an error (see [`CloudArgs::apply`]).
@@ -250,17 +280,7 @@ pub struct Solved {
 pub fn basis(an: &Analysis, k: usize, cache: Option<&Path>) -> Result<Solved> {
     let t0 = Instant::now();
     let bar = EigenBar::new(k);
-    let mut orthogonality = None;
-    let mut report = |p: EigenProgress| {
-        if let EigenProgress::Finished {
-            orthogonality_error,
-            ..
-        } = p
-        {
-            orthogonality = Some(orthogonality_error);
-        }
-        bar.update(p);
-    };
+    let mut report = |p: EigenProgress| bar.update(p);
     if let Some(dir) = cache
         && an.held_k() < k
     {
@@ -292,7 +312,7 @@ pub fn basis(an: &Analysis, k: usize, cache: Option<&Path>) -> Result<Solved> {
     Ok(Solved {
         basis,
         seconds: t0.elapsed().as_secs_f64(),
-        orthogonality,
+        orthogonality: bar.orthogonality(),
     })
 }
 

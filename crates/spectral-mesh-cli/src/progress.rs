@@ -1,5 +1,6 @@
 //! Progress bars on stderr, only when stderr is a terminal.
 
+use std::cell::Cell;
 use std::io::IsTerminal;
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -21,30 +22,45 @@ pub fn bar(len: u64, what: &str) -> ProgressBar {
 }
 
 /// The progress of an eigenbasis of `k` pairs: a bar fed by the solver's progress
-/// callback.
-pub struct EigenBar(ProgressBar);
+/// callback, which also keeps the orthogonality error the solver reports when it finishes.
+pub struct EigenBar {
+    bar: ProgressBar,
+    orthogonality: Cell<Option<f64>>,
+}
 
 impl EigenBar {
     /// A bar for `k` pairs (hidden unless stderr is a terminal).
     pub fn new(k: usize) -> Self {
-        Self(bar(k as u64, "eigenpairs"))
+        Self {
+            bar: bar(k as u64, "eigenpairs"),
+            orthogonality: Cell::new(None),
+        }
     }
 
     /// The solver's progress, shown on the bar.
     pub fn update(&self, p: EigenProgress) {
         match p {
-            EigenProgress::Dense { .. } => self.0.set_message("dense eigen"),
-            EigenProgress::Factorization { .. } => self.0.set_message("factoring"),
+            EigenProgress::Dense { .. } => self.bar.set_message("dense eigen"),
+            EigenProgress::Factorization { .. } => self.bar.set_message("factoring"),
             EigenProgress::Iteration { converged, .. } => {
-                self.0.set_message("iterating");
-                self.0.set_position(converged as u64);
+                self.bar.set_message("iterating");
+                self.bar.set_position(converged as u64);
             }
-            _ => {}
+            EigenProgress::Finished {
+                orthogonality_error,
+                ..
+            } => self.orthogonality.set(Some(orthogonality_error)),
         }
+    }
+
+    /// `max |X^T B X - I|` as the solver reported it for the last basis it computed
+    /// (`None` when none was computed: the measure is not taken twice).
+    pub fn orthogonality(&self) -> Option<f64> {
+        self.orthogonality.get()
     }
 
     /// Removes the bar.
     pub fn finish(&self) {
-        self.0.finish_and_clear();
+        self.bar.finish_and_clear();
     }
 }

@@ -7,8 +7,9 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use serde_json::{Value, json};
 use spectral_mesh_web::{ServeConfig, spawn};
@@ -23,19 +24,9 @@ fn http(addr: SocketAddr, method: &str, path: &str, body: &Value) -> (u16, Vec<u
     (status, body)
 }
 
-fn json_of(addr: SocketAddr, method: &str, path: &str, body: &Value) -> Value {
-    let (status, b) = http(addr, method, path, body);
-    assert!(
-        status < 300,
-        "{method} {path}: {status} {}",
-        String::from_utf8_lossy(&b)
-    );
-    serde_json::from_slice(&b).unwrap()
-}
-
-#[test]
-fn a_web_download_replays_to_the_same_bytes() {
-    let server = spawn(ServeConfig {
+/// A server on 127.0.0.1 (a free port) with a cache of 256 MiB.
+fn server() -> spectral_mesh_web::RunningServer {
+    spawn(ServeConfig {
         port: 0,
         limits: spectral_mesh_web::Limits {
             cache_bytes: 256 << 20,
@@ -43,34 +34,55 @@ fn a_web_download_replays_to_the_same_bytes() {
         },
         ..Default::default()
     })
-    .unwrap();
+    .unwrap()
+}
+
+/// The download of a field request `body` in `format` (asserting a 200 reply).
+fn download(addr: SocketAddr, id: &str, body: &Value, format: &str, label: &str) -> Vec<u8> {
+    let mut b = body.clone();
+    b["format"] = json!(format);
+    let (status, bytes) = http(addr, "POST", &format!("/api/mesh/{id}/download"), &b);
+    assert_eq!(
+        status,
+        200,
+        "{label} {format}: {}",
+        String::from_utf8_lossy(&bytes)
+    );
+    bytes
+}
+
+/// Writes a downloaded experiment file as `dir/{name}.toml` and runs it with
+/// `spectral-mesh run FILE -o dir/{name}` (asserting success); returns that folder.
+fn replay(dir: &Path, name: &str, toml: &[u8], label: &str) -> PathBuf {
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, toml).unwrap();
+    let out = dir.join(name);
+    let run = Command::new(env!("CARGO_BIN_EXE_spectral-mesh"))
+        .arg("run")
+        .arg(&file)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "spectral-mesh run {} ({label}): {}\n{}\nthe file:\n{}",
+        file.display(),
+        String::from_utf8_lossy(&run.stdout),
+        String::from_utf8_lossy(&run.stderr),
+        String::from_utf8_lossy(toml)
+    );
+    out
+}
+
+#[test]
+fn a_web_download_replays_to_the_same_bytes() {
+    let server = server();
     let addr = server.addr;
     assert!(addr.ip().is_loopback());
-    let mesh = json_of(addr, "POST", "/api/mesh", &json!({"shape": "sphere:res=3"}));
-    let id = mesh["mesh_id"].as_str().unwrap().to_string();
+    let id = blocking::load_shape(addr, "sphere:res=3");
     let big_k = 60;
-    json_of(
-        addr,
-        "POST",
-        &format!("/api/mesh/{id}/basis"),
-        &json!({ "k": big_k }),
-    );
-    let start = Instant::now();
-    loop {
-        let st = json_of(
-            addr,
-            "GET",
-            &format!("/api/mesh/{id}/basis/status"),
-            &json!({}),
-        );
-        if st["state"] == "done" {
-            assert_eq!(st["held_k"], big_k);
-            break;
-        }
-        assert_eq!(st["state"], "running", "{st}");
-        assert!(start.elapsed() < Duration::from_secs(300), "basis too slow");
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    blocking::wait_for_basis(addr, &id, big_k, Duration::from_secs(300));
     let dir = tempfile::tempdir().unwrap();
     for (n, request) in [
         json!({"kind": "heat", "t": 0.01, "k": 40}),
@@ -81,13 +93,7 @@ fn a_web_download_replays_to_the_same_bytes() {
     .enumerate()
     {
         let kind = request["kind"].as_str().unwrap().to_string();
-        let download = |format: &str| {
-            let mut body = request.clone();
-            body["format"] = json!(format);
-            let (status, bytes) = http(addr, "POST", &format!("/api/mesh/{id}/download"), &body);
-            assert_eq!(status, 200, "{format}: {}", String::from_utf8_lossy(&bytes));
-            bytes
-        };
+        let download = |format: &str| download(addr, &id, &request, format, &kind);
         let txt = download("txt");
         let toml = download("toml");
         let toml_text = String::from_utf8(toml.clone()).unwrap();
@@ -98,23 +104,7 @@ fn a_web_download_replays_to_the_same_bytes() {
                 "{toml_text}"
             );
         }
-        let file = dir.path().join(format!("web-{n}.toml"));
-        std::fs::write(&file, &toml).unwrap();
-        let out = dir.path().join(format!("out-{n}"));
-        let run = Command::new(env!("CARGO_BIN_EXE_spectral-mesh"))
-            .arg("run")
-            .arg(&file)
-            .arg("-o")
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(
-            run.status.success(),
-            "spectral-mesh run {}: {}\n{}\nthe file:\n{toml_text}",
-            file.display(),
-            String::from_utf8_lossy(&run.stdout),
-            String::from_utf8_lossy(&run.stderr)
-        );
+        let out = replay(dir.path(), &format!("web-{n}"), &toml, &kind);
         let written = out.join(format!("{kind}.txt"));
         let replayed = std::fs::read(&written).unwrap_or_else(|e| {
             panic!(
@@ -157,15 +147,7 @@ fn values(bytes: &[u8]) -> Vec<f64> {
 /// web's experiment file replays it byte for byte.
 #[test]
 fn a_web_geodesic_equals_the_command_line() {
-    let server = spawn(ServeConfig {
-        port: 0,
-        limits: spectral_mesh_web::Limits {
-            cache_bytes: 256 << 20,
-            ..Default::default()
-        },
-        ..Default::default()
-    })
-    .unwrap();
+    let server = server();
     let addr = server.addr;
     let dir = tempfile::tempdir().unwrap();
     for (shape, source, extra) in [
@@ -178,25 +160,13 @@ fn a_web_geodesic_equals_the_command_line() {
         ),
         ("3torus", 5, json!({"laplacian": "robust"})),
     ] {
-        let mesh = json_of(addr, "POST", "/api/mesh", &json!({ "shape": shape }));
-        let id = mesh["mesh_id"].as_str().unwrap().to_string();
+        let id = blocking::load_shape(addr, shape);
         let mut body = json!({"kind": "geodesic", "source": source});
         for (k, v) in extra.as_object().unwrap() {
             body[k] = v.clone();
         }
         let label = format!("{shape} {body}");
-        let download = |format: &str| {
-            let mut b = body.clone();
-            b["format"] = json!(format);
-            let (status, bytes) = http(addr, "POST", &format!("/api/mesh/{id}/download"), &b);
-            assert_eq!(
-                status,
-                200,
-                "{label} {format}: {}",
-                String::from_utf8_lossy(&bytes)
-            );
-            bytes
-        };
+        let download = |format: &str| download(addr, &id, &body, format, &label);
         let web = download("txt");
         let web_values = values(&web);
         assert_eq!(web_values[source], 0.0, "{label}");
@@ -230,21 +200,7 @@ fn a_web_geodesic_equals_the_command_line() {
         let toml = download("toml");
         let toml_text = String::from_utf8(toml.clone()).unwrap();
         assert!(toml_text.contains("kind = \"geodesic\""), "{toml_text}");
-        let file = dir.path().join(format!("geo-{shape}-{source}.toml"));
-        std::fs::write(&file, &toml).unwrap();
-        let replay = dir.path().join(format!("run-{shape}-{source}"));
-        let run = Command::new(env!("CARGO_BIN_EXE_spectral-mesh"))
-            .arg("run")
-            .arg(&file)
-            .arg("-o")
-            .arg(&replay)
-            .output()
-            .unwrap();
-        assert!(
-            run.status.success(),
-            "run {label}: {}\n{toml_text}",
-            String::from_utf8_lossy(&run.stderr)
-        );
+        let replay = replay(dir.path(), &format!("geo-{shape}-{source}"), &toml, &label);
         assert!(
             std::fs::read(replay.join("geodesic.txt")).unwrap() == web,
             "{label}: the replay differs from the download"

@@ -142,33 +142,9 @@ fn main() {
     })
     .unwrap();
     let addr = server.addr;
-    let (_, b) = http(addr, "POST", "/api/mesh", &json!({ "shape": spec }));
-    let id = serde_json::from_slice::<Value>(&b).unwrap()["mesh_id"]
-        .as_str()
-        .unwrap()
-        .to_string();
+    let id = blocking::load_shape(addr, &spec);
     let t = Instant::now();
-    let (status, b) = http(
-        addr,
-        "POST",
-        &format!("/api/mesh/{id}/basis"),
-        &json!({"k": k}),
-    );
-    assert!(status < 300, "{}", String::from_utf8_lossy(&b));
-    loop {
-        let (_, b) = http(
-            addr,
-            "GET",
-            &format!("/api/mesh/{id}/basis/status"),
-            &json!({}),
-        );
-        let st: Value = serde_json::from_slice(&b).unwrap();
-        if st["state"] != "running" {
-            assert_eq!(st["state"], "done", "{st}");
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    }
+    blocking::wait_for_basis(addr, &id, k, Duration::from_secs(24 * 3600));
     println!(
         "\nbasis through the API: {:.1} s",
         t.elapsed().as_secs_f64()

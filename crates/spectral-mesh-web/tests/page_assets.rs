@@ -58,36 +58,8 @@ fn the_3d_library_is_served_from_the_binary() {
 #[test]
 fn a_heat_field_carries_the_flat_rule_and_the_truncation_hint() {
     let srv = server();
-    let (status, _, body) = http(
-        srv.addr,
-        "POST",
-        "/api/mesh",
-        Some(&json!({"shape": "sphere:res=2"})),
-    );
-    assert_eq!(status, 200);
-    let mesh: Value = serde_json::from_slice(&body).unwrap();
-    let id = mesh["mesh_id"].as_str().unwrap().to_string();
-    let (status, _, _) = http(
-        srv.addr,
-        "POST",
-        &format!("/api/mesh/{id}/basis"),
-        Some(&json!({"k": 30})),
-    );
-    assert!(status == 200 || status == 202);
-    for _ in 0..600 {
-        let (_, _, b) = http(
-            srv.addr,
-            "GET",
-            &format!("/api/mesh/{id}/basis/status"),
-            None,
-        );
-        let job: Value = serde_json::from_slice(&b).unwrap();
-        if job["state"] == "done" {
-            break;
-        }
-        assert!(job["state"] == "running", "{job}");
-        std::thread::sleep(Duration::from_millis(100));
-    }
+    let id = blocking::load_shape(srv.addr, "sphere:res=2");
+    blocking::wait_for_basis(srv.addr, &id, 30, Duration::from_secs(60));
     let field = |t: f64| {
         let (status, _, b) = http(
             srv.addr,

@@ -30,15 +30,7 @@ fn the_reply_describes_the_figure_and_the_download_uses_the_camera() {
         ..ServeConfig::default()
     })
     .unwrap();
-    let (status, body) = http(
-        srv.addr,
-        "POST",
-        "/api/mesh",
-        Some(&json!({"shape": "sphere:res=2"})),
-    );
-    assert_eq!(status, 200);
-    let mesh: Value = serde_json::from_slice(&body).unwrap();
-    let id = mesh["mesh_id"].as_str().unwrap().to_string();
+    let id = blocking::load_shape(srv.addr, "sphere:res=2");
     // A harmonic map (no basis): values 0 and 1 at two constrained vertices.
     let req = json!({"kind": "harmonic", "constraints": 2, "colormap": "diverging", "levels": 6,
                      "segments": false});

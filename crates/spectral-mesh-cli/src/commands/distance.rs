@@ -9,7 +9,7 @@ use spectral_mesh::experiments::paper::FieldStats;
 use spectral_mesh::spectral::distances::{ALL_PAIRS_LIMIT, all_pairs};
 use spectral_mesh::spectral::store::npy_f64;
 
-use crate::engine::{self, BasisArgs, check_vertex};
+use crate::engine::{self, FieldBasisArgs, check_vertex};
 use crate::output::{FieldOutputArgs, check_writable, extension, write};
 
 /// The syntax of `--distance` / `--filter`, shown in `--help`.
@@ -41,10 +41,7 @@ pub struct Args {
     #[arg(long, default_value_t = DistanceSpec::default().to_string(), long_help = FILTER_HELP)]
     pub distance: String,
     #[command(flatten)]
-    pub basis: BasisArgs,
-    /// Use the basis as given instead of the shape scaled to unit area.
-    #[arg(long)]
-    pub no_normalize: bool,
+    pub spectral: FieldBasisArgs,
     /// Also write every pairwise distance as an n x n NumPy .npy matrix (small meshes).
     #[arg(long, value_name = "OUT.npy")]
     pub all_pairs: Option<PathBuf>,
@@ -57,7 +54,7 @@ pub struct Args {
 
 /// Computes the distances and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
-    let input = args.basis.load(args.mesh.as_deref())?;
+    let input = args.spectral.basis.load(args.mesh.as_deref())?;
     let n = input.n();
     let spec: DistanceSpec = args
         .distance
@@ -88,16 +85,17 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(s) = args.source {
         check_vertex(s, n, "--source")?;
     }
-    args.basis
+    args.spectral
+        .basis
         .warn_unrecorded(args.output.save_experiment.as_ref());
     let request = FieldRequest::Distance {
         source: args.source,
         distance: spec,
-        k: args.basis.k,
+        k: args.spectral.basis.k,
     };
     let info = input.info;
-    let an = args.basis.analysis(input.shape, !args.no_normalize)?;
-    let (field, seconds) = engine::field(&an, &request, args.basis.cache.as_deref())
+    let an = args.spectral.analysis(input.shape)?;
+    let (field, seconds) = engine::field(&an, &request, args.spectral.basis.cache.as_deref())
         .map_err(|e| anyhow::anyhow!("--distance {}: {e:#}", args.distance))?;
     let source = field.marks[0];
     let stats = FieldStats::of(&field.values);
@@ -105,23 +103,19 @@ pub fn run(args: Args) -> Result<()> {
         "{}: n = {n}; {} distance from vertex {source}, k = {} ({}){}, eigenpairs in {seconds:.2} s",
         info.label(),
         args.distance,
-        args.basis.k,
+        args.spectral.basis.k,
         an.options().laplacian,
-        if args.no_normalize {
-            ""
-        } else {
-            ", unit-area shape"
-        },
+        args.spectral.scale_note(),
     );
     println!("max distance {} at vertex {}", stats.max, stats.argmax);
     args.output.write_field(&an, &field, &args.out)?;
     if let (Some(p), Some(f)) = (&args.all_pairs, &filter) {
-        let basis = engine::basis(&an, args.basis.k, None)?.basis;
-        let m = all_pairs(basis.view(args.basis.k), f)?;
+        let basis = engine::basis(&an, args.spectral.basis.k, None)?.basis;
+        let m = all_pairs(basis.view(args.spectral.basis.k), f)?;
         write(p, &npy_f64(&m, &[n as u64, n as u64], false)?)?;
         println!("all pairs ({n} x {n}) -> {}", p.display());
     }
     args.output
-        .save_experiment(&info, &an, &field, args.basis.repair)?;
+        .save_experiment(&info, &an, &field, args.spectral.basis.repair)?;
     Ok(())
 }

@@ -9,7 +9,7 @@ use spectral_mesh::spectral::embedding::{embedding_mesh, spectral_embedding};
 use spectral_mesh::spectral::filters::Filter;
 
 use super::distance::FILTER_HELP;
-use crate::engine::{self, BasisArgs};
+use crate::engine::{self, FieldBasisArgs};
 use crate::output::{check_outputs, check_writable, write};
 
 /// Arguments of `embed`.
@@ -27,10 +27,7 @@ pub struct Args {
     #[arg(long, default_value_t = spectral_mesh::defaults::EMBED_DIMS)]
     pub dims: usize,
     #[command(flatten)]
-    pub basis: BasisArgs,
-    /// Use the basis as given instead of the shape scaled to unit area.
-    #[arg(long)]
-    pub no_normalize: bool,
+    pub spectral: FieldBasisArgs,
     /// The embedded mesh: .off, .obj, .ply or .stl (repeatable).
     #[arg(long, short = 'o')]
     pub out: Vec<PathBuf>,
@@ -44,7 +41,7 @@ pub struct Args {
 
 /// Computes the embedding and writes it.
 pub fn run(args: Args) -> Result<()> {
-    let input = args.basis.load(args.mesh.as_deref())?;
+    let input = args.spectral.basis.load(args.mesh.as_deref())?;
     let filter: Filter = args
         .filter
         .parse()
@@ -59,11 +56,12 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(c) = &args.coords {
         check_writable(c, args.force)?;
     }
-    args.basis.check_k(input.n())?;
+    args.spectral.basis.check_k(input.n())?;
     let label = input.label();
-    let k = args.basis.k;
-    let an = args.basis.analysis(input.shape, !args.no_normalize)?;
-    let engine::Solved { basis, seconds, .. } = engine::basis(&an, k, args.basis.cache.as_deref())?;
+    let k = args.spectral.basis.k;
+    let an = args.spectral.analysis(input.shape)?;
+    let engine::Solved { basis, seconds, .. } =
+        engine::basis(&an, k, args.spectral.basis.cache.as_deref())?;
     let view = basis.view(k);
     let mesh = an.mesh();
     let coords = spectral_embedding(view, &filter, args.dims)
@@ -83,11 +81,7 @@ pub fn run(args: Args) -> Result<()> {
             String::new()
         },
         an.options().laplacian,
-        if args.no_normalize {
-            ""
-        } else {
-            ", unit-area shape"
-        },
+        args.spectral.scale_note(),
     );
     if !args.out.is_empty() {
         let embedded = embedding_mesh(mesh, view, &filter)

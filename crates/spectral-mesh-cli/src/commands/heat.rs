@@ -8,7 +8,7 @@ use spectral_mesh::analysis::request::DEFAULT_HEAT_T;
 use spectral_mesh::analysis::{FieldRequest, Kernel, Signal};
 use spectral_mesh::experiments::paper::FieldStats;
 
-use crate::engine::{self, BasisArgs, check_vertex};
+use crate::engine::{self, FieldBasisArgs, check_vertex};
 use crate::input::read_field;
 use crate::output::FieldOutputArgs;
 
@@ -32,7 +32,7 @@ pub struct Args {
     #[arg(long, default_value_t = DEFAULT_HEAT_T)]
     pub t: f64,
     #[command(flatten)]
-    pub basis: BasisArgs,
+    pub spectral: FieldBasisArgs,
     /// Diffuse this per-vertex signal (one value per line) instead of e_V.
     #[arg(long, conflicts_with_all = ["indicator", "anchor"])]
     pub signal: Option<PathBuf>,
@@ -44,9 +44,6 @@ pub struct Args {
     /// (X D_t X^T D, D the lumped mass) or standard (X D_t X^T).
     #[arg(long, default_value = Kernel::default().name(), value_parser = kernel_parser())]
     pub kernel: Kernel,
-    /// Use times for the shape as given instead of scaled to unit area.
-    #[arg(long)]
-    pub no_normalize: bool,
     /// Output file(s): .png, .wrl, .ply or .txt by extension (repeatable).
     #[arg(long, short = 'o', required = true)]
     pub out: Vec<PathBuf>,
@@ -74,7 +71,7 @@ fn parse_indicator(text: &str) -> Result<(usize, f64)> {
 
 /// Computes the basis function or the diffusion and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
-    let input = args.basis.load(args.mesh.as_deref())?;
+    let input = args.spectral.basis.load(args.mesh.as_deref())?;
     let n = input.n();
     // What is diffused: None = e_anchor.
     let (signal, what) = match (&args.signal, &args.indicator) {
@@ -100,7 +97,7 @@ pub fn run(args: Args) -> Result<()> {
             (None, String::new())
         }
     };
-    let (t, kernel, k) = (args.t, args.kernel, args.basis.k);
+    let (t, kernel, k) = (args.t, args.kernel, args.spectral.basis.k);
     let request = match &signal {
         Some(s) => FieldRequest::Diffusion {
             signal: s.clone(),
@@ -117,11 +114,12 @@ pub fn run(args: Args) -> Result<()> {
     };
     request.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;
     args.output.check(&args.out)?;
-    args.basis
+    args.spectral
+        .basis
         .warn_unrecorded(args.output.save_experiment.as_ref());
     let info = input.info;
-    let an = args.basis.analysis(input.shape, !args.no_normalize)?;
-    let (field, seconds) = engine::field(&an, &request, args.basis.cache.as_deref())?;
+    let an = args.spectral.analysis(input.shape)?;
+    let (field, seconds) = engine::field(&an, &request, args.spectral.basis.cache.as_deref())?;
     let f = &field.values;
     // The B-mass of what was diffused, and of the result.
     let start = match &signal {
@@ -137,7 +135,7 @@ pub fn run(args: Args) -> Result<()> {
     println!(
         "{}: n = {n}; {what}, t = {t}{}, kernel {}, k = {k} ({}), eigenpairs in {seconds:.2} s",
         info.label(),
-        if args.no_normalize {
+        if args.spectral.no_normalize {
             ""
         } else {
             " (unit-area shape)"
@@ -154,7 +152,7 @@ pub fn run(args: Args) -> Result<()> {
     );
     println!(
         "B-mass (1^T B f{}): input {mass_in}, output {mass_out}, relative change {:.2e}",
-        if args.no_normalize {
+        if args.spectral.no_normalize {
             ""
         } else {
             ", B of the unit-area shape"
@@ -167,6 +165,6 @@ pub fn run(args: Args) -> Result<()> {
     );
     args.output.write_field(&an, &field, &args.out)?;
     args.output
-        .save_experiment(&info, &an, &field, args.basis.repair)?;
+        .save_experiment(&info, &an, &field, args.spectral.basis.repair)?;
     Ok(())
 }

@@ -9,7 +9,7 @@ use spectral_mesh::analysis::{FieldRequest, SignatureSpec};
 use spectral_mesh::fields::segmentation::patch_genera;
 use spectral_mesh_render::figure::field_text;
 
-use crate::engine::{self, BasisArgs};
+use crate::engine::{self, FieldBasisArgs};
 use crate::input::read_field;
 use crate::output::{FieldOutputArgs, check_outputs, write};
 
@@ -37,10 +37,7 @@ pub struct Args {
     #[arg(long, default_value_t = DEFAULT_PERSISTENCE)]
     pub persistence: f64,
     #[command(flatten)]
-    pub basis: BasisArgs,
-    /// Use the basis as given instead of the shape scaled to unit area.
-    #[arg(long)]
-    pub no_normalize: bool,
+    pub spectral: FieldBasisArgs,
     /// Output file(s): .txt (labels, one per line), or .png, .wrl, .ply (patches in
     /// distinct colours), repeatable.
     #[arg(long, short = 'o', required = true)]
@@ -90,24 +87,25 @@ fn signature_request(spec: &SignatureSpec, k: usize) -> Option<FieldRequest> {
 
 /// Segments and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
-    let input = args.basis.load(args.mesh.as_deref())?;
+    let input = args.spectral.basis.load(args.mesh.as_deref())?;
     let n = input.n();
     let spec = signature(&args.signature, n)?;
     let request = FieldRequest::Segmentation {
         signature: spec.clone(),
         persistence: args.persistence,
-        k: args.basis.k,
+        k: args.spectral.basis.k,
     };
     request.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;
     args.output.check(&args.out)?;
     if let Some(p) = &args.field_out {
         check_outputs(std::slice::from_ref(p), &["txt"], args.output.force)?;
     }
-    args.basis
+    args.spectral
+        .basis
         .warn_unrecorded(args.output.save_experiment.as_ref());
     let info = input.info;
-    let an = args.basis.analysis(input.shape, !args.no_normalize)?;
-    let (field, seconds) = engine::field(&an, &request, args.basis.cache.as_deref())
+    let an = args.spectral.analysis(input.shape)?;
+    let (field, seconds) = engine::field(&an, &request, args.spectral.basis.cache.as_deref())
         .map_err(|e| anyhow::anyhow!("--signature {}: {e:#}", args.signature))?;
     let labels = field.labels.clone().unwrap_or_default();
     let n_patches = labels.iter().max().map_or(0, |m| m + 1);
@@ -139,7 +137,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     args.output.write_field(&an, &field, &args.out)?;
     if let Some(p) = &args.field_out {
-        let values = match (&spec, signature_request(&spec, args.basis.k)) {
+        let values = match (&spec, signature_request(&spec, args.spectral.basis.k)) {
             (SignatureSpec::Values(v), _) => v.clone(),
             (_, Some(r)) => an.field(&r)?.values,
             (_, None) => Vec::new(),
@@ -148,6 +146,6 @@ pub fn run(args: Args) -> Result<()> {
         println!("field -> {}", p.display());
     }
     args.output
-        .save_experiment(&info, &an, &field, args.basis.repair)?;
+        .save_experiment(&info, &an, &field, args.spectral.basis.repair)?;
     Ok(())
 }

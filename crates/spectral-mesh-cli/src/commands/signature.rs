@@ -15,7 +15,7 @@ use spectral_mesh::spectral::signatures::{
 };
 
 use super::distance::FILTER_HELP;
-use crate::engine::{self, BasisArgs};
+use crate::engine::{self, FieldBasisArgs};
 use crate::output::{FieldOutputArgs, extension, write};
 
 /// Which signature.
@@ -76,10 +76,7 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     pub column: usize,
     #[command(flatten)]
-    pub basis: BasisArgs,
-    /// Use the basis as given instead of the shape scaled to unit area.
-    #[arg(long)]
-    pub no_normalize: bool,
+    pub spectral: FieldBasisArgs,
     /// Output file(s): .png, .wrl, .ply or .txt by extension (repeatable).
     #[arg(long, short = 'o', required = true)]
     pub out: Vec<PathBuf>,
@@ -267,7 +264,7 @@ fn columns_text(kind: &str, name: &str, labels: &[String], values: &[Vec<f64>]) 
 
 /// Computes the signature and writes the outputs.
 pub fn run(args: Args) -> Result<()> {
-    let input = args.basis.load(args.mesh.as_deref())?;
+    let input = args.spectral.basis.load(args.mesh.as_deref())?;
     args.output.check(&args.out)?;
     if args.t.is_some() && !matches!(args.kind, Kind::Hks | Kind::Adf) {
         bail!("--t is for --kind hks or adf");
@@ -287,12 +284,14 @@ pub fn run(args: Args) -> Result<()> {
             args.column
         );
     }
-    args.basis
+    args.spectral
+        .basis
         .warn_unrecorded(args.output.save_experiment.as_ref());
     let info = input.info;
-    let k = args.basis.k;
-    let an = args.basis.analysis(input.shape, !args.no_normalize)?;
-    let engine::Solved { basis, seconds, .. } = engine::basis(&an, k, args.basis.cache.as_deref())?;
+    let k = args.spectral.basis.k;
+    let an = args.spectral.analysis(input.shape)?;
+    let engine::Solved { basis, seconds, .. } =
+        engine::basis(&an, k, args.spectral.basis.cache.as_deref())?;
     let cols = columns(&args, plan, basis.view(k))?;
     for r in &cols.requests {
         r.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;
@@ -306,11 +305,7 @@ pub fn run(args: Args) -> Result<()> {
         cols.name,
         cols.labels.join(", "),
         an.options().laplacian,
-        if args.no_normalize {
-            ""
-        } else {
-            ", unit-area shape"
-        },
+        args.spectral.scale_note(),
     );
     // The drawn column is the analysis' field of its request.
     let field = an
@@ -339,6 +334,6 @@ pub fn run(args: Args) -> Result<()> {
     }
     args.output.write_field(&an, &field, &single)?;
     args.output
-        .save_experiment(&info, &an, &field, args.basis.repair)?;
+        .save_experiment(&info, &an, &field, args.spectral.basis.repair)?;
     Ok(())
 }

@@ -3,15 +3,14 @@
 use std::sync::Arc;
 
 use axum::Json;
-use axum::body::Body;
-use axum::extract::{Extension, Path, State};
+use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::{IntoResponse, Response};
 use spectral_mesh::analysis::Analysis;
 use spectral_mesh::analysis::memory::creation_bytes;
 
-use super::meshes::{check_id, check_k, entry, get_mesh};
-use super::reading::{json_body, reserve};
+use super::meshes::{check_k, entry, get_mesh};
+use super::reading::{MeshPost, reserve};
 use crate::body;
 use crate::entries::{AnalysisKey, Item};
 use crate::error::{ApiError, ApiResult, busy, internal};
@@ -61,15 +60,11 @@ pub(super) fn client_id(headers: &HeaderMap) -> Option<String> {
 /// rules that stop a job).
 pub(super) async fn start_basis(
     State(s): St,
-    Extension(deadline): Extension<Deadline>,
-    Path(id): Path<String>,
     headers: HeaderMap,
-    body: Body,
+    mut post: MeshPost,
 ) -> ApiResult<Response> {
-    check_id(&id)?;
-    let (bytes, r) = json_body(&s, &headers, body, deadline).await?;
-    let b = body::parse_basis(&bytes)?;
-    drop(r);
+    let b = post.parse(body::parse_basis)?;
+    let (id, deadline) = (post.id, post.deadline);
     let item = get_mesh(&s, &id)?;
     let e = entry(&item)?;
     let (n, noun, mesh) = (e.n(), e.noun(), e.bytes());

@@ -2,10 +2,9 @@
 
 use std::sync::Arc;
 
-use axum::body::Body;
 use axum::extract::rejection::QueryRejection;
 use axum::extract::{Extension, Path, Query, State};
-use axum::http::{HeaderMap, StatusCode, header};
+use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
 use spectral_mesh::analysis::AnalysisInput;
@@ -13,8 +12,8 @@ use spectral_mesh::experiments::file::{ExperimentFile, PointCloudFile};
 use spectral_mesh_render::figure::Figure;
 
 use super::fields::{Computed, compute};
-use super::meshes::{check_id, entry};
-use super::reading::{json_body, reserve};
+use super::meshes::entry;
+use super::reading::{MeshPost, reserve};
 use crate::body::{self, FieldBody};
 use crate::entries::Loaded;
 use crate::error::{ApiError, ApiResult, internal};
@@ -49,18 +48,9 @@ pub(super) async fn download_get(
     download(&s, &id, body, deadline).await
 }
 
-pub(super) async fn download_post(
-    State(s): St,
-    Extension(deadline): Extension<Deadline>,
-    Path(id): Path<String>,
-    headers: HeaderMap,
-    body: Body,
-) -> ApiResult<Response> {
-    check_id(&id)?;
-    let (bytes, r) = json_body(&s, &headers, body, deadline).await?;
-    let body = body::parse_field(&bytes)?;
-    drop((bytes, r));
-    download(&s, &id, body, deadline).await
+pub(super) async fn download_post(State(s): St, mut post: MeshPost) -> ApiResult<Response> {
+    let body = post.parse(body::parse_field)?;
+    download(&s, &post.id, body, post.deadline).await
 }
 
 /// Formats a download can have.

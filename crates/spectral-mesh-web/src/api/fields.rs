@@ -2,16 +2,15 @@
 
 use std::sync::Arc;
 
-use axum::body::Body;
-use axum::extract::{Extension, Path, State};
-use axum::http::{HeaderMap, StatusCode};
+use axum::extract::State;
+use axum::http::StatusCode;
 use axum::response::Response;
 use spectral_mesh::analysis::memory::field_bytes;
 use spectral_mesh::analysis::{Analysis, AnalysisError};
 
 use super::basis::analysis_for;
-use super::meshes::{check_id, entry, get_mesh, octet};
-use super::reading::{json_body, reserve};
+use super::meshes::{entry, get_mesh, octet};
+use super::reading::{MeshPost, reserve};
 use crate::body::{self, FieldBody};
 use crate::entries::{AnalysisKey, Item};
 use crate::error::{ApiError, ApiResult, internal};
@@ -147,17 +146,8 @@ pub(super) fn missing_basis(
     )
 }
 
-pub(super) async fn field(
-    State(s): St,
-    Extension(deadline): Extension<Deadline>,
-    Path(id): Path<String>,
-    headers: HeaderMap,
-    body: Body,
-) -> ApiResult<Response> {
-    check_id(&id)?;
-    let (bytes, r) = json_body(&s, &headers, body, deadline).await?;
-    let body = body::parse_field(&bytes)?;
-    drop((bytes, r));
-    let c = compute(&s, &id, body, true, deadline).await?;
+pub(super) async fn field(State(s): St, mut post: MeshPost) -> ApiResult<Response> {
+    let body = post.parse(body::parse_field)?;
+    let c = compute(&s, &post.id, body, true, post.deadline).await?;
     Ok(octet(c.bytes.unwrap_or_default()))
 }

@@ -1,12 +1,16 @@
 //! Reading request bodies within the limits: memory reservations, deadlines, draining refused bodies.
 
+use std::sync::Arc;
+
 use axum::body::{Body, Bytes};
+use axum::extract::{FromRequest, FromRequestParts, Path, Request};
 use axum::http::{HeaderMap, StatusCode, header};
 use http_body_util::BodyExt;
 
+use super::meshes::check_id;
 use crate::cache::Shortfall;
 use crate::entries::Reservation;
-use crate::error::{ApiError, ApiResult};
+use crate::error::{ApiError, ApiResult, internal};
 use crate::limits::{Deadline, mib};
 use crate::state::AppState;
 
@@ -188,4 +192,52 @@ pub(super) async fn json_body(
         deadline,
     )
     .await
+}
+
+/// The JSON body posted to a mesh's route (`/api/mesh/{id}/...`): the mesh id (checked
+/// before the body is read), the body read within the JSON limit with its memory
+/// reserved ([`json_body`]), and the request's deadline.
+pub(super) struct MeshPost {
+    /// The mesh id of the path.
+    pub(super) id: String,
+    /// The request's deadline.
+    pub(super) deadline: Deadline,
+    /// The body with the memory reserved for it and its parsing, until parsed.
+    body: Option<(Bytes, Reservation)>,
+}
+
+impl MeshPost {
+    /// The body parsed by `parse`; the body's bytes and reservation are freed then.
+    pub(super) fn parse<T, E>(&mut self, parse: impl FnOnce(&[u8]) -> Result<T, E>) -> ApiResult<T>
+    where
+        ApiError: From<E>,
+    {
+        let (bytes, _reservation) = self
+            .body
+            .take()
+            .ok_or_else(|| internal("the body was parsed already"))?;
+        Ok(parse(&bytes)?)
+    }
+}
+
+impl FromRequest<Arc<AppState>> for MeshPost {
+    type Rejection = ApiError;
+
+    async fn from_request(req: Request, s: &Arc<AppState>) -> ApiResult<Self> {
+        let (mut parts, body) = req.into_parts();
+        let Path(id) = Path::<String>::from_request_parts(&mut parts, s)
+            .await
+            .map_err(|e| ApiError::bad(e.body_text()))?;
+        check_id(&id)?;
+        let deadline = *parts
+            .extensions
+            .get::<Deadline>()
+            .ok_or_else(|| internal("the request has no deadline"))?;
+        let body = json_body(s, &parts.headers, body, deadline).await?;
+        Ok(Self {
+            id,
+            deadline,
+            body: Some(body),
+        })
+    }
 }

@@ -1,13 +1,17 @@
 //! One blocking HTTP/1.1 exchange with a local server over std's `TcpStream`
-//! (`Connection: close`, a JSON body, chunked replies decoded), for the tests and examples
-//! that do not run inside tokio. Included by path where it is needed.
+//! (`Connection: close`, a JSON body, chunked replies decoded), and the steps most tests
+//! start with (a shape loaded, a basis computed), for the tests and examples that do not
+//! run inside tokio. Included by path where it is needed.
 #![allow(dead_code, clippy::unwrap_used)]
 
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
-use serde_json::Value;
+use serde_json::{Value, json};
+
+/// How long one read of the helpers below may wait.
+const TIMEOUT: Duration = Duration::from_secs(120);
 
 /// (status, headers in lower case, body) of one request, waiting at most `timeout` for
 /// each read.
@@ -53,4 +57,46 @@ pub fn dechunk(mut b: &[u8]) -> Vec<u8> {
         b = &b[nl + 4 + len..];
     }
     out
+}
+
+/// The JSON reply of a request that must succeed (status below 300).
+pub fn json_ok(addr: SocketAddr, method: &str, path: &str, body: Option<&Value>) -> Value {
+    let (status, _, b) = exchange(addr, method, path, body, TIMEOUT);
+    assert!(
+        status < 300,
+        "{method} {path}: {status} {}",
+        String::from_utf8_lossy(&b)
+    );
+    serde_json::from_slice(&b).unwrap()
+}
+
+/// Loads the built-in shape `spec` (`POST /api/mesh`): its mesh id.
+pub fn load_shape(addr: SocketAddr, spec: &str) -> String {
+    let mesh = json_ok(addr, "POST", "/api/mesh", Some(&json!({ "shape": spec })));
+    mesh["mesh_id"].as_str().unwrap().to_string()
+}
+
+/// Starts the basis job of `k` pairs of mesh `id` with the default options and waits
+/// (at most `within`) until it is done.
+pub fn wait_for_basis(addr: SocketAddr, id: &str, k: usize, within: Duration) {
+    json_ok(
+        addr,
+        "POST",
+        &format!("/api/mesh/{id}/basis"),
+        Some(&json!({ "k": k })),
+    );
+    let start = Instant::now();
+    loop {
+        let st = json_ok(addr, "GET", &format!("/api/mesh/{id}/basis/status"), None);
+        if st["state"] == "done" {
+            assert!(st["held_k"].as_u64().unwrap() >= k as u64, "{st}");
+            return;
+        }
+        assert_eq!(st["state"], "running", "{st}");
+        assert!(
+            start.elapsed() < within,
+            "the basis took more than {within:?}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
 }
