@@ -108,6 +108,7 @@ fn library_values() -> BTreeMap<String, Vec<String>> {
         put("match/k", s(c::DEFAULT_K));
         put("match/zoomout", s(c::DEFAULT_ZOOMOUT_K));
         put("match/step", s(c::DEFAULT_ZOOMOUT_STEP));
+        put("match/zoomout_direction", s(c::DEFAULT_ZOOMOUT_DIRECTION));
         put(
             "match/descriptor",
             s(c::descriptors::DescriptorKind::default()),

@@ -6,8 +6,8 @@
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use spectral_mesh::correspondence::{
-    CorrespondenceError, FunctionalMap, MatchParams, fmap_to_p2p, fmap_to_p2p_12, match_shapes,
-    zoomout,
+    CorrespondenceError, FunctionalMap, MatchParams, Refined, ZoomoutDirection, fmap_to_p2p,
+    fmap_to_p2p_12, match_shapes, zoomout,
 };
 use spectral_mesh::spectral::BasisView;
 use spectral_mesh::{Mesh, Operators, SparseMatrix};
@@ -149,13 +149,25 @@ fn truncated(b: BasisView<'_>, k: usize) -> BasisView<'_> {
     }
 }
 
-/// A refined map and its point map.
-type Refined<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<usize>>);
+/// A refined map and its point map, when that direction was asked for.
+type Refinement<'py> = Option<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<usize>>)>;
 
-/// ZoomOut from `C` to `k_final`: the refined map and `p2p_21`.
+fn refinement<'py>(py: Python<'py>, r: Option<Refined>) -> PyResult<Refinement<'py>> {
+    r.map(|r| {
+        Ok((
+            to_rows(py, r.fmap.k2, r.fmap.k1, r.fmap.row_major())?,
+            to_vector(py, r.p2p),
+        ))
+    })
+    .transpose()
+}
+
+/// ZoomOut from `C` to `k_final` in the `direction` (`forward`, `reverse`, `both`):
+/// `(forward, reverse)`, each `(refined map, point map)` or `None` (forward: `C` and
+/// `p2p_21`; reverse: `C_12` and `p2p_12`).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v1, f1, evecs1_t, v2, f2, evecs2_t, kind, c, k_final, step))]
+#[pyo3(signature = (v1, f1, evecs1_t, v2, f2, evecs2_t, kind, c, k_final, step, direction))]
 pub fn zoomout_refine<'py>(
     py: Python<'py>,
     v1: PyReadonlyArray2<'_, f64>,
@@ -168,21 +180,25 @@ pub fn zoomout_refine<'py>(
     c: PyReadonlyArray2<'_, f64>,
     k_final: usize,
     step: usize,
-) -> PyResult<Refined<'py>> {
-    let prep = || -> Result<(Shape, Shape, FunctionalMap), Failure> {
+    direction: &str,
+) -> PyResult<(Refinement<'py>, Refinement<'py>)> {
+    let prep = || -> Result<(Shape, Shape, FunctionalMap, ZoomoutDirection), Failure> {
         Ok((
             shape(&v1, &f1, None, &evecs1_t, kind, 1)?,
             shape(&v2, &f2, None, &evecs2_t, kind, 2)?,
             fmap_from(&c)?,
+            direction
+                .parse()
+                .map_err(|e: String| Failure::value(format!("direction: {e}")))?,
         ))
     };
-    let (s1, s2, c) = prep().map_err(|e| e.into_pyerr(py))?;
-    let (refined, p2p) = run(py, move |_| {
-        Ok(zoomout(&c, s1.view(), s2.view(), k_final, step)?)
+    let (s1, s2, c, direction) = prep().map_err(|e| e.into_pyerr(py))?;
+    let zoomed = run(py, move |_| {
+        Ok(zoomout(&c, s1.view(), s2.view(), k_final, step, direction)?)
     })?;
     Ok((
-        to_rows(py, refined.k2, refined.k1, refined.row_major())?,
-        to_vector(py, p2p),
+        refinement(py, zoomed.forward)?,
+        refinement(py, zoomed.reverse)?,
     ))
 }
 

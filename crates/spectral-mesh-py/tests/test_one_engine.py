@@ -213,6 +213,7 @@ WHERE: dict[str, dict[str, str]] = {
     "zoomout": {
         "k_final": "correspondence/zoomout_k",
         "step": "correspondence/zoomout_step",
+        "direction": "correspondence/zoomout_direction",
         "kind": "analysis/kind",
     },
     "render": _FIGURE,

@@ -8,8 +8,9 @@
 
 use spectral_mesh::correspondence::{
     DescriptorParams, FmapProblem, FmapWeights, FunctionalMap, MatchParams, MatchShape,
-    cumulative_curve, default_thresholds, descriptors, fmap_to_p2p, fmap_to_p2p_12,
-    geodesic_errors, match_shapes, p2p_to_fmap, transfer, transfer_spectral,
+    ZoomoutDirection, cumulative_curve, default_thresholds, descriptors, fmap_to_p2p,
+    fmap_to_p2p_12, geodesic_errors, match_shapes, p2p_to_fmap, transfer, transfer_spectral,
+    zoomout,
 };
 use spectral_mesh::geodesic::{GeodesicParams, GeodesicSolver};
 use spectral_mesh::mesh::Mesh;
@@ -180,6 +181,116 @@ fn shuffled_mirror_symmetric_pair_keeps_left_and_right() {
         err_rev > 10.0 * err.max(1e-3),
         "reversing {err_rev}, preserving {err}"
     );
+}
+
+/// The share of `map` equal to `truth`.
+fn exact_share(map: &[usize], truth: &[usize]) -> f64 {
+    assert_eq!(map.len(), truth.len());
+    map.iter().zip(truth).filter(|(a, b)| a == b).count() as f64 / map.len() as f64
+}
+
+#[test]
+fn zoomout_in_both_directions_on_a_shuffled_pair() {
+    let m1 = blob(3);
+    let (m2, gt_21) = shuffled(&m1, 7);
+    let mut gt_12 = vec![0; gt_21.len()];
+    for (v, &u) in gt_21.iter().enumerate() {
+        gt_12[u] = v;
+    }
+    let mut params = small_params();
+    params.zoomout_direction = ZoomoutDirection::Both;
+    let k = params.basis_size();
+    let (b1, b2) = (basis(&m1, k), basis(&m2, k));
+    let (v1, v2) = ((&b1).into(), (&b2).into());
+    let both = match_shapes(&m1, v1, &m2, v2, &[], &params).unwrap();
+    let rev = both.reverse.as_ref().expect("the reverse direction");
+    assert_eq!((rev.fmap.k1, rev.fmap.k2), (k, k));
+    assert_eq!(rev.p2p.len(), m1.n_vertices());
+    // Each direction on its own: near-exact, and small geodesic errors (the reverse map
+    // is measured on shape 2, the shape it maps into).
+    let (s21, s12) = (
+        exact_share(&both.p2p_21, &gt_21),
+        exact_share(&rev.p2p, &gt_12),
+    );
+    println!("exact: forward {s21:.4}, reverse {s12:.4}");
+    assert!(s21 > 0.99 && s12 > 0.99, "forward {s21}, reverse {s12}");
+    let solver2 = GeodesicSolver::new(&m2, Laplacian::Fem, &GeodesicParams::default()).unwrap();
+    let e12 = geodesic_errors(&solver2, &rev.p2p, &gt_12, m2.area(), Some(400)).unwrap();
+    assert!(e12.mean < 0.01, "reverse mean error {}", e12.mean);
+    // The two directions agree: the maps are inverse to each other and the functional
+    // maps transposes (both orthogonal on an isometry).
+    let round_trip = (0..m1.n_vertices())
+        .filter(|&u| both.p2p_21[rev.p2p[u]] == u)
+        .count() as f64
+        / m1.n_vertices() as f64;
+    assert!(round_trip > 0.99, "round trip {round_trip}");
+    let back = both.refined.transpose();
+    let diff: f64 = back
+        .c
+        .iter()
+        .zip(&rev.fmap.c)
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum();
+    let norm: f64 = back.c.iter().map(|a| a * a).sum();
+    assert!(
+        diff.sqrt() < 0.05 * norm.sqrt(),
+        "|C12 - C21^T| = {}",
+        diff.sqrt()
+    );
+    // The forward direction alone is what `Both` gives forward, with no reverse map.
+    params.zoomout_direction = ZoomoutDirection::Forward;
+    let fwd = match_shapes(&m1, v1, &m2, v2, &[], &params).unwrap();
+    assert!(fwd.reverse.is_none());
+    assert_eq!(fwd.p2p_21, both.p2p_21);
+    assert_eq!(fwd.refined, both.refined);
+    // The reverse alone: the same reverse map; the forward one from the first map only.
+    params.zoomout_direction = ZoomoutDirection::Reverse;
+    let only = match_shapes(&m1, v1, &m2, v2, &[], &params).unwrap();
+    assert_eq!(only.reverse.as_ref(), Some(rev));
+    assert_eq!(only.refined, only.initial);
+    assert_eq!(
+        only.p2p_21,
+        fmap_to_p2p(&only.initial, v1, v2, false).unwrap()
+    );
+    // The library's function: the reverse refinement is the forward one of the shapes
+    // swapped, from the transpose.
+    let z = zoomout(&both.initial, v1, v2, k, 1, ZoomoutDirection::Reverse).unwrap();
+    assert!(z.forward.is_none());
+    let swapped = zoomout(
+        &both.initial.transpose(),
+        v2,
+        v1,
+        k,
+        1,
+        ZoomoutDirection::Forward,
+    )
+    .unwrap();
+    assert_eq!(z.reverse, swapped.forward);
+    // Sizes the bases do not hold are refused, naming the shape.
+    let e = zoomout(&both.initial, v1, v2, k + 1, 1, ZoomoutDirection::Reverse).unwrap_err();
+    assert!(e.to_string().contains("shape 2's basis"), "{e}");
+}
+
+#[test]
+fn zoomout_direction_names() {
+    for d in ZoomoutDirection::ALL {
+        assert_eq!(d.name().parse::<ZoomoutDirection>(), Ok(d));
+        assert_eq!(serde_json::to_value(d).unwrap(), d.name());
+    }
+    assert_eq!(
+        " Both ".parse::<ZoomoutDirection>(),
+        Ok(ZoomoutDirection::Both)
+    );
+    let e = "sideways".parse::<ZoomoutDirection>().unwrap_err();
+    assert!(e.contains("forward, reverse or both"), "{e}");
+    let j = spectral_mesh::defaults::to_json();
+    assert_eq!(
+        j["correspondence"]["zoomout_direction"],
+        MatchParams::default().zoomout_direction.name()
+    );
+    // Parameters written before the direction existed read as the default.
+    let p: MatchParams = serde_json::from_str(r#"{"k": 12}"#).unwrap();
+    assert_eq!(p.zoomout_direction, ZoomoutDirection::default());
 }
 
 #[test]

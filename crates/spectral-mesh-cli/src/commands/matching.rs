@@ -5,7 +5,9 @@
 //! In the library's terms the TARGET is shape 1 and the SOURCE shape 2: the map written
 //! is `p2p_21` (for each source vertex a target vertex) and the functional map `C`
 //! (`k_source x k_target`) carries functions on the target to functions on the source
-//! (the pull-back by the map).
+//! (the pull-back by the map). With `--zoomout-direction reverse|both` the reverse map
+//! `p2p_12` (for each target vertex a source vertex) is refined too and `--reverse-out`
+//! writes it.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -19,9 +21,10 @@ use spectral_mesh::correspondence::energy::{
     DEFAULT_W_COMMUTATIVITY, DEFAULT_W_DESCRIPTORS, DEFAULT_W_LAPLACIAN, DEFAULT_W_ORIENTATION,
 };
 use spectral_mesh::correspondence::{
-    DEFAULT_K, DEFAULT_ZOOMOUT_K, DEFAULT_ZOOMOUT_STEP, DescriptorParams, FmapWeights, MatchParams,
-    cumulative_curve, default_thresholds, fmap_to_p2p_12, geodesic_errors, match_shapes,
-    parse_point_map,
+    DEFAULT_K, DEFAULT_ZOOMOUT_DIRECTION, DEFAULT_ZOOMOUT_K, DEFAULT_ZOOMOUT_STEP,
+    DescriptorParams, FmapWeights, MatchParams, ZoomoutDirection, cumulative_curve,
+    default_thresholds, fmap_to_p2p_12, geodesic_errors, match_shapes, parse_point_map,
+    point_map_text,
 };
 use spectral_mesh::geodesic::{GeodesicParams, GeodesicSolver};
 use spectral_mesh::spectral::eigenbasis::EigenParams;
@@ -50,6 +53,10 @@ pub struct Args {
     /// ZoomOut step.
     #[arg(long, default_value_t = DEFAULT_ZOOMOUT_STEP)]
     pub step: usize,
+    /// Which map ZoomOut refines: forward (-o, a target vertex per source vertex),
+    /// reverse (--reverse-out, a source vertex per target vertex) or both.
+    #[arg(long, default_value_t = DEFAULT_ZOOMOUT_DIRECTION)]
+    pub zoomout_direction: ZoomoutDirection,
     /// Descriptor: wks or hks.
     #[arg(long, default_value_t = DescriptorKind::default())]
     pub descriptor: DescriptorKind,
@@ -89,9 +96,17 @@ pub struct Args {
     /// The map: one target vertex per source vertex, 0-based, one per line.
     #[arg(long, short = 'o')]
     pub out: Option<PathBuf>,
+    /// The reverse map (with --zoomout-direction reverse or both): one source vertex per
+    /// target vertex, 0-based, one per line.
+    #[arg(long)]
+    pub reverse_out: Option<PathBuf>,
     /// The refined functional map as .npy (k_source x k_target, float64).
     #[arg(long)]
     pub fmap: Option<PathBuf>,
+    /// The reverse refined functional map as .npy (k_target x k_source, float64; with
+    /// --zoomout-direction reverse or both).
+    #[arg(long)]
+    pub reverse_fmap: Option<PathBuf>,
     /// The first functional map (before ZoomOut) as .npy (k x k, float64).
     #[arg(long)]
     pub initial_fmap: Option<PathBuf>,
@@ -116,19 +131,32 @@ fn load_mesh(spec: &str) -> Result<Mesh> {
 /// Computes the map and writes it.
 pub fn run(args: Args) -> Result<()> {
     let t0 = Instant::now();
-    if args.out.is_none() && args.fmap.is_none() && args.picture.is_none() && args.truth.is_none() {
+    let outputs = [
+        &args.out,
+        &args.reverse_out,
+        &args.fmap,
+        &args.reverse_fmap,
+        &args.initial_fmap,
+        &args.picture,
+    ];
+    if args.truth.is_none() && outputs.iter().all(|o| o.is_none()) {
         bail!("nothing to do: give -o MAP.txt, --fmap C.npy, --picture P.png or --truth MAP.txt");
     }
-    for p in [&args.out, &args.fmap, &args.initial_fmap, &args.picture]
-        .into_iter()
-        .flatten()
+    if !args.zoomout_direction.reverse()
+        && (args.reverse_out.is_some() || args.reverse_fmap.is_some())
     {
+        bail!(
+            "--reverse-out and --reverse-fmap need the reverse map: give --zoomout-direction reverse or both"
+        );
+    }
+    for p in outputs.into_iter().flatten() {
         check_writable(p, args.force)?;
     }
     let params = MatchParams {
         k: args.k,
         zoomout_k: args.zoomout,
         zoomout_step: args.step,
+        zoomout_direction: args.zoomout_direction,
         descriptors: DescriptorParams {
             kind: args.descriptor,
             count: args.descriptors,
@@ -222,28 +250,34 @@ pub fn run(args: Args) -> Result<()> {
         t1.elapsed().as_secs_f64(),
         res.energy
     );
-    if let Some(o) = &args.out {
-        let mut s = String::with_capacity(res.p2p_21.len() * 7);
-        for v in &res.p2p_21 {
-            s.push_str(&v.to_string());
-            s.push('\n');
+    let reverse = res.reverse.as_ref();
+    for (o, map, what) in [
+        (&args.out, Some(&res.p2p_21), "map"),
+        (&args.reverse_out, reverse.map(|r| &r.p2p), "reverse map"),
+    ] {
+        if let (Some(o), Some(map)) = (o, map) {
+            write(o, point_map_text(map).as_bytes())?;
+            println!("{what} ({} lines) -> {}", map.len(), o.display());
         }
-        write(o, s.as_bytes())?;
-        println!("map ({} lines) -> {}", res.p2p_21.len(), o.display());
     }
     for (o, c) in [
-        (&args.fmap, &res.refined),
-        (&args.initial_fmap, &res.initial),
+        (&args.fmap, Some(&res.refined)),
+        (&args.reverse_fmap, reverse.map(|r| &r.fmap)),
+        (&args.initial_fmap, Some(&res.initial)),
     ] {
-        if let Some(o) = o {
+        if let (Some(o), Some(c)) = (o, c) {
             let bytes = npy_f64(&c.row_major(), &[c.k2 as u64, c.k1 as u64], false)?;
             write(o, &bytes)?;
             println!("functional map ({} x {}) -> {}", c.k2, c.k1, o.display());
         }
     }
     if let Some(o) = &args.picture {
-        // For each target vertex a source vertex, to carry the source's colours.
-        let back = fmap_to_p2p_12(&res.refined, v1, v2).map_err(|e| anyhow::anyhow!("{e}"))?;
+        // For each target vertex a source vertex, to carry the source's colours: the
+        // refined reverse map when there is one.
+        let back = match reverse {
+            Some(r) => r.p2p.clone(),
+            None => fmap_to_p2p_12(&res.refined, v1, v2).map_err(|e| anyhow::anyhow!("{e}"))?,
+        };
         let img = render_pair(
             an_source.mesh(),
             an_target.mesh(),

@@ -23,11 +23,12 @@ from ._defaults import KIND
 
 _D: dict = _native.defaults()["correspondence"]
 #: The library's defaults of the correspondence functions (``k``, ``zoomout_k``,
-#: ``zoomout_step``, ``descriptors``, ``weights``).
+#: ``zoomout_step``, ``zoomout_direction``, ``descriptors``, ``weights``).
 CORRESPONDENCE: dict = _D
 K: int = _D["k"]
 ZOOMOUT_K: int = _D["zoomout_k"]
 STEP: int = _D["zoomout_step"]
+DIRECTION: str = _D["zoomout_direction"]
 _DESC: dict = _D["descriptors"]
 _W: dict = _D["weights"]
 
@@ -111,13 +112,18 @@ def zoomout(
     k_final: int = ZOOMOUT_K,
     *,
     step: int = STEP,
+    direction: str = DIRECTION,
     basis1: Sequence[Any] | None = None,
     basis2: Sequence[Any] | None = None,
     kind: str = KIND,
-) -> tuple[Any, Any]:
-    """ZoomOut: refines ``C`` (``(k2, k1)``) to ``(k_final, k_final)`` in steps; returns
-    the refined map and its point map ``p2p_21`` (``(n2,)``, a vertex of shape 1 for each
-    vertex of shape 2)."""
+) -> tuple[Any, ...]:
+    """ZoomOut: refines ``C`` (``(k2, k1)``) to ``(k_final, k_final)`` in steps.
+
+    ``direction="forward"`` returns the refined map and its point map ``p2p_21``
+    (``(n2,)``, a vertex of shape 1 for each vertex of shape 2); ``"reverse"`` refines
+    ``C.T`` with the shapes swapped and returns ``(C_12, p2p_12)`` (``C_12`` carries
+    functions on shape 2 to shape 1; ``p2p_12`` is ``(n1,)``, a vertex of shape 2 for each
+    vertex of shape 1); ``"both"`` returns ``(C, p2p_21, C_12, p2p_12)``."""
     v1, f1 = _arrays.mesh(V1, F1)
     v2, f2 = _arrays.mesh(V2, F2)
     c = np.asarray(C, dtype=np.float64)
@@ -126,12 +132,17 @@ def zoomout(
     kf = max(_arrays.count(k_final, "k_final", 1), c.shape[0], c.shape[1])
     _e1, x1 = _basis(v1, f1, basis1, kf, kind, 1)
     _e2, x2 = _basis(v2, f2, basis2, kf, kind, 2)
-    Cz, p2p_21 = _native.zoomout_refine(
+    forward, reverse = _native.zoomout_refine(
         v1, f1, _arrays.columns_t(x1[:, :kf], "evecs1"),
         v2, f2, _arrays.columns_t(x2[:, :kf], "evecs2"),
         str(kind), np.ascontiguousarray(c.T), kf, _arrays.count(step, "step", 1),
+        str(direction),
     )
-    return Cz, p2p_21.astype(np.int64)
+    out: list[Any] = []
+    for r in (forward, reverse):
+        if r is not None:
+            out += [r[0], r[1].astype(np.int64)]
+    return tuple(out)
 
 
 def p2p(

@@ -316,7 +316,8 @@ def zoomout_refine(
     c: F64,
     k_final: int,
     step: int,
-) -> tuple[F64, NDArray[np.uintp]]: ...
+    direction: str,
+) -> tuple[tuple[F64, NDArray[np.uintp]] | None, tuple[F64, NDArray[np.uintp]] | None]: ...
 def point_map(
     c: F64, evecs1_t: F64, evecs2_t: F64, adjoint: bool, to_second: bool
 ) -> NDArray[np.uintp]: ...

@@ -15,7 +15,8 @@
 //!   term is quadratic in `C`, so one dense symmetric solve in `vec(C)`;
 //! - [`pointwise`]: nearest neighbours in the spectral embedding (k-d tree), both ways,
 //!   the functional map of a point map, function transfer;
-//! - [`zoomout`]: ZoomOut refinement from `k` to `k_final` in steps;
+//! - [`zoomout`]: ZoomOut refinement from `k` to `k_final` in steps, of `p2p_21`, of
+//!   `p2p_12` or both ([`ZoomoutDirection`]);
 //! - [`evaluate`]: mean geodesic error normalized by `sqrt(area)` and the cumulative curve;
 //! - [`match_shapes`]: the whole pipeline (descriptors, map, ZoomOut, point map).
 
@@ -30,7 +31,7 @@ pub use descriptors::{DescriptorKind, DescriptorParams, Descriptors, descriptors
 pub use energy::{FmapProblem, FmapWeights, MatchShape};
 pub use evaluate::{GeodesicErrors, cumulative_curve, default_thresholds, geodesic_errors};
 pub use pointwise::{fmap_to_p2p, fmap_to_p2p_12, p2p_to_fmap, transfer, transfer_spectral};
-pub use zoomout::zoomout;
+pub use zoomout::{Refined, Zoomed, ZoomoutDirection, zoomout};
 
 use crate::mesh::Mesh;
 use crate::spectral::BasisView;
@@ -41,6 +42,8 @@ pub const DEFAULT_K: usize = 30;
 pub const DEFAULT_ZOOMOUT_K: usize = 100;
 /// Default ZoomOut step (added to both sizes at each iteration).
 pub const DEFAULT_ZOOMOUT_STEP: usize = 1;
+/// Default ZoomOut direction: the forward map `p2p_21` only (pyFM's).
+pub const DEFAULT_ZOOMOUT_DIRECTION: ZoomoutDirection = ZoomoutDirection::Forward;
 /// Largest number of unknowns `k1 k2` of the exact solve (its dense Hessian holds
 /// `(k1 k2)^2` values: 134 MB at this limit, `k1 = k2 = 64`).
 pub const MAX_FMAP_UNKNOWNS: usize = 4096;
@@ -155,6 +158,16 @@ pub fn parse_point_map(
     Ok(map)
 }
 
+/// The text of a point map as [`parse_point_map`] reads it: one 0-based vertex per line.
+pub fn point_map_text(map: &[usize]) -> String {
+    let mut s = String::with_capacity(map.len() * 7);
+    for v in map {
+        s.push_str(&v.to_string());
+        s.push('\n');
+    }
+    s
+}
+
 /// Reads landmarks: lines `A B`, a vertex of the first shape (`< n_a`) and its
 /// counterpart on the second (`< n_b`), 0-based.
 pub fn parse_landmarks(
@@ -250,7 +263,7 @@ pub(crate) fn truncate<'a>(
 }
 
 /// Parameters of the whole pipeline [`match_shapes`]. `Default`: `k = 30`, ZoomOut to
-/// 100 in steps of 1, the default descriptors and weights.
+/// 100 in steps of 1 in the forward direction, the default descriptors and weights.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct MatchParams {
@@ -260,6 +273,8 @@ pub struct MatchParams {
     pub zoomout_k: usize,
     /// ZoomOut step.
     pub zoomout_step: usize,
+    /// Which point maps ZoomOut refines: `p2p_21` (forward), `p2p_12` (reverse) or both.
+    pub zoomout_direction: ZoomoutDirection,
     /// Descriptors.
     pub descriptors: DescriptorParams,
     /// Weights of the energy.
@@ -272,6 +287,7 @@ impl Default for MatchParams {
             k: DEFAULT_K,
             zoomout_k: DEFAULT_ZOOMOUT_K,
             zoomout_step: DEFAULT_ZOOMOUT_STEP,
+            zoomout_direction: DEFAULT_ZOOMOUT_DIRECTION,
             descriptors: DescriptorParams::default(),
             weights: FmapWeights::default(),
         }
@@ -315,16 +331,21 @@ pub struct MatchResult {
     /// The functional map of the energy (`k x k`).
     pub initial: FunctionalMap,
     /// The refined functional map (`zoomout_k x zoomout_k`; the initial one without
-    /// ZoomOut).
+    /// ZoomOut or when only the reverse direction is refined).
     pub refined: FunctionalMap,
     /// For each vertex of shape 2, a vertex of shape 1 (from `refined`).
     pub p2p_21: Vec<usize>,
+    /// The reverse direction, when [`MatchParams::zoomout_direction`] asks for it: `C_12`
+    /// refined from `initial^T` (`zoomout_k x zoomout_k`, functions on shape 2 to shape 1)
+    /// and `p2p_12`, for each vertex of shape 1 a vertex of shape 2.
+    pub reverse: Option<Refined>,
     /// The energy of `initial`.
     pub energy: f64,
 }
 
 /// The whole pipeline: descriptors on both shapes, the functional map of the energy
-/// (exact), ZoomOut refinement, the point map from shape 2 to shape 1. Both bases must
+/// (exact), ZoomOut refinement, the point map from shape 2 to shape 1 (refined unless
+/// only the reverse direction is asked for) and, when asked for, the reverse one. Both bases must
 /// hold [`MatchParams::basis_size`] pairs; `landmarks` are pairs (vertex of shape 1,
 /// vertex of shape 2) whose kernels are added to the descriptors.
 pub fn match_shapes(
@@ -359,22 +380,30 @@ pub fn match_shapes(
     )?;
     let initial = problem.solve()?;
     let energy = problem.energy(&initial);
-    let (refined, p2p_21) = if params.zoomout_k > params.k {
-        zoomout(
-            &initial,
-            basis1,
-            basis2,
-            params.zoomout_k,
-            params.zoomout_step,
-        )?
-    } else {
-        let p2p = fmap_to_p2p(&initial, basis1, basis2, false)?;
-        (initial.clone(), p2p)
+    // Without refinement (`zoomout_k <= k`) these are the point maps of `initial`.
+    let zoomed = zoomout(
+        &initial,
+        basis1,
+        basis2,
+        params.zoomout_k,
+        params.zoomout_step,
+        params.zoomout_direction,
+    )?;
+    let Refined {
+        fmap: refined,
+        p2p: p2p_21,
+    } = match zoomed.forward {
+        Some(f) => f,
+        None => Refined {
+            p2p: fmap_to_p2p(&initial, basis1, basis2, false)?,
+            fmap: initial.clone(),
+        },
     };
     Ok(MatchResult {
         initial,
         refined,
         p2p_21,
+        reverse: zoomed.reverse,
         energy,
     })
 }
