@@ -242,6 +242,11 @@ pub struct CriticalPointFinder {
     component: Vec<u32>,
     /// `(lowest vertex, vertices)` of each component.
     components: Vec<(usize, usize)>,
+    /// `neighbours[neighbour_offsets[v]..neighbour_offsets[v + 1]]`: the neighbours of `v`
+    /// (the ends of its link edges), ascending, each once. The persistence sweeps walk
+    /// them (see [`crate::fields::persistence`]).
+    neighbour_offsets: Vec<usize>,
+    neighbours: Vec<u32>,
 }
 
 /// Vertices per parallel task of [`CriticalPointFinder::find`].
@@ -290,12 +295,15 @@ impl CriticalPointFinder {
             component[v] = root_id[r];
             components[root_id[r] as usize].1 += 1;
         }
+        let (neighbour_offsets, neighbours) = neighbour_lists(&offsets, &edges);
         Self {
             offsets,
             edges,
             simple,
             component,
             components,
+            neighbour_offsets,
+            neighbours,
         }
     }
 
@@ -343,8 +351,20 @@ impl CriticalPointFinder {
     }
 
     /// The link edges of `v` (one per triangle around it): their ends are its neighbours.
+    #[cfg(test)]
     pub(crate) fn link_edges(&self, v: usize) -> &[(usize, usize)] {
         &self.edges[self.offsets[v]..self.offsets[v + 1]]
+    }
+
+    /// The neighbours of `v` (the ends of its link edges), ascending, each once.
+    pub(crate) fn neighbours(&self, v: usize) -> &[u32] {
+        &self.neighbours[self.neighbour_offsets[v]..self.neighbour_offsets[v + 1]]
+    }
+
+    /// Connected component of every vertex (as [`CriticalPointFinder::component_of`]),
+    /// `u32::MAX` for a vertex no triangle uses.
+    pub(crate) fn component_ids(&self) -> &[u32] {
+        &self.component
     }
 
     /// Connected component of `v` (through triangles, numbered by lowest vertex), `None`
@@ -448,6 +468,34 @@ impl CriticalPointFinder {
         }
         Some(classify(edges, &above, rule))
     }
+}
+
+/// The neighbour lists (ascending, without repeats) of the link edges
+/// `edges[offsets[v]..offsets[v + 1]]` of every vertex, in compressed form.
+fn neighbour_lists(offsets: &[usize], edges: &[(usize, usize)]) -> (Vec<usize>, Vec<u32>) {
+    let n = offsets.len() - 1;
+    let mut nbr_offsets = Vec::with_capacity(n + 1);
+    nbr_offsets.push(0);
+    let mut nbrs: Vec<u32> = Vec::with_capacity(edges.len() + edges.len() / 4);
+    for v in 0..n {
+        let start = nbrs.len();
+        for &(a, b) in &edges[offsets[v]..offsets[v + 1]] {
+            // The component numbering already holds vertex ids in u32.
+            nbrs.push(a as u32);
+            nbrs.push(b as u32);
+        }
+        nbrs[start..].sort_unstable();
+        let mut kept = start;
+        for i in start..nbrs.len() {
+            if kept == start || nbrs[kept - 1] != nbrs[i] {
+                nbrs[kept] = nbrs[i];
+                kept += 1;
+            }
+        }
+        nbrs.truncate(kept);
+        nbr_offsets.push(kept);
+    }
+    (nbr_offsets, nbrs)
 }
 
 /// `field` rounded to multiples of `FLAT_RELATIVE_TOLERANCE * max |f|` above its minimum

@@ -37,12 +37,9 @@
 //!
 //! The raw set stays available ([`Persistence::raw`]) with its own check.
 
-use rayon::prelude::*;
-
 use crate::fields::critical_points::{
     BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError, quantized,
 };
-use crate::mesh::topology::UnionFind;
 
 /// A pair whose persistence is below this fraction of the field's range (`max - min`) is
 /// hidden. Truncation ripples of a heat kernel are many orders of magnitude below it; the
@@ -145,15 +142,13 @@ pub fn persistence(
             got: field.len(),
         });
     }
-    // The classification's order: rounded values, ties by index.
-    let q = quantized(field);
-    let mut order: Vec<usize> = (0..n)
-        .filter(|&v| finder.component_of(v).is_some())
-        .collect();
-    order.par_sort_unstable_by(|&a, &b| q[a].total_cmp(&q[b]).then(a.cmp(&b)));
-    let (up_pairs, up_essential) = sweep(finder, &order, n);
-    order.reverse();
-    let (down_pairs, down_essential) = sweep(finder, &order, n);
+    // The classification's order: rounded values, ties by index; the sweep down walks it
+    // backwards. Both sweeps at once.
+    let order = sweep_order(finder, &quantized(field));
+    let ((up_pairs, up_essential), (down_pairs, down_essential)) = rayon::join(
+        || sweep(finder, &order, false),
+        || sweep(finder, &order, true),
+    );
 
     // Range and scale over finite values; per component as well.
     let nc = finder.n_components();
@@ -275,7 +270,13 @@ pub fn persistence(
             p.hidden = true;
         }
     }
-    let hidden_extremum = |v: usize| pairs.iter().any(|p| p.extremum == v && p.hidden);
+    let mut hidden_vertex = vec![false; n];
+    for p in &pairs {
+        if p.hidden {
+            hidden_vertex[p.extremum] = true;
+        }
+    }
+    let hidden_extremum = |v: usize| hidden_vertex[v];
     let mut shown = raw.clone();
     shown
         .minima
@@ -340,53 +341,140 @@ pub fn finite_for_critical(field: &[f64]) -> std::borrow::Cow<'_, [f64]> {
     }
 }
 
-/// One sweep over `order` (every vertex a triangle uses): the pairs `(extremum, saddle)`
-/// of the pieces that die, and the extremum of each piece left at the end (one per
-/// connected component).
+/// The vertices a triangle uses, ascending by `q` (in [`f64::total_cmp`]'s order) with
+/// ties broken by index: a stable least-significant-digit radix sort of the values' bits
+/// (11 bits a pass; a pass whose digit is the same for every vertex is skipped, as most
+/// high digits of rounded values are).
+fn sweep_order(finder: &CriticalPointFinder, q: &[f64]) -> Vec<u32> {
+    const BITS: u32 = 11;
+    const BUCKETS: usize = 1 << BITS;
+    // The bits ordered as `total_cmp` orders the values.
+    let key = |x: f64| {
+        let b = x.to_bits();
+        if b >> 63 == 1 { !b } else { b | (1 << 63) }
+    };
+    let comp = finder.component_ids();
+    let (mut keys, mut order): (Vec<u64>, Vec<u32>) = (0..q.len())
+        .filter(|&v| comp[v] != u32::MAX)
+        .map(|v| (key(q[v]), v as u32))
+        .unzip();
+    if order.is_empty() {
+        return order;
+    }
+    let (mut keys_to, mut order_to) = (vec![0u64; keys.len()], vec![0u32; order.len()]);
+    // The digits that differ somewhere: bits where some key differs from the first.
+    let differ = keys.iter().fold(0u64, |acc, &k| acc | (k ^ keys[0]));
+    let mut count = vec![0usize; BUCKETS];
+    let mut shift = 0;
+    while shift < 64 {
+        let mask = (BUCKETS as u64 - 1) << shift;
+        if differ & mask != 0 {
+            count.fill(0);
+            for &k in &keys {
+                count[((k >> shift) as usize) & (BUCKETS - 1)] += 1;
+            }
+            let mut sum = 0;
+            for c in count.iter_mut() {
+                let here = *c;
+                *c = sum;
+                sum += here;
+            }
+            for (&k, &v) in keys.iter().zip(&order) {
+                let d = ((k >> shift) as usize) & (BUCKETS - 1);
+                keys_to[count[d]] = k;
+                order_to[count[d]] = v;
+                count[d] += 1;
+            }
+            std::mem::swap(&mut keys, &mut keys_to);
+            std::mem::swap(&mut order, &mut order_to);
+        }
+        shift += BITS;
+    }
+    order
+}
+
+/// No vertex: the parent of a vertex the sweep has not reached yet.
+const UNSWEPT: u32 = u32::MAX;
+
+/// One sweep over `order` (every vertex a triangle uses; backwards when `down`): the pairs
+/// `(extremum, saddle)` of the pieces that die, and the extremum of each piece left at the
+/// end (one per connected component), ascending.
+///
+/// A union-find over the vertices swept so far (path halving, union by size) holds the
+/// pieces of the sublevel (superlevel) set; each root keeps the step at which its piece was
+/// born. A vertex joins the pieces of its swept neighbours one at a time: of two pieces
+/// the younger dies at the vertex (the elder rule), which pairs the same extrema with the
+/// same saddles as joining all of them at once to the oldest. O(n log n) for the sort
+/// before it, about O(n) here; no allocation per vertex.
 fn sweep(
     finder: &CriticalPointFinder,
-    order: &[usize],
-    n: usize,
+    order: &[u32],
+    down: bool,
 ) -> (Vec<(usize, usize)>, Vec<usize>) {
-    let mut rank = vec![usize::MAX; n];
-    for (i, &v) in order.iter().enumerate() {
-        rank[v] = i;
-    }
-    let mut uf = UnionFind::new(n);
-    // The extremum (oldest vertex) of the piece whose root this is.
-    let mut birth = vec![usize::MAX; n];
+    let n = finder.n_vertices();
+    let len = order.len();
+    let at = |step: usize| -> u32 {
+        if down {
+            order[len - 1 - step]
+        } else {
+            order[step]
+        }
+    };
+    let mut parent = vec![UNSWEPT; n];
+    let mut size = vec![1u32; n];
+    // At a root: the step at which the piece's extremum was swept.
+    let mut born = vec![0u32; n];
+    let find = |parent: &mut [u32], mut x: u32| -> u32 {
+        while parent[x as usize] != x {
+            let up = parent[parent[x as usize] as usize];
+            parent[x as usize] = up;
+            x = up;
+        }
+        x
+    };
     let mut pairs = Vec::new();
-    let mut roots: Vec<usize> = Vec::new();
-    for &v in order {
-        roots.clear();
-        for &(a, b) in finder.link_edges(v) {
-            for u in [a, b] {
-                if rank[u] < rank[v] {
-                    let r = uf.find(u);
-                    if !roots.contains(&r) {
-                        roots.push(r);
-                    }
-                }
+    for step in 0..len {
+        let v = at(step);
+        parent[v as usize] = v;
+        born[v as usize] = step as u32;
+        // The root of v's piece; v alone until it meets a swept neighbour.
+        let mut root = v;
+        let mut alone = true;
+        for &u in finder.neighbours(v as usize) {
+            if parent[u as usize] == UNSWEPT {
+                continue;
             }
-        }
-        let Some(&elder) = roots.iter().min_by_key(|&&r| rank[birth[r]]) else {
-            birth[v] = v;
-            continue;
-        };
-        let oldest = birth[elder];
-        for &r in &roots {
-            if r != elder {
-                pairs.push((birth[r], v));
+            let r = find(&mut parent, u);
+            if r == root {
+                continue;
             }
-            uf.union(r, v);
+            let (elder, younger) = if born[r as usize] < born[root as usize] {
+                (r, root)
+            } else {
+                (root, r)
+            };
+            // The first piece v meets takes v in (v is no extremum); every further one
+            // meets another piece at v, a saddle, and the younger of the two dies.
+            if !alone {
+                pairs.push((at(born[younger as usize] as usize) as usize, v as usize));
+            }
+            alone = false;
+            let oldest = born[elder as usize];
+            let (big, small) = if size[r as usize] >= size[root as usize] {
+                (r, root)
+            } else {
+                (root, r)
+            };
+            parent[small as usize] = big;
+            size[big as usize] += size[small as usize];
+            born[big as usize] = oldest;
+            root = big;
         }
-        let root = uf.find(v);
-        birth[root] = oldest;
     }
-    let mut essential: Vec<usize> = order
-        .iter()
-        .filter(|&&v| uf.find(v) == v)
-        .map(|&v| birth[v])
+    let mut essential: Vec<usize> = (0..len)
+        .map(at)
+        .filter(|&v| parent[v as usize] == v)
+        .map(|v| at(born[v as usize] as usize) as usize)
         .collect();
     essential.sort_unstable();
     (pairs, essential)
