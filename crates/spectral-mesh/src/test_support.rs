@@ -89,6 +89,25 @@ pub(crate) fn grid(m: usize, mut position: impl FnMut(usize, usize) -> [f64; 3])
     Mesh::new(p, t).unwrap()
 }
 
+/// An `m x m` grid of points with unit spacing, jittered deterministically (each point
+/// moved by `amplitude` times an integer in `-5..=5` along x and the opposite along y),
+/// at height `z = height(x, y)`; point `(i, j)` has index `i * m + j`.
+pub(crate) fn jittered_grid(
+    m: usize,
+    amplitude: f64,
+    height: impl Fn(f64, f64) -> f64,
+) -> Vec<[f64; 3]> {
+    let mut pts = Vec::with_capacity(m * m);
+    for i in 0..m {
+        for j in 0..m {
+            let jit = amplitude * (((i * m + j) * 37 % 11) as f64 - 5.0);
+            let (x, y) = (i as f64 + jit, j as f64 - jit);
+            pts.push([x, y, height(x, y)]);
+        }
+    }
+    pts
+}
+
 /// A deterministic stream of numbers in `[0, 1)` from `seed` (Knuth's MMIX linear
 /// congruential generator, the high bits): reproducible test inputs, not statistics.
 pub(crate) fn lcg(seed: u64) -> impl FnMut() -> f64 {

@@ -27,6 +27,17 @@ fn close(a: &[f64], b: &[f64], rel: f64) {
     );
 }
 
+/// A geodesic-distance request (the default convention) from `source` and `sources`, with
+/// the time factor `m` of `t = m h^2`.
+fn geodesic(source: Option<usize>, sources: Vec<usize>, time_factor: f64) -> FieldRequest {
+    FieldRequest::Geodesic {
+        source,
+        sources,
+        time_factor,
+        convention: Default::default(),
+    }
+}
+
 #[test]
 fn unit_area_fields_equal_the_normalised_basis_path() {
     // The analysis normalises the operators; the earlier path normalised the basis.
@@ -320,7 +331,7 @@ fn two_copies(shape: &str) -> (Mesh, usize) {
 
 #[test]
 fn a_geodesic_request_is_the_heat_method_in_mesh_units_factored_once() {
-    use crate::geodesic::{Convention, GeodesicParams, GeodesicSolver};
+    use crate::geodesic::{GeodesicParams, GeodesicSolver};
     // Normalisation does not scale a geodesic distance: it is in the mesh's units.
     let an = analysis("3torus", true);
     let n = an.n();
@@ -348,24 +359,10 @@ fn a_geodesic_request_is_the_heat_method_in_mesh_units_factored_once() {
     let before = an.memory_bytes();
     let s1 = an.geodesic_solver(&GeodesicParams::default()).unwrap();
     for v in [0, 5, n - 1] {
-        let g = an
-            .field(&FieldRequest::Geodesic {
-                source: Some(v),
-                sources: vec![],
-                time_factor: 1.0,
-                convention: Convention::Crane,
-            })
-            .unwrap();
+        let g = an.field(&geodesic(Some(v), vec![], 1.0)).unwrap();
         assert_eq!(g.values[v], 0.0);
     }
-    let set = an
-        .field(&FieldRequest::Geodesic {
-            source: None,
-            sources: vec![0, n - 1],
-            time_factor: 1.0,
-            convention: Convention::Crane,
-        })
-        .unwrap();
+    let set = an.field(&geodesic(None, vec![0, n - 1], 1.0)).unwrap();
     assert_eq!(set.marks, vec![0, n - 1]);
     assert_eq!(set.request.source(), Some(0));
     assert_eq!(
@@ -379,14 +376,7 @@ fn a_geodesic_request_is_the_heat_method_in_mesh_units_factored_once() {
     assert_eq!(lock(&an.geodesic).len(), 1);
     assert_eq!(an.memory_bytes(), before);
     // Another m is another solver (kept beside the first).
-    let m2 = an
-        .field(&FieldRequest::Geodesic {
-            source: Some(src),
-            sources: vec![],
-            time_factor: 4.0,
-            convention: Convention::Crane,
-        })
-        .unwrap();
+    let m2 = an.field(&geodesic(Some(src), vec![], 4.0)).unwrap();
     assert_ne!(m2.values, f.values);
     assert_eq!(lock(&an.geodesic).len(), 2);
     assert!(an.memory_bytes() > before);
@@ -399,14 +389,7 @@ fn a_geodesic_request_is_the_heat_method_in_mesh_units_factored_once() {
 fn a_geodesic_distance_says_which_components_it_cannot_reach() {
     let (mesh, n0) = two_copies("sphere:res=2");
     let an = Analysis::new(mesh, AnalysisOptions::default());
-    let f = an
-        .field(&FieldRequest::Geodesic {
-            source: Some(3),
-            sources: vec![],
-            time_factor: 1.0,
-            convention: Default::default(),
-        })
-        .unwrap();
+    let f = an.field(&geodesic(Some(3), vec![], 1.0)).unwrap();
     assert!(f.values[..n0].iter().all(|v| v.is_finite()));
     assert!(f.values[n0..].iter().all(|&v| v == f64::INFINITY));
     let other = an.topology().vertex_component[n0];
@@ -438,14 +421,7 @@ fn a_geodesic_distance_says_which_components_it_cannot_reach() {
             .all(|&v| v < n0)
     );
     // A source on each: every value finite.
-    let both = an
-        .field(&FieldRequest::Geodesic {
-            source: Some(3),
-            sources: vec![n0 + 3],
-            time_factor: 1.0,
-            convention: Default::default(),
-        })
-        .unwrap();
+    let both = an.field(&geodesic(Some(3), vec![n0 + 3], 1.0)).unwrap();
     assert!(both.values.iter().all(|v| v.is_finite()));
     assert!(both.unreachable.is_empty());
     close(&both.values[..n0], &f.values[..n0], 1e-12);
@@ -461,12 +437,7 @@ fn geodesic_errors_name_the_source_and_the_laplacian() {
         Mesh::new(pos, t.triangles().to_vec()).unwrap(),
         AnalysisOptions::default(),
     );
-    let req = |source: usize, sources: Vec<usize>| FieldRequest::Geodesic {
-        source: Some(source),
-        sources,
-        time_factor: 1.0,
-        convention: Default::default(),
-    };
+    let req = |source: usize, sources: Vec<usize>| geodesic(Some(source), sources, 1.0);
     let e = an.field(&req(n + 1, vec![])).unwrap_err();
     assert!(
         e.to_string()

@@ -255,10 +255,9 @@ mod tests {
             Schedule::Values(vec![0.1, 1.0])
         );
         assert_eq!(Schedule::Values(vec![0.1, 1.0]).to_string(), "0.1,1.0");
-        assert!("auto:0".parse::<Schedule>().is_err());
-        assert!("a,b".parse::<Schedule>().is_err());
-        assert!("inf".parse::<Schedule>().is_err());
-        assert!("".parse::<Schedule>().is_err());
+        for bad in ["auto:0", "a,b", "inf", ""] {
+            assert!(bad.parse::<Schedule>().is_err(), "{bad:?}");
+        }
     }
 
     #[test]

@@ -7,6 +7,15 @@ use crate::shapes::build_str;
 use crate::spectral::signatures::{hks, hks_auto_times};
 use crate::spectral::store::load_npz;
 
+/// A temporary folder holding the built-in shape `spec` written as `name` (OFF), the
+/// output folder inside it (not created) and the shape as an input.
+fn one_shape(name: &str, spec: &str) -> (tempfile::TempDir, std::path::PathBuf, BatchInput) {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let input = write_shape(d.path(), name, spec);
+    (d, out, input)
+}
+
 fn write_shape(dir: &Path, name: &str, spec: &str) -> BatchInput {
     let path = dir.join(name);
     std::fs::create_dir_all(path.parent().unwrap()).unwrap();
@@ -227,9 +236,7 @@ fn a_bad_file_is_a_row_and_a_marker_until_it_changes() {
 
 #[test]
 fn thumbnails_eigenvalues_only_panics_and_point_clouds() {
-    let d = tempfile::tempdir().unwrap();
-    let out = d.path().join("out");
-    let input = write_shape(d.path(), "s.off", "sphere:res=2");
+    let (d, out, input) = one_shape("s.off", "sphere:res=2");
     let p = BatchParams {
         k: 8,
         basis: false,
@@ -534,9 +541,7 @@ fn the_summary_has_a_row_per_shape_and_a_rerun_redoes_exactly_what_changed() {
 
 #[test]
 fn outputs_are_written_atomically() {
-    let d = tempfile::tempdir().unwrap();
-    let out = d.path().join("out");
-    let input = write_shape(d.path(), "t.off", "torus:res=1");
+    let (_dir, out, input) = one_shape("t.off", "torus:res=1");
     let result = out.join("t.off.npz");
     // While results are written again and again (the parameters alternate, so each run
     // replaces the file), a reader never sees a partial archive under the final name.
@@ -652,9 +657,7 @@ fn npz_array(path: &Path, name: &str) -> (Vec<u64>, Vec<f64>) {
 fn geodesic_distances_from_farthest_samples_are_saved_and_hashed() {
     use crate::analysis::{Analysis, AnalysisOptions};
     use crate::geodesic::{GeodesicParams, GeodesicSolver, farthest_point_sampling};
-    let d = tempfile::tempdir().unwrap();
-    let out = d.path().join("out");
-    let input = write_shape(d.path(), "t.off", "torus:res=2");
+    let (_dir, out, input) = one_shape("t.off", "torus:res=2");
     let plain = BatchParams {
         k: 6,
         ..Default::default()

@@ -248,14 +248,7 @@ mod tests {
     #[test]
     fn gradient_of_a_linear_function_is_exact_and_divergence_is_its_adjoint() {
         // A jittered planar grid in z = 0.3 x (tilted plane): u = a . p is linear.
-        let mut pts = Vec::new();
-        for i in 0..9 {
-            for j in 0..9 {
-                let jit = 0.013 * (((i * 9 + j) * 37 % 11) as f64 - 5.0);
-                let (x, y) = (i as f64 + jit, j as f64 - jit);
-                pts.push([x, y, 0.3 * x]);
-            }
-        }
+        let pts = crate::test_support::jittered_grid(9, 0.013, |x, _| 0.3 * x);
         let n = pts.len();
         let cloud = PointCloud::new(pts.clone(), None).unwrap();
         let mass: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * (i % 3) as f64).collect();

@@ -139,53 +139,42 @@ fn min_angle_cos_free(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 mod tests {
     use super::*;
 
-    fn area2(p: &[[f64; 3]], t: [usize; 3]) -> [f64; 3] {
-        cross(sub(p[t[1]], p[t[0]]), sub(p[t[2]], p[t[0]]))
+    /// Triangulates the polygon `poly` over the corners `xy` (in the plane z = 0) and checks
+    /// that it gives `triangles` triangles, all wound as the polygon (counter-clockwise),
+    /// whose areas add up to `area`: none leaves the polygon.
+    fn check_triangulation(xy: &[[f64; 2]], poly: &[usize], triangles: usize, area: f64) {
+        let p: Vec<[f64; 3]> = xy.iter().map(|&[x, y]| [x, y, 0.0]).collect();
+        let mut out = Vec::new();
+        assert!(triangulate_polygon(&p, poly, &mut out));
+        assert_eq!(out.len(), triangles);
+        let mut total = 0.0;
+        for &t in &out {
+            let a = cross(sub(p[t[1]], p[t[0]]), sub(p[t[2]], p[t[0]]));
+            assert!(a[2] > 0.0, "every triangle keeps the winding: {t:?}");
+            total += 0.5 * a[2];
+        }
+        assert!((total - area).abs() < 1e-12, "area {total}");
     }
 
     #[test]
     fn convex_quad_keeps_winding_and_area() {
-        let p = vec![
-            [0.0, 0.0, 0.0],
-            [2.0, 0.0, 0.0],
-            [2.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ];
-        let mut out = Vec::new();
-        assert!(triangulate_polygon(&p, &[0, 1, 2, 3], &mut out));
-        assert_eq!(out.len(), 2);
-        let mut total = 0.0;
-        for &t in &out {
-            let a = area2(&p, t);
-            assert!(a[2] > 0.0, "winding kept");
-            total += 0.5 * a[2];
-        }
-        assert!((total - 2.0).abs() < 1e-12);
+        let square = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]];
+        check_triangulation(&square, &[0, 1, 2, 3], 2, 2.0);
     }
 
     #[test]
     fn non_convex_polygon_has_no_triangle_outside() {
-        // An L shape (reflex corner at 4); a fan from 0 would leave the shape.
-        let p = vec![
-            [0.0, 0.0, 0.0],
-            [2.0, 0.0, 0.0],
-            [2.0, 1.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [1.0, 2.0, 0.0],
-            [0.0, 2.0, 0.0],
+        // An L shape (reflex corner at 3), started at the reflex corner so that a naive
+        // fan would leave the shape.
+        let l_shape = [
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [2.0, 1.0],
+            [1.0, 1.0],
+            [1.0, 2.0],
+            [0.0, 2.0],
         ];
-        // Start the polygon at the reflex corner so a naive fan would fail.
-        let poly = [3, 4, 5, 0, 1, 2];
-        let mut out = Vec::new();
-        assert!(triangulate_polygon(&p, &poly, &mut out));
-        assert_eq!(out.len(), 4);
-        let mut total = 0.0;
-        for &t in &out {
-            let a = area2(&p, t);
-            assert!(a[2] > 0.0, "every triangle keeps the winding: {t:?}");
-            total += 0.5 * a[2];
-        }
-        assert!((total - 3.0).abs() < 1e-12, "area {total}");
+        check_triangulation(&l_shape, &[3, 4, 5, 0, 1, 2], 4, 3.0);
     }
 
     #[test]

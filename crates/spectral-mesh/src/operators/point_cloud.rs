@@ -849,13 +849,7 @@ mod tests {
     #[test]
     fn planar_grid_star_is_a_fan_around_the_centre() {
         // A jittered grid in the plane z = 0: interior stars are closed fans.
-        let mut pts = Vec::new();
-        for i in 0..7 {
-            for j in 0..7 {
-                let jit = 0.01 * (((i * 7 + j) * 37 % 11) as f64 - 5.0);
-                pts.push([i as f64 + jit, j as f64 - jit, 0.0]);
-            }
-        }
+        let pts = crate::test_support::jittered_grid(7, 0.01, |_, _| 0.0);
         let nb = nearest_neighbors(&pts, 12);
         let c = 3 * 7 + 3;
         let mut out = Vec::new();

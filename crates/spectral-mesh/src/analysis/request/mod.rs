@@ -30,47 +30,44 @@ pub use signal::Signal;
 pub use spec::{DistanceSpec, SignatureSpec};
 pub use validate::RequestError;
 
-/// Default number of eigenpairs (the paper's).
-pub const DEFAULT_K: usize = 100;
-/// Default heat time of the heat basis function and of diffusions (the paper's `t = 0.5`;
-/// for the unit-area shape when the analysis normalizes).
-pub const DEFAULT_HEAT_T: f64 = 0.5;
-/// Default time of the heat kernel signature and the auto-diffusion function.
-pub const DEFAULT_SIGNATURE_T: f64 = 0.1;
-/// Default bandwidth of a wave kernel signature at one energy.
-pub const DEFAULT_WKS_SIGMA: f64 = 0.5;
-/// Default persistence threshold of segmentations (relative to the field's range).
-pub const DEFAULT_PERSISTENCE: f64 = 0.05;
-/// Default index of single eigenfunctions and embedding coordinates: the first pair after
-/// the constant one.
-pub const DEFAULT_COMPONENT: usize = 1;
+/// Declares each default as a public constant and as the function that serde's
+/// `default = "..."` names (one declaration per default).
+macro_rules! defaults {
+    ($($(#[$doc:meta])* $name:ident, $function:ident: $ty:ty = $value:expr;)*) => {
+        $(
+            $(#[$doc])*
+            pub const $name: $ty = $value;
+            fn $function() -> $ty {
+                $name
+            }
+        )*
+    };
+}
+
+defaults! {
+    /// Default number of eigenpairs (the paper's).
+    DEFAULT_K, default_k: usize = 100;
+    /// Default heat time of the heat basis function and of diffusions (the paper's `t = 0.5`;
+    /// for the unit-area shape when the analysis normalizes).
+    DEFAULT_HEAT_T, default_heat_t: f64 = 0.5;
+    /// Default time of the heat kernel signature and the auto-diffusion function.
+    DEFAULT_SIGNATURE_T, default_signature_t: f64 = 0.1;
+    /// Default bandwidth of a wave kernel signature at one energy.
+    DEFAULT_WKS_SIGMA, default_wks_sigma: f64 = 0.5;
+    /// Default persistence threshold of segmentations (relative to the field's range).
+    DEFAULT_PERSISTENCE, default_persistence: f64 = 0.05;
+    /// Default index of single eigenfunctions and embedding coordinates: the first pair
+    /// after the constant one.
+    DEFAULT_COMPONENT, default_component: usize = 1;
+    /// Default order of a harmonic map (1: harmonic; 2: bi-harmonic).
+    DEFAULT_HARMONIC_ORDER, default_order: u32 = 1;
+}
 pub use crate::defaults::values::DEFAULT_GEODESIC_TIME_FACTOR;
 /// Longest filter or signature text accepted (a bound on what a client can make us parse).
 pub const MAX_SPEC_LEN: usize = 1000;
 
-fn default_k() -> usize {
-    DEFAULT_K
-}
-fn default_heat_t() -> f64 {
-    DEFAULT_HEAT_T
-}
-fn default_signature_t() -> f64 {
-    DEFAULT_SIGNATURE_T
-}
-fn default_wks_sigma() -> f64 {
-    DEFAULT_WKS_SIGMA
-}
-fn default_persistence() -> f64 {
-    DEFAULT_PERSISTENCE
-}
-fn default_component() -> usize {
-    DEFAULT_COMPONENT
-}
 fn default_geodesic_time_factor() -> f64 {
     DEFAULT_GEODESIC_TIME_FACTOR
-}
-fn default_order() -> u32 {
-    1
 }
 
 /// A field any face can ask for. Serialized as a table with a `kind` tag
@@ -282,6 +279,27 @@ pub const KINDS: [&str; 13] = [
     "geodesic",
 ];
 
+/// The `k` field of a request, `None` for the kinds without one (a harmonic map, a geodesic
+/// distance): a reference or a mutable one, as `$request` is.
+macro_rules! eigenpairs_field {
+    ($request:expr) => {
+        match $request {
+            FieldRequest::Harmonic { .. } | FieldRequest::Geodesic { .. } => None,
+            FieldRequest::Heat { k, .. }
+            | FieldRequest::Diffusion { k, .. }
+            | FieldRequest::Distance { k, .. }
+            | FieldRequest::SpectralFunction { k, .. }
+            | FieldRequest::Hks { k, .. }
+            | FieldRequest::Wks { k, .. }
+            | FieldRequest::Adf { k, .. }
+            | FieldRequest::Segmentation { k, .. }
+            | FieldRequest::Embedding { k, .. }
+            | FieldRequest::Eigenfunction { k, .. }
+            | FieldRequest::Green { k, .. } => Some(k),
+        }
+    };
+}
+
 impl FieldRequest {
     /// The `kind` tag.
     pub fn kind(&self) -> &'static str {
@@ -306,40 +324,18 @@ impl FieldRequest {
     /// harmonic map, a geodesic distance, or a segmentation of a given field).
     pub fn eigenpairs(&self) -> Option<usize> {
         match self {
-            FieldRequest::Harmonic { .. } | FieldRequest::Geodesic { .. } => None,
             FieldRequest::Segmentation {
                 signature: SignatureSpec::Values(_),
                 ..
             } => None,
-            FieldRequest::Heat { k, .. }
-            | FieldRequest::Diffusion { k, .. }
-            | FieldRequest::Distance { k, .. }
-            | FieldRequest::SpectralFunction { k, .. }
-            | FieldRequest::Hks { k, .. }
-            | FieldRequest::Wks { k, .. }
-            | FieldRequest::Adf { k, .. }
-            | FieldRequest::Segmentation { k, .. }
-            | FieldRequest::Embedding { k, .. }
-            | FieldRequest::Eigenfunction { k, .. }
-            | FieldRequest::Green { k, .. } => Some(*k),
+            _ => eigenpairs_field!(self).copied(),
         }
     }
 
     /// Sets the number of eigenpairs (no effect on requests that need no basis).
     pub fn set_eigenpairs(&mut self, new_k: usize) {
-        match self {
-            FieldRequest::Harmonic { .. } | FieldRequest::Geodesic { .. } => {}
-            FieldRequest::Heat { k, .. }
-            | FieldRequest::Diffusion { k, .. }
-            | FieldRequest::Distance { k, .. }
-            | FieldRequest::SpectralFunction { k, .. }
-            | FieldRequest::Hks { k, .. }
-            | FieldRequest::Wks { k, .. }
-            | FieldRequest::Adf { k, .. }
-            | FieldRequest::Segmentation { k, .. }
-            | FieldRequest::Embedding { k, .. }
-            | FieldRequest::Eigenfunction { k, .. }
-            | FieldRequest::Green { k, .. } => *k = new_k,
+        if let Some(k) = eigenpairs_field!(self) {
+            *k = new_k;
         }
     }
 

@@ -22,7 +22,7 @@
 
 use faer::Mat;
 
-use super::dense::{gram, product, scaled_gram_eig, sub_product, sym_eig};
+use super::dense::{col_dots, gram, product, scaled_gram_eig, sub_product, sym_eig};
 use super::kernels::{
     b_orthogonality_error_cancellable, relative_residuals, residuals_from, sym_spmm,
 };
@@ -91,14 +91,9 @@ fn orth_against(w: &mut [f64], v: &[f64], n: usize, m: usize, c: usize, b: &Spar
 /// Scales each column to unit B-norm and removes zero columns; returns the count.
 fn svqb_diag_normalize(w: &mut Vec<f64>, n: usize, c: usize, b: &SparseMatrix) -> usize {
     let bw = sym_spmm(b, &w[..n * c], c);
+    let norms2 = col_dots(w, &bw, n, c);
     let mut out = Vec::with_capacity(n * c);
-    for j in 0..c {
-        let col = &w[j * n..(j + 1) * n];
-        let nb: f64 = col
-            .iter()
-            .zip(&bw[j * n..(j + 1) * n])
-            .map(|(a, b)| a * b)
-            .sum();
+    for (col, &nb) in w.chunks_exact(n.max(1)).zip(&norms2) {
         if nb > 0.0 && nb.is_finite() {
             let s = 1.0 / nb.sqrt();
             out.extend(col.iter().map(|v| v * s));

@@ -131,6 +131,20 @@ fn sym_evd(h: MatRef<'_, f64>, par: Par) -> Option<(Vec<f64>, Mat<f64>)> {
     Some((vals, u))
 }
 
+/// `sum_i w_i x_i` for each of the first `c` column pairs of the column-major `n`-row
+/// blocks `w` and `x` (with `x = B w`: the squared B-norms of the columns).
+pub(super) fn col_dots(w: &[f64], x: &[f64], n: usize, c: usize) -> Vec<f64> {
+    (0..c)
+        .map(|j| {
+            w[j * n..(j + 1) * n]
+                .iter()
+                .zip(&x[j * n..(j + 1) * n])
+                .map(|(a, b)| a * b)
+                .sum()
+        })
+        .collect()
+}
+
 /// `A B` of two small matrices (the projected problems' sizes), sequential.
 pub(super) fn small_product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let mut out = Mat::<f64>::zeros(a.nrows(), b.ncols());

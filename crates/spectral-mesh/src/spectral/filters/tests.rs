@@ -87,12 +87,16 @@ fn filter_text_round_trip() {
         "heat".parse::<Filter>().unwrap(),
         Filter::Diffusion { t: 0.5 }
     );
-    assert!("diffusion:t=-1".parse::<Filter>().is_err());
-    assert!("mix:a=2".parse::<Filter>().is_err());
-    assert!("diffusion:x=1".parse::<Filter>().is_err());
-    assert!("nonsense".parse::<Filter>().is_err());
-    assert!("custom-w:s*q".parse::<Filter>().is_err());
-    assert!("poly".parse::<Filter>().is_err());
+    for bad in [
+        "diffusion:t=-1",
+        "mix:a=2",
+        "diffusion:x=1",
+        "nonsense",
+        "custom-w:s*q",
+        "poly",
+    ] {
+        assert!(bad.parse::<Filter>().is_err(), "{bad}");
+    }
 }
 
 #[test]

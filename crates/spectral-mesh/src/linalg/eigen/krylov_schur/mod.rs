@@ -56,7 +56,7 @@ use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 use self::orthonormalize::{LanczosStep, orthonormalize};
 use super::deflation::{ComponentNullSpace, DenseDeflation};
-use super::dense::{LEAF_ROWS, gram, product, small_product, sub_product, sym_eig};
+use super::dense::{LEAF_ROWS, col_dots, gram, product, small_product, sub_product, sym_eig};
 use super::kernels::{residuals_from, sym_spmm, sym_spmm_into};
 use super::result::{PartialEigen, package};
 use super::rng::Rng;
@@ -159,25 +159,18 @@ fn true_residuals(
         let xs = &xs[..n * w];
         sym_spmm_into(pb.s, xs, w, &mut sx);
         sym_spmm_into(pb.b, xs, w, &mut bx);
-        let mut l = Vec::with_capacity(w);
-        for q in 0..w {
-            let col = &xs[q * n..(q + 1) * n];
-            let num: f64 = col
-                .iter()
-                .zip(&sx[q * n..(q + 1) * n])
-                .map(|(a, b)| a * b)
-                .sum();
-            let den: f64 = col
-                .iter()
-                .zip(&bx[q * n..(q + 1) * n])
-                .map(|(a, b)| a * b)
-                .sum();
-            l.push(if den > 0.0 {
-                num / den
-            } else {
-                fallback[done + q]
-            });
-        }
+        // Rayleigh quotients x^T S x / x^T B x.
+        let nums = col_dots(xs, &sx, n, w);
+        let dens = col_dots(xs, &bx, n, w);
+        let l: Vec<f64> = (0..w)
+            .map(|q| {
+                if dens[q] > 0.0 {
+                    nums[q] / dens[q]
+                } else {
+                    fallback[done + q]
+                }
+            })
+            .collect();
         res.extend(residuals_from(
             &sx[..n * w],
             &bx[..n * w],

@@ -4,7 +4,9 @@
 
 use faer::{Accum, Mat, MatMut};
 
-use super::super::dense::{gram, matmul_rows, scaled_gram_eig, small_product, sub_product, view};
+use super::super::dense::{
+    col_dots, gram, matmul_rows, scaled_gram_eig, small_product, sub_product, view,
+};
 use super::super::kernels::{sym_spmm, sym_spmm_into};
 use super::super::rng::Rng;
 use super::super::types::{SparseEigenError, check};
@@ -18,19 +20,6 @@ use crate::linalg::{SparseMatrix, scratch};
 /// 1e-4 of the norm is left) let rounding errors build up over restarts on a sphere
 /// (residuals stalled near 1e-10), so in practice two passes are made.
 const SECOND_PASS_FRACTION: f64 = 0.5;
-
-/// `sum_i w_i * (B w)_i` per column.
-pub(super) fn col_dots(w: &[f64], bw: &[f64], n: usize, c: usize) -> Vec<f64> {
-    (0..c)
-        .map(|j| {
-            w[j * n..(j + 1) * n]
-                .iter()
-                .zip(&bw[j * n..(j + 1) * n])
-                .map(|(a, b)| a * b)
-                .sum()
-        })
-        .collect()
-}
 
 /// `B W` for the `c` columns of `w`, in a scratch buffer; `given`, when it already holds
 /// `B W` (right size), is used instead (saves one sparse product), and a buffer of the
