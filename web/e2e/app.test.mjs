@@ -1,33 +1,27 @@
 // End-to-end tests of the spectral-mesh web app in headless Chromium (run by run.sh, which
 // starts the server and sets SPECTRAL_MESH_URL).
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { launch, pageHelpers, writeTorusOff, writePyramidOff } from './common.mjs';
+import { openPage, pageHelpers, writeTorusOff, writePyramidOff } from './common.mjs';
 
-const URL = process.env.SPECTRAL_MESH_URL;
 const SHARED = process.env.SPECTRAL_MESH_SHARED_MESHES || '';
 const SHOT = process.env.SPECTRAL_MESH_SCREENSHOT || '';
 const BENCH = process.env.SPECTRAL_MESH_WEB_BENCH === '1';
 
-let browser, page;
+let page;
 const pageErrors = [];
 
-before(async () => {
-  assert.ok(URL, 'SPECTRAL_MESH_URL is not set: run web/e2e/run.sh');
-  browser = await launch();
-  page = browser.page;
+openPage((p) => {
+  page = p;
   page.on('pageerror', (e) => pageErrors.push(e.message));
-  await page.goto(URL);
-});
-
-after(async () => { await browser?.close(); });
+}, { firstField: false });
 
 // Fields drawn so far; also notes the errors shown so far, so that waitField sees only
 // the new ones.
-const { count, errorCount, waitField, waitError, setValue, pickPoints } =
+const { count, errorCount, waitField, waitError, setValue, pickPoints, clickSource } =
   pageHelpers(() => page, { fieldTimeout: 180000, errorTimeout: 60000 });
 const lastError = () => page.evaluate(() => window.__lastError);
 const lastField = () => page.evaluate(() => window.__lastFieldPlain());
@@ -120,15 +114,9 @@ test('clicking the surface moves the heat anchor and the peak follows; t spreads
   f = await waitField(before);
   assert.equal(f.header.truncation.warning, false);
   assert.match(await page.textContent('#truncation'), /first omitted pair/);
-  const pts = await surfacePoints();
-  assert.ok(pts.length > 5, 'the surface is on screen');
-  const target = pts[Math.floor(pts.length / 3)];
-  before = await count();
-  await page.mouse.click(target.x, target.y);
-  f = await waitField(before);
-  const src = Number(await page.inputValue('#source'));
-  assert.equal(src, target.v);
-  assert.equal(f.header.source, src);
+  const clicked = await clickSource(1 / 3);
+  f = clicked.f;
+  const { src } = clicked;
   // The heat is concentrated around the clicked anchor (on a shape of varying curvature
   // the kernel's largest value need not be at the anchor itself).
   assert.ok(f.values[src] >= 0.5 * f.header.max, `k_t(a, a) = ${f.values[src]}, max ${f.header.max}`);

@@ -5,6 +5,7 @@ import os from 'node:os';
 import path from 'node:path';
 import assert from 'node:assert/strict';
 import zlib from 'node:zlib';
+import { before, after } from 'node:test';
 import { chromium } from 'playwright-core';
 
 // Headless Chromium with a fresh profile (the flags that work on a closed network; see
@@ -26,6 +27,25 @@ export async function launch() {
       fs.rmSync(userDir, { recursive: true, force: true });
     },
   };
+}
+
+// Opens the page run.sh serves (SPECTRAL_MESH_URL) in a fresh browser before the calling
+// file's tests and closes it after them: `onOpen(page)` is called before the page loads
+// (to keep the page, listen to it); with `firstField`, the page's first field is waited
+// for (at most 180 s).
+export function openPage(onOpen, { firstField = true } = {}) {
+  let browser;
+  before(async () => {
+    const url = process.env.SPECTRAL_MESH_URL;
+    assert.ok(url, 'SPECTRAL_MESH_URL is not set: run web/e2e/run.sh');
+    browser = await launch();
+    await onOpen(browser.page);
+    await browser.page.goto(url);
+    if (firstField) {
+      await browser.page.waitForFunction(() => (window.__fieldCount || 0) > 0, null, { timeout: 180000 });
+    }
+  });
+  after(async () => { await browser?.close(); });
 }
 
 // A square pyramid: 5 vertices, 6 triangles, closed.
@@ -107,7 +127,24 @@ export function pageHelpers(getPage, { fieldTimeout, errorTimeout }) {
     });
   }
 
-  return { count, errorCount, waitField, waitError, setValue, pickPoints };
+  // Clicks the surface at the point a `fraction` of the way through `pickPoints()` and
+  // waits for the field: it and its source (or anchor), checked to be the clicked vertex
+  // in the source box and in the field's header.
+  async function clickSource(fraction) {
+    const page = getPage();
+    const pts = await pickPoints();
+    assert.ok(pts.length > 5, 'the surface is on screen');
+    const target = pts[Math.floor(fraction * pts.length)];
+    const before = await count();
+    await page.mouse.click(target.x, target.y);
+    const f = await waitField(before);
+    const src = Number(await page.inputValue('#source'));
+    assert.equal(src, target.v);
+    assert.equal(f.header.source, src);
+    return { f, src, pts };
+  }
+
+  return { count, errorCount, waitField, waitError, setValue, pickPoints, clickSource };
 }
 
 // A PNG file's pixels: 8-bit RGB or RGBA (colour types 2 and 6), not interlaced, as the

@@ -1,26 +1,16 @@
 // End-to-end tests of what the page shows a researcher (issue 30): critical points
 // simplified by persistence, and the rough edges (messages, text boxes, words, layout).
 // Run by run.sh (alone: `web/e2e/run.sh web/e2e/figures.test.mjs`).
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { decodePng, launch, writePyramidOff } from './common.mjs';
+import { decodePng, openPage, writePyramidOff } from './common.mjs';
 
-const URL = process.env.SPECTRAL_MESH_URL;
 const BENCH = process.env.SPECTRAL_MESH_WEB_BENCH === '1';
-let browser, page;
-
-before(async () => {
-  assert.ok(URL, 'SPECTRAL_MESH_URL is not set: run web/e2e/run.sh');
-  browser = await launch();
-  page = browser.page;
-  await page.goto(URL);
-  await page.waitForFunction(() => (window.__fieldCount || 0) > 0, null, { timeout: 180000 });
-});
-
-after(async () => { await browser?.close(); });
+let page;
+openPage((p) => { page = p; });
 
 const errorCount = () => page.evaluate(() => window.__errorCount || 0);
 const fieldCount = () => page.evaluate(() => window.__fieldCount || 0);

@@ -1,23 +1,13 @@
 // End-to-end test of the geodesic distance on the page (issue 28): pick the experiment,
 // click the surface, and find the distance from the clicked vertex with its isolines.
 // Run by run.sh (alone: `web/e2e/run.sh web/e2e/geodesic.test.mjs`).
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { launch, pageHelpers } from './common.mjs';
+import { openPage, pageHelpers } from './common.mjs';
 
-const URL = process.env.SPECTRAL_MESH_URL;
-let browser, page;
-const { count, waitField, setValue, pickPoints } = pageHelpers(() => page, { fieldTimeout: 180000, errorTimeout: 60000 });
-
-before(async () => {
-  assert.ok(URL, 'SPECTRAL_MESH_URL is not set: run web/e2e/run.sh');
-  browser = await launch();
-  page = browser.page;
-  await page.goto(URL);
-  await page.waitForFunction(() => (window.__fieldCount || 0) > 0, null, { timeout: 180000 });
-});
-
-after(async () => { await browser?.close(); });
+let page;
+openPage((p) => { page = p; });
+const { count, waitField, setValue, clickSource } = pageHelpers(() => page, { fieldTimeout: 180000, errorTimeout: 60000 });
 
 test('geodesic distance: a click sets the source, the distance is 0 there, evenly spaced isolines', async () => {
   let before = await setValue('experiment', 'geodesic');
@@ -26,15 +16,9 @@ test('geodesic distance: a click sets the source, the distance is 0 there, evenl
   assert.equal(f.header.k, null, 'no eigenbasis');
   assert.equal(f.header.normalized, false);
   assert.match(await page.textContent('#guidance'), /heat method/);
-  const pts = await pickPoints();
-  assert.ok(pts.length > 5, 'the surface is on screen');
-  const target = pts[Math.floor((2 * pts.length) / 3)];
-  before = await count();
-  await page.mouse.click(target.x, target.y);
-  f = await waitField(before);
-  const src = Number(await page.inputValue('#source'));
-  assert.equal(src, target.v);
-  assert.equal(f.header.source, src);
+  const clicked = await clickSource(2 / 3);
+  f = clicked.f;
+  const { src, pts } = clicked;
   assert.equal(f.values[src], 0, 'the distance at the source is 0');
   assert.equal(f.header.min, 0);
   assert.ok(f.header.max > 0 && Number.isFinite(f.header.max), `max ${f.header.max}`);

@@ -34,6 +34,11 @@ fn s(v: impl ToString) -> Vec<String> {
     vec![v.to_string()]
 }
 
+/// Several values as text, in order.
+fn list<T: ToString>(values: impl IntoIterator<Item = T>) -> Vec<String> {
+    values.into_iter().map(|v| v.to_string()).collect()
+}
+
 /// The library's value of every argument with a default, by clap id, or by
 /// `command path/id` where one id means different things in different commands.
 fn library_values() -> BTreeMap<String, Vec<String>> {
@@ -50,7 +55,7 @@ fn library_values() -> BTreeMap<String, Vec<String>> {
     put("tolerance", s(EigenParams::default().tolerance));
     put("levels", s(fig.levels));
     put("colormap", s(fig.colormap));
-    put("size", s(fig.size));
+    put("size", s(fig.canvas.size));
     put("t", s(d::DEFAULT_HEAT_T));
     put("kernel", s(Kernel::default().name()));
     put("distance", s(DistanceSpec::default()));
@@ -62,43 +67,25 @@ fn library_values() -> BTreeMap<String, Vec<String>> {
     put("dtype", s(BasisDtype::default().name()));
     put("time_factor", s(geodesic.time_factor));
     put("convention", s(geodesic.convention));
-    put(
-        "constraints",
-        harmonic
-            .constraint_counts
-            .iter()
-            .map(ToString::to_string)
-            .collect(),
-    );
+    put("constraints", list(&harmonic.constraint_counts));
     put("order", s(harmonic.order));
     put("batch/k", s(batch.k));
     put("batch/laplacian", s(batch.laplacian));
     put("batch/tolerance", s(batch.tolerance));
     put(
         "study truncation/laplacian",
-        truncation
-            .laplacians
-            .iter()
-            .map(|l| l.name().to_string())
-            .collect(),
+        list(truncation.laplacians.iter().map(|l| l.name())),
     );
-    put(
-        "study truncation/t",
-        truncation.times.iter().map(ToString::to_string).collect(),
-    );
+    put("study truncation/t", list(&truncation.times));
     put(
         "study truncation/k",
-        truncation
-            .ks
-            .iter()
-            .map(|&k| {
-                if k == usize::MAX {
-                    "all".into()
-                } else {
-                    k.to_string()
-                }
-            })
-            .collect(),
+        list(truncation.ks.iter().map(|&k| {
+            if k == usize::MAX {
+                "all".to_string()
+            } else {
+                k.to_string()
+            }
+        })),
     );
     assert_eq!(truncation.reference, TruncationReference::Auto);
     put("study truncation/reference", s("auto"));

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use spectral_mesh::analysis::{Analysis, Field};
 use spectral_mesh_render::Colormap;
-use spectral_mesh_render::figure::{Figure, FigureOptions, field_text};
+use spectral_mesh_render::figure::{Canvas, Figure, FigureOptions, field_text};
 use spectral_mesh_render::raster::View;
 
 use crate::output::{extension, write};
@@ -26,7 +26,7 @@ pub struct FigureArgs {
     #[arg(long)]
     pub view: Option<View>,
     /// Picture width (and height unless --height) in pixels.
-    #[arg(long, default_value_t = FigureOptions::default().size)]
+    #[arg(long, default_value_t = Canvas::default().size)]
     pub size: u32,
     /// Picture height in pixels [default: the size].
     #[arg(long)]
@@ -61,10 +61,12 @@ impl FigureArgs {
             levels: self.levels,
             colormap: self.colormap,
             view: self.view.unwrap_or(d.view),
-            size: self.size,
-            height: self.height,
-            scale: self.scale,
-            dpi: self.dpi,
+            canvas: Canvas {
+                size: self.size,
+                height: self.height,
+                scale: self.scale,
+                dpi: self.dpi,
+            },
             legend: !self.no_legend,
             transparent: self.transparent,
             critical_points: !self.no_critical_points,

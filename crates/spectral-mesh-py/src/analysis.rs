@@ -19,7 +19,7 @@ use spectral_mesh::spectral::distances::{
 use spectral_mesh::spectral::embedding::{
     embedding_component, spectral_embedding, spectral_embedding_weights,
 };
-use spectral_mesh::spectral::filters::Filter;
+use spectral_mesh::spectral::filters::{Filter, FilterError};
 use spectral_mesh::spectral::signatures::{hks, hks_auto_times, wks, wks_auto_energies};
 use spectral_mesh::spectral::store::{BasisMeta, load_npz, save_npz};
 use spectral_mesh::{Analysis, CancelToken, Eigenbasis, FieldRequest};
@@ -32,12 +32,12 @@ use crate::arrays::{
 use crate::errors::Failure;
 use crate::pyjson;
 use crate::run::{Progress, run};
-use crate::{FigureArgs, draw, eigen_params, laplacian_of, with_values};
+use crate::{Picture, SolverArgs, draw, laplacian_of, with_values};
 
 /// The `k` weights of a Python weight function from its values at the eigenvalues of
 /// [`weighted_pairs`] (the library's checks: strictly positive and finite).
 fn pair_weights(b: BasisView<'_>, given: &[f64], name: &str) -> Result<Vec<f64>, Failure> {
-    weights_of_pairs(b.values, given, name).map_err(|e| Failure::value(e.to_string()))
+    weights_of_pairs(b.values, given, name).map_err(value_error)
 }
 
 /// A weight function's values as given (not-finite ones included: [`weights_of_pairs`]
@@ -47,6 +47,26 @@ fn raw_weights(a: &PyReadonlyArray1<'_, f64>) -> Result<Vec<f64>, Failure> {
         .map_err(|e| Failure::value(format!("weights: {e}")))?
         .to_vec())
 }
+
+/// A filter given as text (`what`: the keyword, for the message).
+fn parse_filter(text: &str, what: &str) -> Result<Filter, Failure> {
+    text.parse()
+        .map_err(|e: FilterError| Failure::value(format!("{what}: {e}")))
+}
+
+/// A `ValueError` from a library error's message.
+fn value_error(e: impl std::fmt::Display) -> Failure {
+    Failure::value(e.to_string())
+}
+
+/// An embedding's rows as `(n, d, row-major data)`.
+fn embedding_rows(rows: Vec<Vec<f64>>) -> (usize, usize, Vec<f64>) {
+    let d = rows.first().map_or(0, Vec::len);
+    (rows.len(), d, rows.concat())
+}
+
+/// A Python weight function's values at the filter's eigenvalues, and its name.
+type Weights<'a> = (PyReadonlyArray1<'a, f64>, String);
 
 /// A `ValueError` from a serde message.
 fn request_error(e: serde_json::Error) -> Failure {
@@ -61,6 +81,28 @@ pub struct PyAnalysis {
     inner: Arc<Analysis>,
     /// The point-cloud Laplacian's parameters of a point-cloud analysis.
     cloud: Option<PointCloudParams>,
+    /// Number of vertices.
+    #[pyo3(get)]
+    n: usize,
+    /// True for the analysis of a point cloud.
+    #[pyo3(get)]
+    is_point_cloud: bool,
+    /// The mean spacing of a point cloud's points (the mean edge length of its triangle
+    /// union), `None` for a mesh.
+    #[pyo3(get)]
+    point_spacing: Option<f64>,
+    /// Whether the operators are normalized to unit total mass.
+    #[pyo3(get)]
+    normalized: bool,
+    /// The discretization's name.
+    #[pyo3(get)]
+    kind: &'static str,
+    /// `1^T B 1` of the mass as assembled (the area for area-based masses).
+    #[pyo3(get)]
+    input_total_mass: f64,
+    /// The vertex of largest x (lowest index on ties): the default source and anchor.
+    #[pyo3(get)]
+    default_source: usize,
 }
 
 /// The point-cloud Laplacian's parameters from the Python keywords (`None`: the
@@ -84,6 +126,21 @@ pub(crate) fn cloud_params(
 }
 
 impl PyAnalysis {
+    /// The Python object of an analysis (its fixed properties read once).
+    fn wrap(inner: Arc<Analysis>, cloud: Option<PointCloudParams>) -> Self {
+        Self {
+            n: inner.n(),
+            is_point_cloud: inner.is_point_cloud(),
+            point_spacing: inner.point_spacing(),
+            normalized: inner.options().normalize,
+            kind: inner.options().laplacian.name(),
+            input_total_mass: inner.input_total_mass(),
+            default_source: inner.default_source(),
+            inner,
+            cloud,
+        }
+    }
+
     /// Runs `f` on the first `k` pairs of the basis (computed when needed).
     fn with_basis<T, F>(&self, py: Python<'_>, k: usize, f: F) -> PyResult<T>
     where
@@ -101,19 +158,28 @@ impl PyAnalysis {
         &self,
         py: Python<'_>,
         k: usize,
-        weights: &PyReadonlyArray1<'_, f64>,
-        name: String,
+        (weights, name): Weights<'_>,
         f: F,
     ) -> PyResult<T>
     where
         T: Send + 'static,
         F: FnOnce(BasisView<'_>, &[f64]) -> Result<T, Failure> + Send + 'static,
     {
-        let given = raw_weights(weights).map_err(|e| e.into_pyerr(py))?;
+        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
         self.with_basis(py, k, move |b| {
             let w = pair_weights(b, &given, &name)?;
             f(b, &w)
         })
+    }
+
+    /// The `(n, cols)` array of the `cols` per-vertex columns a computation returns.
+    fn columns<'py>(
+        &self,
+        py: Python<'py>,
+        cols: usize,
+        data: PyResult<Vec<f64>>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        to_columns(py, self.inner.n(), cols, data?)
     }
 
     /// [`PyAnalysis::with_basis`] reporting the eigensolve to a Python callback.
@@ -141,18 +207,13 @@ impl PyAnalysis {
 impl PyAnalysis {
     /// Builds the analysis of `(V, F)` (assembles the operators; nothing is factored yet).
     #[new]
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (v, f, kind, normalize, tol, seed, dirichlet, method))]
     fn new(
         py: Python<'_>,
         v: PyReadonlyArray2<'_, f64>,
         f: PyReadonlyArray2<'_, i64>,
         kind: &str,
         normalize: bool,
-        tol: f64,
-        seed: u64,
-        dirichlet: Option<Vec<usize>>,
-        method: &str,
+        solver: SolverArgs,
     ) -> PyResult<Self> {
         let prepare = || -> Result<_, Failure> {
             Ok((
@@ -160,21 +221,20 @@ impl PyAnalysis {
                 AnalysisOptions {
                     laplacian: laplacian_of(kind)?,
                     normalize,
-                    eigen: eigen_params(tol, seed, dirichlet, method)?,
+                    eigen: solver.params()?,
                 },
             ))
         };
         let (mesh, options) = prepare().map_err(|e| e.into_pyerr(py))?;
         let inner = run(py, move |_| Ok(Arc::new(Analysis::new(mesh, options))))?;
-        Ok(Self { inner, cloud: None })
+        Ok(Self::wrap(inner, None))
     }
 
     /// Builds the analysis of a point cloud `P` (its point-cloud Laplacian, built now):
     /// `normals` (when given) give the tangent planes where they are non-zero; `None`
     /// parameters take the library's defaults.
     #[staticmethod]
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (p, normals, neighbors, mollify_factor, normalize, tol, seed, dirichlet, method))]
+    #[pyo3(signature = (p, normals, neighbors, mollify_factor, normalize, solver))]
     fn from_points(
         py: Python<'_>,
         p: PyReadonlyArray2<'_, f64>,
@@ -182,10 +242,7 @@ impl PyAnalysis {
         neighbors: Option<usize>,
         mollify_factor: Option<f64>,
         normalize: bool,
-        tol: f64,
-        seed: u64,
-        dirichlet: Option<Vec<usize>>,
-        method: &str,
+        solver: SolverArgs,
     ) -> PyResult<Self> {
         let prepare = || -> Result<_, Failure> {
             let cloud = arrays::cloud_from(&p, normals.as_ref())?;
@@ -193,7 +250,7 @@ impl PyAnalysis {
             let options = AnalysisOptions {
                 laplacian: Laplacian::Robust,
                 normalize,
-                eigen: eigen_params(tol, seed, dirichlet, method)?,
+                eigen: solver.params()?,
             };
             Ok((cloud, params, options))
         };
@@ -201,10 +258,7 @@ impl PyAnalysis {
         let inner = run(py, move |_| {
             Ok(Arc::new(Analysis::from_points(cloud, &params, options)?))
         })?;
-        Ok(Self {
-            inner,
-            cloud: Some(params),
-        })
+        Ok(Self::wrap(inner, Some(params)))
     }
 
     /// Builds the analysis of a mesh or point-cloud file (`read_input`: a PLY without
@@ -213,7 +267,7 @@ impl PyAnalysis {
     /// the library's defaults) are refused with a mesh, as on the command line.
     #[staticmethod]
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (path, kind, neighbors, mollify_factor, use_normals, normalize, tol, seed, dirichlet, method))]
+    #[pyo3(signature = (path, kind, neighbors, mollify_factor, use_normals, normalize, solver))]
     fn from_file(
         py: Python<'_>,
         path: PathBuf,
@@ -222,14 +276,11 @@ impl PyAnalysis {
         mollify_factor: Option<f64>,
         use_normals: bool,
         normalize: bool,
-        tol: f64,
-        seed: u64,
-        dirichlet: Option<Vec<usize>>,
-        method: &str,
+        solver: SolverArgs,
     ) -> PyResult<Self> {
         let prepare = || -> Result<_, Failure> {
             let kind = kind.as_deref().map(laplacian_of).transpose()?;
-            Ok((kind, eigen_params(tol, seed, dirichlet, method)?))
+            Ok((kind, solver.params()?))
         };
         let (kind, eigen) = prepare().map_err(|e| e.into_pyerr(py))?;
         let (inner, cloud) = run(py, move |_| {
@@ -266,26 +317,7 @@ impl PyAnalysis {
             };
             Ok((Arc::new(Analysis::from_input(input, options)?), cloud))
         })?;
-        Ok(Self { inner, cloud })
-    }
-
-    /// True for the analysis of a point cloud.
-    #[getter]
-    fn is_point_cloud(&self) -> bool {
-        self.inner.is_point_cloud()
-    }
-
-    /// The mean spacing of a point cloud's points (the mean edge length of its triangle
-    /// union), `None` for a mesh.
-    #[getter]
-    fn point_spacing(&self) -> Option<f64> {
-        self.inner.point_spacing()
-    }
-
-    /// Number of vertices.
-    #[getter]
-    fn n(&self) -> usize {
-        self.inner.n()
+        Ok(Self::wrap(inner, cloud))
     }
 
     /// Eigenpairs held (0 before the first spectral request).
@@ -294,34 +326,10 @@ impl PyAnalysis {
         self.inner.held_k()
     }
 
-    /// Whether the operators are normalized to unit total mass.
-    #[getter]
-    fn normalized(&self) -> bool {
-        self.inner.options().normalize
-    }
-
-    /// The discretization's name.
-    #[getter]
-    fn kind(&self) -> &'static str {
-        self.inner.options().laplacian.name()
-    }
-
-    /// `1^T B 1` of the mass as assembled (the area for area-based masses).
-    #[getter]
-    fn input_total_mass(&self) -> f64 {
-        self.inner.input_total_mass()
-    }
-
     /// How many times the shifted pencil was factored.
     #[getter]
     fn factorizations(&self) -> usize {
         self.inner.factorizations()
-    }
-
-    /// The vertex of largest x (lowest index on ties): the default source and anchor.
-    #[getter]
-    fn default_source(&self) -> usize {
-        self.inner.default_source()
     }
 
     /// `(V, F)` of the mesh (copies).
@@ -495,15 +503,15 @@ impl PyAnalysis {
                 Failure::value(format!("t = {t}: times must be finite and > 0")).into_pyerr(py),
             );
         }
-        let (n, cols) = (self.inner.n(), times.len());
-        let data = self.with_basis(py, k, move |b| Ok(hks(b, &times, scaled).concat()))?;
-        to_columns(py, n, cols, data)
+        let cols = times.len();
+        let data = self.with_basis(py, k, move |b| Ok(hks(b, &times, scaled).concat()));
+        self.columns(py, cols, data)
     }
 
     /// pyFM's automatic HKS times for the first `k` pairs.
     fn hks_auto_times(&self, py: Python<'_>, count: usize, k: usize) -> PyResult<Vec<f64>> {
         self.with_basis(py, k, move |b| {
-            hks_auto_times(b, count).map_err(|e| Failure::value(e.to_string()))
+            hks_auto_times(b, count).map_err(value_error)
         })
     }
 
@@ -519,13 +527,13 @@ impl PyAnalysis {
         if let Some(e) = energies.iter().find(|e| !e.is_finite()) {
             return Err(Failure::value(format!("energy {e} is not finite")).into_pyerr(py));
         }
-        let (n, cols) = (self.inner.n(), energies.len());
+        let cols = energies.len();
         let data = self.with_basis(py, k, move |b| {
             Ok(wks(b, &energies, sigma, scaled)
-                .map_err(|e| Failure::value(e.to_string()))?
+                .map_err(value_error)?
                 .concat())
-        })?;
-        to_columns(py, n, cols, data)
+        });
+        self.columns(py, cols, data)
     }
 
     /// pyFM's automatic WKS energies and bandwidth for the first `k` pairs.
@@ -536,7 +544,7 @@ impl PyAnalysis {
         k: usize,
     ) -> PyResult<(Vec<f64>, f64)> {
         self.with_basis(py, k, move |b| {
-            wks_auto_energies(b, count).map_err(|e| Failure::value(e.to_string()))
+            wks_auto_energies(b, count).map_err(value_error)
         })
     }
 
@@ -547,17 +555,11 @@ impl PyAnalysis {
         filter: &str,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let filter: Filter =
-            filter
-                .parse()
-                .map_err(|e: spectral_mesh::spectral::filters::FilterError| {
-                    Failure::value(format!("filter: {e}")).into_pyerr(py)
-                })?;
+        let filter = parse_filter(filter, "filter").map_err(|e| e.into_pyerr(py))?;
         let (n, d, data) = self.with_basis(py, k, move |b| {
-            let rows = spectral_embedding(b, &filter, usize::MAX)
-                .map_err(|e| Failure::value(e.to_string()))?;
-            let d = rows.first().map_or(0, Vec::len);
-            Ok((rows.len(), d, rows.concat()))
+            spectral_embedding(b, &filter, usize::MAX)
+                .map(embedding_rows)
+                .map_err(value_error)
         })?;
         to_rows(py, n, d, data)
     }
@@ -571,7 +573,7 @@ impl PyAnalysis {
         k: usize,
     ) -> PyResult<(Vec<usize>, Bound<'py, PyArray1<f64>>)> {
         let (used, values) = self.with_basis(py, k, move |b| {
-            weighted_pairs(b.values).map_err(|e| Failure::value(e.to_string()))
+            weighted_pairs(b.values).map_err(value_error)
         })?;
         Ok((used, to_vector(py, values)))
     }
@@ -582,17 +584,16 @@ impl PyAnalysis {
         &self,
         py: Python<'py>,
         sources: Vec<usize>,
-        weights: PyReadonlyArray1<'_, f64>,
-        name: String,
+        weights: Weights<'_>,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let (n, cols) = (self.inner.n(), sources.len());
-        let data = self.with_weights(py, k, &weights, name, move |b, w| {
+        let cols = sources.len();
+        let data = self.with_weights(py, k, weights, move |b, w| {
             Ok(distances_from_many_weights(b, &sources, w)
-                .map_err(|e| Failure::value(e.to_string()))?
+                .map_err(value_error)?
                 .concat())
-        })?;
-        to_columns(py, n, cols, data)
+        });
+        self.columns(py, cols, data)
     }
 
     /// A row `G(source, .)` of the Green kernel with the weights of a function: `(n,)`.
@@ -600,12 +601,11 @@ impl PyAnalysis {
         &self,
         py: Python<'py>,
         source: usize,
-        weights: PyReadonlyArray1<'_, f64>,
-        name: String,
+        weights: Weights<'_>,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let data = self.with_weights(py, k, &weights, name, move |b, w| {
-            green_row_weights(b, source, w).map_err(|e| Failure::value(e.to_string()))
+        let data = self.with_weights(py, k, weights, move |b, w| {
+            green_row_weights(b, source, w).map_err(value_error)
         })?;
         Ok(to_vector(py, data))
     }
@@ -614,12 +614,11 @@ impl PyAnalysis {
     fn spectral_function_weighted<'py>(
         &self,
         py: Python<'py>,
-        weights: PyReadonlyArray1<'_, f64>,
-        name: String,
+        weights: Weights<'_>,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let data = self.with_weights(py, k, &weights, name, move |b, w| {
-            spectral_function_weights(b, w).map_err(|e| Failure::value(e.to_string()))
+        let data = self.with_weights(py, k, weights, move |b, w| {
+            spectral_function_weights(b, w).map_err(value_error)
         })?;
         Ok(to_vector(py, data))
     }
@@ -629,15 +628,13 @@ impl PyAnalysis {
     fn embedding_weighted<'py>(
         &self,
         py: Python<'py>,
-        weights: PyReadonlyArray1<'_, f64>,
-        name: String,
+        weights: Weights<'_>,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let (n, d, data) = self.with_weights(py, k, &weights, name, move |b, w| {
-            let rows = spectral_embedding_weights(b, w, usize::MAX)
-                .map_err(|e| Failure::value(e.to_string()))?;
-            let d = rows.first().map_or(0, Vec::len);
-            Ok((rows.len(), d, rows.concat()))
+        let (n, d, data) = self.with_weights(py, k, weights, move |b, w| {
+            spectral_embedding_weights(b, w, usize::MAX)
+                .map(embedding_rows)
+                .map_err(value_error)
         })?;
         to_rows(py, n, d, data)
     }
@@ -647,13 +644,12 @@ impl PyAnalysis {
     fn embedding_component_weighted<'py>(
         &self,
         py: Python<'py>,
-        weights: PyReadonlyArray1<'_, f64>,
-        name: String,
+        weights: Weights<'_>,
         component: usize,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let data = self.with_weights(py, k, &weights, name, move |b, w| {
-            embedding_component(b, w, component).map_err(|e| Failure::value(e.to_string()))
+        let data = self.with_weights(py, k, weights, move |b, w| {
+            embedding_component(b, w, component).map_err(value_error)
         })?;
         Ok(to_vector(py, data))
     }
@@ -666,19 +662,14 @@ impl PyAnalysis {
         filter: &str,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let filter: Filter =
-            filter
-                .parse()
-                .map_err(|e: spectral_mesh::spectral::filters::FilterError| {
-                    Failure::value(format!("distance: {e}")).into_pyerr(py)
-                })?;
-        let (n, cols) = (self.inner.n(), sources.len());
+        let filter = parse_filter(filter, "distance").map_err(|e| e.into_pyerr(py))?;
+        let cols = sources.len();
         let data = self.with_basis(py, k, move |b| {
             Ok(distances_from_many(b, &sources, &filter)
-                .map_err(|e| Failure::value(e.to_string()))?
+                .map_err(value_error)?
                 .concat())
-        })?;
-        to_columns(py, n, cols, data)
+        });
+        self.columns(py, cols, data)
     }
 
     /// Installs a basis given as arrays: eigenvalues `(k,)` and the eigenvectors' `(k, n)`
@@ -690,15 +681,8 @@ impl PyAnalysis {
         evecs_t: PyReadonlyArray2<'_, f64>,
     ) -> PyResult<()> {
         let prepare = || -> Result<Eigenbasis, Failure> {
-            let values = arrays::values(&evals, "evals")?;
-            let (n, k, vectors) = arrays::columns(&evecs_t, "evecs")?;
-            if k != values.len() {
-                return Err(Failure::value(format!(
-                    "evecs has {k} columns but evals has {} values",
-                    values.len()
-                )));
-            }
-            if k == 0 {
+            let (n, values, vectors) = arrays::pairs(&evals, &evecs_t)?;
+            if values.is_empty() {
                 return Err(Failure::value("the basis is empty (k = 0)"));
             }
             if values.windows(2).any(|w| w[1] < w[0]) {
@@ -788,30 +772,9 @@ impl PyAnalysis {
     }
 
     /// Draws a field on this mesh (see the module-level `render`).
-    #[pyo3(signature = (values, marks, labels, figure, path))]
-    fn render(
-        &self,
-        py: Python<'_>,
-        values: PyReadonlyArray1<'_, f64>,
-        marks: Vec<usize>,
-        labels: Option<Vec<usize>>,
-        figure: FigureArgs,
-        path: Option<PathBuf>,
-    ) -> PyResult<Py<PyAny>> {
-        let prepare = || -> Result<_, Failure> {
-            Ok((arrays::values(&values, "values")?, figure.options()?))
-        };
-        let (values, options) = prepare().map_err(|e| e.into_pyerr(py))?;
-        draw(
-            py,
-            self.inner.mesh_arc().clone(),
-            values,
-            marks,
-            labels,
-            options,
-            self.inner.point_spacing().map(|h| POINT_RADIUS_FACTOR * h),
-            path,
-        )
+    fn render(&self, py: Python<'_>, picture: Picture<'_>) -> PyResult<Py<PyAny>> {
+        let radius = self.inner.point_spacing().map(|h| POINT_RADIUS_FACTOR * h);
+        draw(py, self.inner.mesh_arc().clone(), radius, picture)
     }
 
     fn __repr__(&self) -> String {

@@ -7,7 +7,7 @@
 //! column-major layout, a free view of a Fortran-ordered `(n, k)` array). Everything is
 //! still checked here, so the native module can be called directly without crashing.
 
-use numpy::ndarray::{Array2, ShapeBuilder};
+use numpy::ndarray::{Array2, Ix2, ShapeBuilder, StrideShape};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use spectral_mesh::mesh::PointCloudError;
@@ -143,6 +143,34 @@ pub fn columns(
     Ok((n, k, data.to_vec()))
 }
 
+/// Eigenpairs given as arrays: eigenvalues `(k,)` and the eigenvectors' `(k, n)`
+/// transpose, as `(n, values, vectors column-major)` (the counts checked to agree).
+pub fn pairs(
+    evals: &PyReadonlyArray1<'_, f64>,
+    evecs_t: &PyReadonlyArray2<'_, f64>,
+) -> Result<(usize, Vec<f64>, Vec<f64>), Failure> {
+    let values = values(evals, "evals")?;
+    let (n, k, vectors) = columns(evecs_t, "evecs")?;
+    if k != values.len() {
+        return Err(Failure::value(format!(
+            "evecs has {k} columns but evals has {} values",
+            values.len()
+        )));
+    }
+    Ok((n, values, vectors))
+}
+
+/// A 2-d array of `shape` (C- or Fortran-ordered) owning `data`, without a copy.
+fn to_array<'py, T: numpy::Element>(
+    py: Python<'py>,
+    shape: impl Into<StrideShape<Ix2>>,
+    data: Vec<T>,
+) -> PyResult<Bound<'py, PyArray2<T>>> {
+    let a = Array2::from_shape_vec(shape, data)
+        .map_err(|e| Failure::Internal(format!("array shape: {e}")).into_pyerr(py))?;
+    Ok(PyArray2::from_owned_array(py, a))
+}
+
 /// An `(n, k)` Fortran-ordered array owning `data` (`n x k` column-major), without a copy.
 pub fn to_columns<'py, T: numpy::Element>(
     py: Python<'py>,
@@ -150,9 +178,7 @@ pub fn to_columns<'py, T: numpy::Element>(
     k: usize,
     data: Vec<T>,
 ) -> PyResult<Bound<'py, PyArray2<T>>> {
-    let a = Array2::from_shape_vec((n, k).f(), data)
-        .map_err(|e| Failure::Internal(format!("array shape: {e}")).into_pyerr(py))?;
-    Ok(PyArray2::from_owned_array(py, a))
+    to_array(py, (n, k).f(), data)
 }
 
 /// An `(rows, cols)` C-ordered array owning `data` (row-major), without a copy.
@@ -162,9 +188,7 @@ pub fn to_rows<'py, T: numpy::Element>(
     cols: usize,
     data: Vec<T>,
 ) -> PyResult<Bound<'py, PyArray2<T>>> {
-    let a = Array2::from_shape_vec((rows, cols), data)
-        .map_err(|e| Failure::Internal(format!("array shape: {e}")).into_pyerr(py))?;
-    Ok(PyArray2::from_owned_array(py, a))
+    to_array(py, (rows, cols), data)
 }
 
 /// A vector as a NumPy array, without a copy.

@@ -59,6 +59,27 @@ fn geodesic_params(
 #[pyclass(frozen, name = "GeodesicSolver", module = "spectral_mesh._native")]
 pub struct PyGeodesicSolver {
     solver: Arc<GeodesicSolver>,
+    /// The time step `t = m h^2`.
+    #[pyo3(get)]
+    t: f64,
+    /// The mean edge length `h`.
+    #[pyo3(get)]
+    h: f64,
+    /// Number of vertices.
+    #[pyo3(get)]
+    n: usize,
+}
+
+impl PyGeodesicSolver {
+    /// The Python object of a factored solver.
+    fn wrap(solver: GeodesicSolver) -> Self {
+        Self {
+            t: solver.time(),
+            h: solver.mean_edge_length(),
+            n: solver.n(),
+            solver: Arc::new(solver),
+        }
+    }
 }
 
 #[pymethods]
@@ -78,9 +99,7 @@ impl PyGeodesicSolver {
         let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
         let params = geodesic_params(py, time_factor, convention)?;
         let solver = run(py, move |_| Ok(GeodesicSolver::new(&mesh, lap, &params)?))?;
-        Ok(Self {
-            solver: Arc::new(solver),
-        })
+        Ok(Self::wrap(solver))
     }
 
     /// Builds and factors the solver of a point cloud (point-cloud Laplacian, gradient in
@@ -109,9 +128,7 @@ impl PyGeodesicSolver {
         let solver = run(py, move |_| {
             Ok(GeodesicSolver::from_point_cloud(&cloud, &cp, &params)?)
         })?;
-        Ok(Self {
-            solver: Arc::new(solver),
-        })
+        Ok(Self::wrap(solver))
     }
 
     /// Distance from the set of vertices and face points.
@@ -162,23 +179,5 @@ impl PyGeodesicSolver {
     ) -> PyResult<Vec<usize>> {
         let s = self.solver.clone();
         run(py, move |_| Ok(farthest_point_sampling(&s, k, start)?))
-    }
-
-    /// The time step `t = m h^2`.
-    #[getter]
-    fn t(&self) -> f64 {
-        self.solver.time()
-    }
-
-    /// The mean edge length `h`.
-    #[getter]
-    fn h(&self) -> f64 {
-        self.solver.mean_edge_length()
-    }
-
-    /// Number of vertices.
-    #[getter]
-    fn n(&self) -> usize {
-        self.solver.n()
     }
 }

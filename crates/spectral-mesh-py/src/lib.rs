@@ -23,7 +23,7 @@ use spectral_mesh::spectral::eigenbasis::{
 };
 use spectral_mesh::spectral::store::{BasisDtype, BasisMeta, load_npz, save_npz};
 use spectral_mesh::{Analysis, Eigenbasis, FieldRequest, Mesh, SparseMatrix};
-use spectral_mesh_render::{Colormap, Figure, FigureOptions, View};
+use spectral_mesh_render::{Canvas, Colormap, Figure, FigureOptions, View};
 
 mod analysis;
 mod arrays;
@@ -75,6 +75,19 @@ pub(crate) fn tolerance_of(tol: f64) -> Result<f64, Failure> {
             "tol = {tol}: must be a finite number > 0, or 0 for the default ({:e})",
             EigenParams::default().tolerance
         )))
+    }
+}
+
+/// The eigensolver's Python keywords as the wrappers pass them: one tuple
+/// `(tol, seed, dirichlet, method)`.
+#[derive(FromPyObject)]
+pub(crate) struct SolverArgs(f64, u64, Option<Vec<usize>>, String);
+
+impl SolverArgs {
+    /// The library's eigensolver parameters (checked by [`eigen_params`]).
+    pub(crate) fn params(self) -> Result<EigenParams, Failure> {
+        let Self(tol, seed, dirichlet, method) = self;
+        eigen_params(tol, seed, dirichlet, &method)
     }
 }
 
@@ -262,7 +275,7 @@ type CertifiedPairs<'py> = (
 /// double precision, rounded once); `None`: the library's default.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v, f, k, kind, normalize, tol, seed, dirichlet, method, progress=None, certify=false, dtype=None))]
+#[pyo3(signature = (v, f, k, kind, normalize, solver, progress=None, certify=false, dtype=None))]
 fn eigenbasis<'py>(
     py: Python<'py>,
     v: PyReadonlyArray2<'_, f64>,
@@ -270,10 +283,7 @@ fn eigenbasis<'py>(
     k: usize,
     kind: &str,
     normalize: bool,
-    tol: f64,
-    seed: u64,
-    dirichlet: Option<Vec<usize>>,
-    method: &str,
+    solver: SolverArgs,
     progress: Option<Py<PyAny>>,
     certify: bool,
     dtype: Option<&str>,
@@ -288,7 +298,7 @@ fn eigenbasis<'py>(
     let options = AnalysisOptions {
         laplacian: laplacian_of(kind).map_err(|e| e.into_pyerr(py))?,
         normalize,
-        eigen: eigen_params(tol, seed, dirichlet, method).map_err(|e| e.into_pyerr(py))?,
+        eigen: solver.params().map_err(|e| e.into_pyerr(py))?,
     };
     let (n, values, vectors, report) = run(py, move |token| {
         let an = Analysis::new(mesh, options);
@@ -447,14 +457,7 @@ fn save_basis(
     f: Option<PyReadonlyArray2<'_, i64>>,
 ) -> PyResult<()> {
     let prepare = || -> Result<(Eigenbasis, Option<Mesh>), Failure> {
-        let values = arrays::values(&evals, "evals")?;
-        let (n, k, vectors) = arrays::columns(&evecs_t, "evecs")?;
-        if k != values.len() {
-            return Err(Failure::value(format!(
-                "evecs has {k} columns but evals has {} values",
-                values.len()
-            )));
-        }
+        let (n, values, vectors) = arrays::pairs(&evals, &evecs_t)?;
         let mass = csc_from("B", n, &mass.0, &mass.1, &mass.2)?;
         let mesh = match (&v, &f) {
             (Some(v), Some(f)) => {
@@ -546,10 +549,12 @@ impl FigureArgs {
                 .view
                 .parse::<View>()
                 .map_err(|e| Failure::value(format!("view: {e}")))?,
-            size: self.size,
-            height: self.height,
-            scale: self.scale,
-            dpi: self.dpi,
+            canvas: Canvas {
+                size: self.size,
+                height: self.height,
+                scale: self.scale,
+                dpi: self.dpi,
+            },
             legend: self.legend,
             transparent: self.transparent,
             critical_points: self.critical_points,
@@ -558,20 +563,31 @@ impl FigureArgs {
     }
 }
 
-/// Draws `values` on `mesh`: writes `path` (format from its extension) and returns
-/// `None`, or returns the `(size, size, 4)` RGBA picture. `point_radius`: draw the vertices
-/// as discs of this radius (a point cloud; its triangle union carries the level sets).
-#[allow(clippy::too_many_arguments)]
+/// What both native `render`s draw after the mesh, as `_render_args` passes it: one tuple
+/// `(values, marks, labels, figure, path)`.
+#[derive(FromPyObject)]
+pub(crate) struct Picture<'py>(
+    PyReadonlyArray1<'py, f64>,
+    Vec<usize>,
+    Option<Vec<usize>>,
+    FigureArgs,
+    Option<PathBuf>,
+);
+
+/// Draws a picture's values on `mesh`: writes its path (format from its extension) and
+/// returns `None`, or returns the `(size, size, 4)` RGBA picture. `point_radius`: draw the
+/// vertices as discs of this radius (a point cloud; its triangle union carries the level
+/// sets).
 pub(crate) fn draw(
     py: Python<'_>,
     mesh: Arc<Mesh>,
-    values: Vec<f64>,
-    marks: Vec<usize>,
-    labels: Option<Vec<usize>>,
-    options: FigureOptions,
     point_radius: Option<f64>,
-    path: Option<PathBuf>,
+    picture: Picture<'_>,
 ) -> PyResult<Py<PyAny>> {
+    let Picture(values, marks, labels, figure, path) = picture;
+    let prepare =
+        || -> Result<_, Failure> { Ok((arrays::values(&values, "values")?, figure.options()?)) };
+    let (values, options) = prepare().map_err(|e| e.into_pyerr(py))?;
     let out = run(py, move |_| {
         let n = mesh.n_vertices();
         if let Some(&m) = marks.iter().find(|&&m| m >= n) {
@@ -619,36 +635,14 @@ pub(crate) fn draw(
 
 /// Draws a field on `(V, F)` (see [`draw`]).
 #[pyfunction]
-#[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v, f, values, marks, labels, figure, path))]
 fn render(
     py: Python<'_>,
     v: PyReadonlyArray2<'_, f64>,
     f: PyReadonlyArray2<'_, i64>,
-    values: PyReadonlyArray1<'_, f64>,
-    marks: Vec<usize>,
-    labels: Option<Vec<usize>>,
-    figure: FigureArgs,
-    path: Option<PathBuf>,
+    picture: Picture<'_>,
 ) -> PyResult<Py<PyAny>> {
-    let prepare = || -> Result<(Mesh, Vec<f64>, FigureOptions), Failure> {
-        Ok((
-            mesh_from(&v, &f)?,
-            arrays::values(&values, "values")?,
-            figure.options()?,
-        ))
-    };
-    let (mesh, values, options) = prepare().map_err(|e| e.into_pyerr(py))?;
-    draw(
-        py,
-        Arc::new(mesh),
-        values,
-        marks,
-        labels,
-        options,
-        None,
-        path,
-    )
+    let mesh = mesh_from(&v, &f).map_err(|e| e.into_pyerr(py))?;
+    draw(py, Arc::new(mesh), None, picture)
 }
 
 /// Every default as a dict: the library's ([`spectral_mesh::defaults::to_json`]: every

@@ -344,7 +344,7 @@ def test_tol_means_one_thing_everywhere(sphere):
     w0 = sm.eigsh(S, 6, B, sigma=-0.01, tol=0)[0]
     assert np.array_equal(w0, sm.eigsh(S, 6, B, sigma=-0.01, tol=sm.DEFAULTS["analysis"]["tol"])[0])
     a0 = sm.Analysis(V, F, tol=0)
-    assert a0._a.options()["tol"] == sm.DEFAULTS["analysis"]["tol"]
+    assert a0._native.options()["tol"] == sm.DEFAULTS["analysis"]["tol"]
     for call in (
         lambda: sm.eigenbasis(V, F, 6, tol=-1.0),
         lambda: sm.eigsh(S, 6, B, sigma=-0.01, tol=-1.0),

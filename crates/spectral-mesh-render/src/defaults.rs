@@ -17,7 +17,7 @@ pub fn to_json() -> Value {
         "levels": fig.levels,
         "colormap": fig.colormap.name(),
         "view": view_name(fig.view),
-        "size": fig.size,
+        "size": fig.canvas.size,
         "transparent": fig.transparent,
         "critical_points": fig.critical_points,
         "colorbar": fig.colorbar,

@@ -29,16 +29,8 @@ pub struct FigureOptions {
     pub colormap: Colormap,
     /// View. Default iso.
     pub view: View,
-    /// Picture width in pixels (and height unless `height` is given). Default the
-    /// library's `spectral_mesh::defaults::PICTURE_SIZE`.
-    pub size: u32,
-    /// Picture height in pixels (default: `size`, a square).
-    pub height: Option<u32>,
-    /// Picture pixels per screen pixel: markers, lines and text are drawn this many
-    /// times their size on the page (default: `min(width, height) / 800`).
-    pub scale: Option<f64>,
-    /// Print resolution written into the PNG (its `pHYs` chunk), dots per inch.
-    pub dpi: Option<u32>,
+    /// The picture's pixels: size, scale and print resolution.
+    pub canvas: Canvas,
     /// Draw the legend. Default true.
     pub legend: bool,
     /// Transparent background instead of white.
@@ -55,14 +47,53 @@ impl Default for FigureOptions {
             levels: spectral_mesh::defaults::LEVELS,
             colormap: Colormap::Hue,
             view: View::Iso,
-            size: spectral_mesh::defaults::PICTURE_SIZE,
-            height: None,
-            scale: None,
-            dpi: None,
+            canvas: Canvas::default(),
             legend: true,
             transparent: false,
             critical_points: true,
             colorbar: true,
+        }
+    }
+}
+
+/// The pixels of a picture: its width and height, how many picture pixels stand for one
+/// pixel of the page (the size of markers, lines and text), and the print resolution.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Canvas {
+    /// Picture width in pixels (and height unless `height` is given). Default the
+    /// library's `spectral_mesh::defaults::PICTURE_SIZE`.
+    pub size: u32,
+    /// Picture height in pixels (default: `size`, a square).
+    pub height: Option<u32>,
+    /// Picture pixels per screen pixel: markers, lines and text are drawn this many
+    /// times their size on the page (default: `min(width, height) / 800`).
+    pub scale: Option<f64>,
+    /// Print resolution written into the PNG (its `pHYs` chunk), dots per inch.
+    pub dpi: Option<u32>,
+}
+
+impl Default for Canvas {
+    fn default() -> Self {
+        Self {
+            size: spectral_mesh::defaults::PICTURE_SIZE,
+            height: None,
+            scale: None,
+            dpi: None,
+        }
+    }
+}
+
+impl Canvas {
+    /// Picture height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height.unwrap_or(self.size)
+    }
+
+    /// Picture pixels per screen pixel ([`Canvas::scale`], resolved).
+    pub fn pixel_scale(&self) -> f64 {
+        match self.scale {
+            Some(s) if s.is_finite() && s > 0.0 => s,
+            _ => (f64::from(self.size.min(self.height())) / 800.0).max(0.25),
         }
     }
 }
@@ -122,7 +153,7 @@ impl FigureOptions {
             })?;
         }
         if let Some(s) = f.size {
-            o.size = s;
+            o.canvas.size = s;
         }
         if let Some(t) = f.transparent {
             o.transparent = t;
@@ -133,8 +164,8 @@ impl FigureOptions {
         if let Some(c) = f.colorbar {
             o.colorbar = c;
         }
-        o.height = f.height;
-        o.dpi = f.dpi;
+        o.canvas.height = f.height;
+        o.canvas.dpi = f.dpi;
         if let Some(sc) = f.scale {
             if !(sc.is_finite() && sc > 0.0 && sc <= 16.0) {
                 return Err(FigureError::Option {
@@ -142,25 +173,12 @@ impl FigureOptions {
                     message: format!("{sc}: must be in (0, 16]"),
                 });
             }
-            o.scale = Some(sc);
+            o.canvas.scale = Some(sc);
         }
         if let Some(l) = f.legend {
             o.legend = l;
         }
         Ok(o)
-    }
-
-    /// Picture height in pixels.
-    pub fn height(&self) -> u32 {
-        self.height.unwrap_or(self.size)
-    }
-
-    /// Picture pixels per screen pixel ([`FigureOptions::scale`], resolved).
-    pub fn pixel_scale(&self) -> f64 {
-        match self.scale {
-            Some(s) if s.is_finite() && s > 0.0 => s,
-            _ => (f64::from(self.size.min(self.height())) / 800.0).max(0.25),
-        }
     }
 
     /// Every key written out, for saved experiment files.
@@ -169,13 +187,13 @@ impl FigureOptions {
             levels: Some(self.levels),
             colormap: Some(self.colormap.to_string()),
             view: Some(view_name(self.view)),
-            size: Some(self.size),
+            size: Some(self.canvas.size),
             transparent: Some(self.transparent),
             critical_points: Some(self.critical_points),
             colorbar: Some(self.colorbar),
-            height: self.height,
-            scale: self.scale,
-            dpi: self.dpi,
+            height: self.canvas.height,
+            scale: self.canvas.scale,
+            dpi: self.canvas.dpi,
             legend: Some(self.legend),
         }
     }
@@ -443,8 +461,8 @@ impl<'a> Figure<'a> {
         scene.colorbar = None;
         let fitted = !matches!(self.options.view, View::Camera(_));
         let opts = RenderOptions {
-            width: self.options.size,
-            height: self.options.height(),
+            width: self.options.canvas.size,
+            height: self.options.canvas.height(),
             view: self.options.view,
             background: if self.options.transparent {
                 Background::Transparent
@@ -464,7 +482,7 @@ impl<'a> Figure<'a> {
     pub fn png(&self) -> Result<Vec<u8>, FigureError> {
         let img = self.image()?;
         let mut buf = Vec::new();
-        img.write_png_dpi(&mut buf, self.options.dpi)?;
+        img.write_png_dpi(&mut buf, self.options.canvas.dpi)?;
         Ok(buf)
     }
 
@@ -614,10 +632,12 @@ mod tests {
                 azimuth_deg: 10.5,
                 elevation_deg: -3.0,
             },
-            size: 321,
-            height: Some(200),
-            scale: Some(2.0),
-            dpi: Some(300),
+            canvas: Canvas {
+                size: 321,
+                height: Some(200),
+                scale: Some(2.0),
+                dpi: Some(300),
+            },
             legend: false,
             transparent: true,
             critical_points: false,
@@ -639,7 +659,10 @@ mod tests {
             AnalysisOptions::default(),
         );
         let small = FigureOptions {
-            size: 64,
+            canvas: Canvas {
+                size: 64,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let f = an.field(&FieldRequest::default_with_k(20)).unwrap();

@@ -25,7 +25,7 @@ pub mod thumbnail;
 pub mod vrml;
 
 pub use colormap::Colormap;
-pub use figure::{Figure, FigureError, FigureOptions};
+pub use figure::{Canvas, Figure, FigureError, FigureOptions};
 pub use raster::{
     Background, Camera, CameraSpec, ColorBar, Marker, MarkerKind, MarkerShape, Projection,
     RenderOptions, Scene, View, colour_range, field_colors, field_range, render, render_scene,

@@ -4,7 +4,7 @@
 use spectral_mesh::Mesh;
 use spectral_mesh::batch::Thumbnailer;
 
-use crate::figure::{Figure, FigureOptions};
+use crate::figure::{Canvas, Figure, FigureOptions};
 
 /// Draws batch thumbnails with [`Figure`]: the field in the default colour map with 10
 /// level sets, no critical-point markers and no colour bar, `size x size` pixels.
@@ -15,7 +15,10 @@ impl Thumbnails {
     /// The figure options of a thumbnail of `size x size` pixels.
     pub fn options(size: u32) -> FigureOptions {
         FigureOptions {
-            size,
+            canvas: Canvas {
+                size,
+                ..Canvas::default()
+            },
             levels: 10,
             critical_points: false,
             colorbar: false,

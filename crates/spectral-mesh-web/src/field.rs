@@ -35,51 +35,24 @@ pub struct FieldHeader {
     /// The request with every default resolved (source or anchor filled in): sending it
     /// back gives the same field.
     pub request: FieldRequest,
-    /// The resolved source or anchor, if the kind has one.
-    pub source: Option<usize>,
-    /// Vertices to mark: source or anchor, constrained vertices, segment maxima.
-    pub marks: Vec<usize>,
-    /// Resolved constraints of a harmonic map (empty otherwise).
-    pub constraints: Vec<Constraint>,
-    /// Components a harmonic map left unconstrained (constant, left out of `critical`).
-    pub floating: Vec<FloatingComponent>,
-    /// Discretization.
-    pub laplacian: &'static str,
-    /// True when the input is a point cloud (its operators are the point-cloud Laplacian,
-    /// its level sets and critical points those of the triangle union that Laplacian was
-    /// built on).
-    pub point_cloud: bool,
-    /// A point cloud's mean neighbour spacing ([`Analysis::point_spacing`], in the
-    /// input's units), which the page sizes its splats from; `null` for a mesh.
-    pub point_spacing: Option<f64>,
-    /// True when the field is that of the shape scaled to unit area.
-    pub normalized: bool,
-    /// Eigenpairs used (`null` when no basis was used).
-    pub k: Option<usize>,
-    /// Eigenpairs the basis held (the first `k` were used).
-    pub basis_k: Option<usize>,
-    /// The largest eigenvalue used (`lambda_{k-1}`, of the normalised operators when
-    /// `normalized`).
-    pub lambda_max: Option<f64>,
-    /// True when the values are patch labels (segmentation): no level sets, no critical
-    /// points.
-    pub categorical: bool,
-    /// Smallest finite value.
-    pub min: f64,
-    /// Largest finite value.
-    pub max: f64,
-    /// Components a geodesic distance cannot reach (its values there are `+inf`: no
-    /// level sets, no critical points); empty otherwise.
-    pub unreachable: Vec<usize>,
-    /// The library's sentence about them ([`Field::unreachable_message`]), `null` when
-    /// every value is finite.
-    pub unreachable_message: Option<String>,
-    /// The iso-values of the level sets whose segments follow, ascending (those of the
-    /// figure's description: [`spectral_mesh_render::description`], over its colour
-    /// range).
-    pub levels: Vec<f64>,
-    /// Segments per level set, in the order of `levels`.
-    pub level_counts: Vec<u32>,
+    /// The vertices the request resolved to.
+    #[serde(flatten)]
+    pub vertices: ResolvedVertices,
+    /// The analysis the field was computed on.
+    #[serde(flatten)]
+    pub analysis: AnalysisHeader,
+    /// The eigenpairs the field used.
+    #[serde(flatten)]
+    pub basis: BasisUse,
+    /// The range of the field's values.
+    #[serde(flatten)]
+    pub values: ValueRange,
+    /// The components without a finite value.
+    #[serde(flatten)]
+    pub unreachable: Unreachable,
+    /// The level sets whose segments follow the values.
+    #[serde(flatten)]
+    pub level_sets: LevelSets,
     /// Critical points with the Euler check (`null` for categorical fields). A field
     /// constant within the library's relative tolerance has `flat = true` and none.
     pub critical: Option<CriticalReport>,
@@ -93,6 +66,157 @@ pub struct FieldHeader {
     pub figure: FigureDescription,
     /// Server time.
     pub timing_ms: Timing,
+}
+
+/// The vertices a field request resolved to (part of [`FieldHeader`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct ResolvedVertices {
+    /// The resolved source or anchor, if the kind has one.
+    pub source: Option<usize>,
+    /// Vertices to mark: source or anchor, constrained vertices, segment maxima.
+    pub marks: Vec<usize>,
+    /// Resolved constraints of a harmonic map (empty otherwise).
+    pub constraints: Vec<Constraint>,
+    /// Components a harmonic map left unconstrained (constant, left out of `critical`).
+    pub floating: Vec<FloatingComponent>,
+}
+
+impl ResolvedVertices {
+    /// The vertices of `field`'s resolved request.
+    fn of(field: &Field) -> Self {
+        Self {
+            source: field.request.source(),
+            marks: field.marks.clone(),
+            constraints: field.constraints.clone(),
+            floating: field.floating.clone(),
+        }
+    }
+}
+
+/// The analysis a field was computed on (part of [`FieldHeader`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct AnalysisHeader {
+    /// Discretization.
+    pub laplacian: &'static str,
+    /// True when the input is a point cloud (its operators are the point-cloud Laplacian,
+    /// its level sets and critical points those of the triangle union that Laplacian was
+    /// built on).
+    pub point_cloud: bool,
+    /// A point cloud's mean neighbour spacing ([`Analysis::point_spacing`], in the
+    /// input's units), which the page sizes its splats from; `null` for a mesh.
+    pub point_spacing: Option<f64>,
+    /// True when the field is that of the shape scaled to unit area.
+    pub normalized: bool,
+}
+
+impl AnalysisHeader {
+    /// What a header says of `analysis` and of `field`'s scale.
+    fn of(analysis: &Analysis, field: &Field) -> Self {
+        Self {
+            laplacian: analysis.options().laplacian.name(),
+            point_cloud: analysis.is_point_cloud(),
+            point_spacing: analysis.point_spacing(),
+            normalized: field.normalized,
+        }
+    }
+}
+
+/// The eigenpairs a field used (part of [`FieldHeader`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct BasisUse {
+    /// Eigenpairs used (`null` when no basis was used).
+    pub k: Option<usize>,
+    /// Eigenpairs the basis held (the first `k` were used).
+    pub basis_k: Option<usize>,
+    /// The largest eigenvalue used (`lambda_{k-1}`, of the normalised operators when
+    /// `normalized`).
+    pub lambda_max: Option<f64>,
+}
+
+impl BasisUse {
+    /// The pairs `field` used of `analysis`' held basis.
+    fn of(analysis: &Analysis, field: &Field) -> Self {
+        let lambda_max = match (field.k, analysis.held_basis()) {
+            (Some(k), Some(b)) if k >= 1 && k <= b.k() => Some(b.values[k - 1]),
+            _ => None,
+        };
+        Self {
+            k: field.k,
+            basis_k: field.basis_k,
+            lambda_max,
+        }
+    }
+}
+
+/// The range of a field's values (part of [`FieldHeader`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct ValueRange {
+    /// True when the values are patch labels (segmentation): no level sets, no critical
+    /// points.
+    pub categorical: bool,
+    /// Smallest finite value.
+    pub min: f64,
+    /// Largest finite value.
+    pub max: f64,
+}
+
+impl ValueRange {
+    /// The range of `field`'s finite values (`(0, 0)` when none is).
+    fn of(field: &Field) -> Self {
+        let (min, max) = field.finite_range().unwrap_or((0.0, 0.0));
+        let categorical = field.labels.is_some();
+        Self {
+            categorical,
+            min,
+            max,
+        }
+    }
+}
+
+/// The components where a field has no finite value (part of [`FieldHeader`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct Unreachable {
+    /// Components a geodesic distance cannot reach (its values there are `+inf`: no
+    /// level sets, no critical points); empty otherwise.
+    pub unreachable: Vec<usize>,
+    /// The library's sentence about them ([`Field::unreachable_message`]), `null` when
+    /// every value is finite.
+    pub unreachable_message: Option<String>,
+}
+
+/// The level sets of a field reply (part of [`FieldHeader`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct LevelSets {
+    /// The iso-values of the level sets whose segments follow, ascending (those of the
+    /// figure's description: [`spectral_mesh_render::description`], over its colour
+    /// range).
+    pub levels: Vec<f64>,
+    /// Segments per level set, in the order of `levels`.
+    pub level_counts: Vec<u32>,
+}
+
+impl LevelSets {
+    /// The level sets of `values` on `analysis`' mesh at `levels`, with their segments'
+    /// end points (`x1 y1 z1 x2 y2 z2` each, level after level).
+    fn extract(analysis: &Analysis, values: &[f64], levels: Vec<f64>) -> (Self, Vec<f32>) {
+        let sets = level_set_segments(analysis.mesh(), values, &levels);
+        let total: usize = sets.iter().map(Vec::len).sum();
+        let mut segments = Vec::with_capacity(6 * total);
+        let mut level_counts = Vec::with_capacity(sets.len());
+        for set in &sets {
+            level_counts.push(set.len() as u32);
+            for seg in set {
+                for p in seg {
+                    segments.extend(p.iter().map(|&x| x as f32));
+                }
+            }
+        }
+        let sets = Self {
+            levels,
+            level_counts,
+        };
+        (sets, segments)
+    }
 }
 
 /// A field with everything the page draws.
@@ -120,9 +244,8 @@ pub fn field_reply(
         return Ok(None);
     };
     let t_field = start.elapsed();
-    let (min, max) = field.finite_range().unwrap_or((0.0, 0.0));
-    let categorical = field.labels.is_some();
-    let critical = if categorical {
+    let values = ValueRange::of(&field);
+    let critical = if values.categorical {
         None
     } else {
         Some(analysis.field_critical_points(&field)?)
@@ -135,46 +258,22 @@ pub fn field_reply(
     } else {
         Vec::new()
     };
-    let sets = level_set_segments(analysis.mesh(), &field.values, &isos);
-    let total: usize = sets.iter().map(Vec::len).sum();
-    let mut segments = Vec::with_capacity(6 * total);
-    let mut level_counts = Vec::with_capacity(sets.len());
-    for set in &sets {
-        level_counts.push(set.len() as u32);
-        for seg in set {
-            for p in seg {
-                segments.extend(p.iter().map(|&x| x as f32));
-            }
-        }
-    }
+    let (level_sets, segments) = LevelSets::extract(analysis, &field.values, isos);
     let t_levels = start.elapsed();
-    let lambda_max = match (field.k, analysis.held_basis()) {
-        (Some(k), Some(b)) if k >= 1 && k <= b.k() => Some(b.values[k - 1]),
-        _ => None,
-    };
     let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
     let header = FieldHeader {
         n: field.values.len(),
         kind: field.request.kind(),
         request: field.request.clone(),
-        source: field.request.source(),
-        marks: field.marks.clone(),
-        constraints: field.constraints.clone(),
-        floating: field.floating.clone(),
-        laplacian: analysis.options().laplacian.name(),
-        point_cloud: analysis.is_point_cloud(),
-        point_spacing: analysis.point_spacing(),
-        normalized: field.normalized,
-        k: field.k,
-        basis_k: field.basis_k,
-        lambda_max,
-        categorical,
-        min,
-        max,
-        unreachable: field.unreachable.clone(),
-        unreachable_message: field.unreachable_message(),
-        levels: isos,
-        level_counts,
+        vertices: ResolvedVertices::of(&field),
+        analysis: AnalysisHeader::of(analysis, &field),
+        basis: BasisUse::of(analysis, &field),
+        values,
+        unreachable: Unreachable {
+            unreachable: field.unreachable.clone(),
+            unreachable_message: field.unreachable_message(),
+        },
+        level_sets,
         critical,
         truncation: analysis.truncation_hint(&field),
         figure: description,

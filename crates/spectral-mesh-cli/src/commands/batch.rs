@@ -66,21 +66,8 @@ pub struct Args {
     /// Save the eigenvalues (and descriptors) only, not the eigenvectors and mass.
     #[arg(long)]
     pub eigenvalues_only: bool,
-    /// Heat kernel signature: auto:N (N times from each spectrum) or a list t1,t2,...
-    #[arg(long, value_name = "TIMES")]
-    pub hks: Option<Schedule>,
-    /// Wave kernel signature: auto:N or a list of log-energies e1,e2,...
-    #[arg(long, value_name = "ENERGIES")]
-    pub wks: Option<Schedule>,
-    /// WKS bandwidth (default: from auto:N, or 0.5 with a list).
-    #[arg(long)]
-    pub wks_sigma: Option<f64>,
-    /// Auto-diffusion function: auto:N or a list of times.
-    #[arg(long, value_name = "TIMES")]
-    pub adf: Option<Schedule>,
-    /// Divide HKS by the heat trace and WKS by its normalisation sum.
-    #[arg(long)]
-    pub scaled: bool,
+    #[command(flatten)]
+    pub descriptors: DescriptorArgs,
     /// A PNG thumbnail of this many pixels a side per mesh (the first non-constant
     /// eigenvector).
     #[arg(long, value_name = "PIXELS")]
@@ -114,6 +101,26 @@ pub struct Args {
     pub worker: bool,
 }
 
+/// The point descriptors each shape's result holds (none unless asked for).
+#[derive(Debug, clap::Args)]
+pub struct DescriptorArgs {
+    /// Heat kernel signature: auto:N (N times from each spectrum) or a list t1,t2,...
+    #[arg(long, value_name = "TIMES")]
+    pub hks: Option<Schedule>,
+    /// Wave kernel signature: auto:N or a list of log-energies e1,e2,...
+    #[arg(long, value_name = "ENERGIES")]
+    pub wks: Option<Schedule>,
+    /// WKS bandwidth (default: from auto:N, or 0.5 with a list).
+    #[arg(long)]
+    pub wks_sigma: Option<f64>,
+    /// Auto-diffusion function: auto:N or a list of times.
+    #[arg(long, value_name = "TIMES")]
+    pub adf: Option<Schedule>,
+    /// Divide HKS by the heat trace and WKS by its normalisation sum.
+    #[arg(long)]
+    pub scaled: bool,
+}
+
 /// What a worker is told once, on its first stdin line.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct WorkerConfig {
@@ -138,11 +145,11 @@ impl Args {
             tolerance: self.tolerance,
             normalize: !self.no_normalize,
             basis: !self.eigenvalues_only,
-            hks: self.hks.clone(),
-            wks: self.wks.clone(),
-            wks_sigma: self.wks_sigma,
-            adf: self.adf.clone(),
-            scaled: self.scaled,
+            hks: self.descriptors.hks.clone(),
+            wks: self.descriptors.wks.clone(),
+            wks_sigma: self.descriptors.wks_sigma,
+            adf: self.descriptors.adf.clone(),
+            scaled: self.descriptors.scaled,
             thumbnail: self.thumbnail,
             point_cloud: self.cloud.params()?,
             geodesic: self.geodesic,

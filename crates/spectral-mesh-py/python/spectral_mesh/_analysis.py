@@ -14,6 +14,7 @@ import numpy.typing as npt
 from . import _arrays, _native
 from ._arrays import FloatArray, IntArray
 from ._errors import InternalError
+from ._forward import NativeAttribute
 from ._api import _render_args
 if TYPE_CHECKING:
     from ._arrays import CsrMatrix
@@ -133,14 +134,6 @@ def _function_name(w: Callable[..., Any]) -> str:
     return f"{name} (a Python function)"
 
 
-def _solver_options(
-    tol: Any, seed: Any, dirichlet: Sequence[int] | None, method: Any
-) -> tuple[float, int, list[int] | None, str]:
-    """The eigensolver keywords as the native constructors take them."""
-    d = None if dirichlet is None else [_arrays.count(i, "dirichlet vertex") for i in dirichlet]
-    return _arrays.real(tol, "tol"), _arrays.count(seed, "seed"), d, str(method)
-
-
 class Analysis:
     """One mesh or point cloud analysed: its operators ``(S, B)``, the factorization, an eigenbasis that
     grows with ``k``, and every field of the paper computed from them.
@@ -195,13 +188,13 @@ class Analysis:
             F,
             str(kind),
             bool(normalize),
-            *_solver_options(tol, seed, dirichlet, method),
+            _arrays.solver(tol, seed, dirichlet, method),
         )
         # Own read-only copies: the analysis does not change when the caller's arrays do.
         self._setup(native, V.copy(), F.copy())
 
     def _setup(self, native: _native.Analysis, V: FloatArray, F: IntArray) -> None:
-        self._a = native
+        self._native = native
         self._V = V
         self._F = F
         self._V.setflags(write=False)
@@ -262,7 +255,7 @@ class Analysis:
             _arrays.count(n_neighbors, "n_neighbors"),
             _arrays.real(mollify_factor, "mollify_factor"),
             bool(normalize),
-            *_solver_options(tol, seed, dirichlet, method),
+            _arrays.solver(tol, seed, dirichlet, method),
         )
         return cls._of_native(native, P.copy())
 
@@ -301,7 +294,7 @@ class Analysis:
             mf,
             bool(use_normals),
             bool(normalize),
-            *_solver_options(tol, seed, dirichlet, method),
+            _arrays.solver(tol, seed, dirichlet, method),
         )
         return cls._of_native(native)
 
@@ -327,60 +320,45 @@ class Analysis:
         segmentations and harmonic maps)."""
         return self._F
 
-    @property
-    def n(self) -> int:
-        """Number of vertices (or points)."""
-        return self._a.n
+    n: NativeAttribute[int] = NativeAttribute("Number of vertices (or points).")
 
-    @property
-    def is_point_cloud(self) -> bool:
+    is_point_cloud: NativeAttribute[bool] = NativeAttribute(
         """True for the analysis of a point cloud (:meth:`from_points`, :meth:`from_file`)."""
-        return self._a.is_point_cloud
+    )
 
     @property
     def point_cloud_params(self) -> dict[str, Any] | None:
         """The point-cloud Laplacian's parameters (``neighbors``, ``mollify_factor``,
         ``delaunay_tolerance``, ``normals``, ``union``: the library's names, as in
         experiment files' ``[point_cloud]``), ``None`` for a mesh."""
-        params: dict[str, Any] | None = self._a.options()["point_cloud"]
+        params: dict[str, Any] | None = self._native.options()["point_cloud"]
         return params
 
-    @property
-    def point_spacing(self) -> float | None:
+    point_spacing: NativeAttribute[float | None] = NativeAttribute(
         """The mean spacing of a point cloud's points (the mean edge length of
         :attr:`F`; pictures draw discs of a size from it), ``None`` for a mesh."""
-        return self._a.point_spacing
+    )
 
-    @property
-    def kind(self) -> str:
-        """The discretization."""
-        return self._a.kind
+    kind: NativeAttribute[str] = NativeAttribute("The discretization.")
 
-    @property
-    def normalized(self) -> bool:
-        """True when the shape is analysed at unit total area."""
-        return self._a.normalized
+    normalized: NativeAttribute[bool] = NativeAttribute("True when the shape is analysed at unit total area.")
 
-    @property
-    def area(self) -> float:
+    area: NativeAttribute[float] = NativeAttribute(
         """``A = 1^T B 1`` of the mass as assembled: the surface area for the area-based
-        masses (``n`` for ``cot`` and ``uniform``). Normalization divides ``B`` by it."""
-        return self._a.input_total_mass
+        masses (``n`` for ``cot`` and ``uniform``). Normalization divides ``B`` by it.""", name="input_total_mass"
+    )
 
-    @property
-    def held_k(self) -> int:
+    held_k: NativeAttribute[int] = NativeAttribute(
         """The number of eigenpairs held (0 before the first spectral request)."""
-        return self._a.held_k
+    )
 
-    @property
-    def factorizations(self) -> int:
+    factorizations: NativeAttribute[int] = NativeAttribute(
         """How many times ``S - sigma B`` was factored for eigenbases (a counter)."""
-        return self._a.factorizations
+    )
 
-    @property
-    def default_source(self) -> int:
+    default_source: NativeAttribute[int] = NativeAttribute(
         """The default source and anchor: the vertex of largest x (lowest index on ties)."""
-        return self._a.default_source
+    )
 
     @property
     def last_info(self) -> dict[str, Any]:
@@ -389,14 +367,14 @@ class Analysis:
         return self._info
 
     def __repr__(self) -> str:
-        return self._a.__repr__()
+        return self._native.__repr__()
 
     # ------------------------------------------------------------------ operators, basis
 
     def operators(self) -> tuple[CsrMatrix, CsrMatrix]:
         """``(S, B)`` in use, ``scipy.sparse.csr_matrix`` (``B / area`` when normalized);
         conventions as :func:`spectral_mesh.laplacian`."""
-        s, b = self._a.operators()
+        s, b = self._native.operators()
         return _arrays.csr_from_parts(s, self.n), _arrays.csr_from_parts(b, self.n)
 
     def basis(
@@ -406,7 +384,7 @@ class Analysis:
         use (copies): ascending, B-orthonormal, signs as :func:`spectral_mesh.eigenbasis`.
         Computed, or grown, when fewer than ``k`` are held; ``progress`` as in
         :func:`spectral_mesh.eigenbasis`."""
-        return self._a.basis(self._k(k), progress)
+        return self._native.basis(self._k(k), progress)
 
     def eigenvalues(self, k: int = K) -> FloatArray:
         """The first ``k`` eigenvalues ``(k,)``."""
@@ -414,24 +392,24 @@ class Analysis:
 
     def residuals(self) -> FloatArray:
         """Relative residuals of the held pairs (``(held_k,)``)."""
-        return self._a.residuals()
+        return self._native.residuals()
 
     def set_basis(self, evals: npt.ArrayLike, evecs: npt.ArrayLike) -> None:
         """Hold a basis computed elsewhere (LaPy, SciPy, a file): ``evals`` ``(k,)``
         ascending and ``evecs`` ``(n, k)`` orthonormal for this analysis' mass (remember
         ``normalize``: eigenvalues of the raw mesh times the area, vectors times
         ``sqrt(area)``). Fields then use it."""
-        self._a.set_basis(_arrays.vector(evals, "evals"), _arrays.columns_t(evecs, "evecs"))
+        self._native.set_basis(_arrays.vector(evals, "evals"), _arrays.columns_t(evecs, "evecs"))
 
     def save_basis(self, path: str | os.PathLike[str]) -> None:
         """Save the held basis as a ``.npz`` archive (see :func:`spectral_mesh.save_basis`)
         with the mesh's hash and the solver parameters."""
-        self._a.save_basis(os.fspath(path))
+        self._native.save_basis(os.fspath(path))
 
     def load_basis(self, path: str | os.PathLike[str]) -> int:
         """Hold the basis of an archive saved for this mesh, discretization and
         normalization (refused with ``ValueError`` otherwise). Returns its ``k``."""
-        return self._a.load_basis(os.fspath(path))
+        return self._native.load_basis(os.fspath(path))
 
     # ------------------------------------------------------------------ fields
 
@@ -478,7 +456,7 @@ class Analysis:
         for key, v in params.items():
             if v is not None:
                 req[key] = _arrays.plain(v, key)
-        vals, labels, info = self._a.field(req, values)
+        vals, labels, info = self._native.field(req, values)
         info.pop("values", None)
         info.pop("labels", None)
         self._info = info
@@ -497,7 +475,7 @@ class Analysis:
         weigh (the zero ones left out by the library's rule), and its name. Which pairs,
         the checks (strictly positive, finite) and every use of the weights are the
         library's: only the function itself runs in Python."""
-        _used, s = self._a.filter_eigenvalues(k)
+        _used, s = self._native.filter_eigenvalues(k)
         values = np.asarray(w(s.copy()), dtype=np.float64)
         if values.shape != s.shape:
             try:
@@ -578,8 +556,7 @@ class Analysis:
                 srcs = [_arrays.count(source, "source")]
             else:
                 srcs = [_arrays.count(x, "source") for x in source]
-            ws, name = self._function_weights(distance, k)
-            d = self._a.distances_weighted(srcs, ws, name, k)
+            d = self._native.distances_weighted(srcs, self._function_weights(distance, k), k)
             return d[:, 0] if one else d
         if source is not None and not isinstance(source, (int, np.integer)):
             sources = [_arrays.count(s, "source") for s in source]
@@ -591,7 +568,7 @@ class Analysis:
                     if sources
                     else np.zeros((self.n, 0))
                 )
-            return self._a.distances_many(sources, str(distance), k)
+            return self._native.distances_many(sources, str(distance), k)
         return self._values("distance", source=source, distance=distance, k=k)
 
     def spectral_function(
@@ -604,8 +581,7 @@ class Analysis:
         of a filter (see :meth:`distance` for filters, text or a Python function): ``(n,)``."""
         k = self._k(k)
         if callable(filter):
-            ws, name = self._function_weights(filter, k)
-            return self._a.spectral_function_weighted(ws, name, k)
+            return self._native.spectral_function_weighted(self._function_weights(filter, k), k)
         return self._values("spectral-function", filter=filter, k=k)
 
     def green(
@@ -621,8 +597,7 @@ class Analysis:
         k = self._k(k)
         if callable(filter):
             s = self.default_source if source is None else _arrays.count(source, "source")
-            ws, name = self._function_weights(filter, k)
-            return self._a.green_weighted(s, ws, name, k)
+            return self._native.green_weighted(s, self._function_weights(filter, k), k)
         return self._values("green", source=source, filter=filter, k=k)
 
     def hks(
@@ -640,12 +615,12 @@ class Analysis:
         if np.ndim(t) == 0:
             return self._values("hks", t=t, scaled=bool(scaled), k=k)
         times = [_arrays.real(x, "t") for x in np.asarray(t).ravel()]
-        return self._a.hks_many(times, bool(scaled), k)
+        return self._native.hks_many(times, bool(scaled), k)
 
     def hks_times(self, n_times: int, *, k: int = _R["hks"]["k"]) -> FloatArray:
         """pyFM's automatic HKS times: ``n_times`` values geometrically spaced from
         ``4 ln 10 / lambda_max`` to ``4 ln 10 / lambda_1`` (the first non-zero)."""
-        return np.asarray(self._a.hks_auto_times(_arrays.count(n_times, "n_times", 1), self._k(k)))
+        return np.asarray(self._native.hks_auto_times(_arrays.count(n_times, "n_times", 1), self._k(k)))
 
     def auto_hks(
         self, n_times: int, *, scaled: bool = _R["hks"]["scaled"], k: int = _R["hks"]["k"]
@@ -655,7 +630,7 @@ class Analysis:
         :meth:`hks` and the command line); pyFM's ``auto_HKS`` scales by default: pass
         ``scaled=True`` for its numbers."""
         times = self.hks_times(n_times, k=k)
-        return self._a.hks_many([float(x) for x in times], bool(scaled), self._k(k))
+        return self._native.hks_many([float(x) for x in times], bool(scaled), self._k(k))
 
     def wks(
         self,
@@ -673,13 +648,13 @@ class Analysis:
         if np.ndim(energy) == 0:
             return self._values("wks", energy=energy, sigma=sigma, scaled=bool(scaled), k=k)
         es = [_arrays.real(x, "energy") for x in np.asarray(energy).ravel()]
-        return self._a.wks_many(es, _arrays.real(sigma, "sigma"), bool(scaled), k)
+        return self._native.wks_many(es, _arrays.real(sigma, "sigma"), bool(scaled), k)
 
     def wks_energies(self, n_energies: int, *, k: int = _R["wks"]["k"]) -> tuple[FloatArray, float]:
         """pyFM's automatic WKS energies and bandwidth: ``sigma = 7 (e_max - e_min) / n``,
         ``n`` energies evenly spaced from ``ln lambda_1 + 2 sigma`` to
         ``ln lambda_max - 2 sigma``. Returns ``(energies, sigma)``."""
-        e, s = self._a.wks_auto_energies(_arrays.count(n_energies, "n_energies", 1), self._k(k))
+        e, s = self._native.wks_auto_energies(_arrays.count(n_energies, "n_energies", 1), self._k(k))
         return np.asarray(e), s
 
     def auto_wks(
@@ -689,7 +664,7 @@ class Analysis:
         ``scaled`` defaults to the library's ``False`` as in :meth:`wks`; pass
         ``scaled=True`` for pyFM's default."""
         e, s = self.wks_energies(n_energies, k=k)
-        return self._a.wks_many([float(x) for x in e], float(s), bool(scaled), self._k(k))
+        return self._native.wks_many([float(x) for x in e], float(s), bool(scaled), self._k(k))
 
     def adf(self, t: float = _R["adf"]["t"], *, k: int = _R["adf"]["k"]) -> FloatArray:
         """The auto-diffusion function ``G(p, p)`` with the weight ``exp(-t s)``, zero
@@ -717,13 +692,13 @@ class Analysis:
         ``(n,)``. ``filter``: text or a Python function (see :meth:`distance`)."""
         k = self._k(k)
         if callable(filter):
-            ws, name = self._function_weights(filter, k)
+            weights = self._function_weights(filter, k)
             if component is None:
-                return self._a.embedding_weighted(ws, name, k)
+                return self._native.embedding_weighted(weights, k)
             c = _arrays.count(component, "component")
-            return self._a.embedding_component_weighted(ws, name, c, k)
+            return self._native.embedding_component_weighted(weights, c, k)
         if component is None:
-            return self._a.embedding_matrix(str(filter), k)
+            return self._native.embedding_matrix(str(filter), k)
         return self._values("embedding", filter=filter, component=component, k=k)
 
     def segmentation(
@@ -767,7 +742,7 @@ class Analysis:
 
     def critical_points(self, values: npt.ArrayLike) -> CriticalPoints:
         """The minima, maxima and saddles of a field ``(n,)``, with the Euler check."""
-        r = self._a.critical_points(_arrays.per_vertex(values, self.n))
+        r = self._native.critical_points(_arrays.per_vertex(values, self.n))
         p = r["points"]
         sad = np.asarray(p["saddles"], dtype=np.int64).reshape(-1, 2)
         ints = lambda x: np.asarray(x, dtype=np.int64)  # noqa: E731
@@ -796,9 +771,9 @@ class Analysis:
         :class:`LevelSet` holds its segments ``(s, 2, 3)``."""
         vals = _arrays.per_vertex(values, self.n)
         if np.ndim(levels) == 0:
-            sets = self._a.level_sets(vals, [], _arrays.count(levels, "levels"))
+            sets = self._native.level_sets(vals, [], _arrays.count(levels, "levels"))
         else:
-            sets = self._a.level_sets(
+            sets = self._native.level_sets(
                 vals, [_arrays.real(x, "level") for x in np.asarray(levels).ravel()]
             )
         return [LevelSet(v, seg.reshape(-1, 2, 3)) for v, seg in sets]
@@ -832,4 +807,4 @@ class Analysis:
         args = _render_args(values, self.n, marks, labels, levels, colormap, view, size,
                             transparent, critical_points, colorbar, path,
                             legend=legend, height=height, scale=scale, dpi=dpi)
-        return self._a.render(*args)
+        return self._native.render(args)

@@ -286,17 +286,13 @@ def eigenbasis(
         raise ValueError(
             f"k = {k} eigenpairs asked for, but the mesh has only {V.shape[0]} vertices"
         )
-    d = None if dirichlet is None else [_arrays.count(i, "dirichlet vertex") for i in dirichlet]
     evals, evecs, certificate = _native.eigenbasis(
         V,
         F,
         k,
         str(kind),
         bool(normalize),
-        _arrays.real(tol, "tol"),
-        _arrays.count(seed, "seed"),
-        d,
-        str(method),
+        _arrays.solver(tol, seed, dirichlet, method),
         progress,
         bool(certify),
         None if dtype is None else str(dtype),
@@ -562,13 +558,13 @@ def _marks(marks: int | Sequence[int] | None) -> list[int]:
 def _render_args(values: Any, n: int, marks: Any, labels: Any, levels: Any, colormap: Any,
                  view: Any, size: Any, transparent: Any, critical_points: Any,
                  colorbar: Any, path: Any, *, legend: Any = True, height: Any = None,
-                 scale: Any = None, dpi: Any = None) -> tuple[Any, ...]:
-    """The native render's arguments after the mesh (values, marks, labels, the picture
+                 scale: Any = None, dpi: Any = None) -> _native.Picture:
+    """The native render's argument after the mesh (values, marks, labels, the picture
     options as one dict, path), checked and converted: the one way of :func:`render` and
     :meth:`Analysis.render` (``n`` vertices)."""
     vals = _arrays.per_vertex(values, n)
     marks, labels = _marks(marks), _labels(labels, n)
-    figure = {
+    figure: _native.Figure = {
         "levels": _arrays.count(levels, "levels"),
         "colormap": str(colormap),
         "view": _view_text(view),
@@ -630,7 +626,7 @@ def render(
     args = _render_args(values, V.shape[0], marks, labels, levels, colormap, view, size,
                         transparent, critical_points, colorbar, path,
                         legend=legend, height=height, scale=scale, dpi=dpi)
-    return _native.render(V, F, *args)
+    return _native.render(V, F, args)
 
 
 def num_threads() -> int:

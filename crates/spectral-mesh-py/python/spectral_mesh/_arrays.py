@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from typing import TYPE_CHECKING, Any, TypeAlias
+from typing import TYPE_CHECKING, Any, Sequence, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
@@ -205,3 +205,12 @@ def csr_from_parts(parts: CscParts, n: int) -> CsrMatrix:
 
     data, indices, indptr = parts
     return sp.csr_matrix((data, indices, indptr), shape=(n, n))
+
+
+def solver(
+    tol: Any, seed: Any, dirichlet: Sequence[int] | None, method: Any
+) -> tuple[float, int, list[int] | None, str]:
+    """The eigensolver keywords as the native functions take them: one tuple
+    ``(tol, seed, dirichlet, method)``, each checked."""
+    d = None if dirichlet is None else [count(i, "dirichlet vertex") for i in dirichlet]
+    return real(tol, "tol"), count(seed, "seed"), d, str(method)

@@ -9,6 +9,7 @@ import numpy as np
 
 from . import _arrays, _native
 from ._defaults import KIND
+from ._forward import NativeAttribute
 
 
 def _sources(sources: Any) -> list[int]:
@@ -92,20 +93,11 @@ class GeodesicSolver:
         self._native = _native.GeodesicSolver.from_points(P, nr, nn, mf, gn, tf, convention)
         return self
 
-    @property
-    def n(self) -> int:
-        """The number of vertices (or points)."""
-        return self._native.n
+    n: NativeAttribute[int] = NativeAttribute("The number of vertices (or points).")
 
-    @property
-    def t(self) -> float:
-        """The time step ``t = m h^2``."""
-        return self._native.t
+    t: NativeAttribute[float] = NativeAttribute("The time step ``t = m h^2``.")
 
-    @property
-    def h(self) -> float:
-        """The mean edge length."""
-        return self._native.h
+    h: NativeAttribute[float] = NativeAttribute("The mean edge length.")
 
     def distance(self, sources: Any = (), face_points: Sequence | None = None) -> np.ndarray:
         """``(n,)`` distance to the nearest of the source vertices and face points

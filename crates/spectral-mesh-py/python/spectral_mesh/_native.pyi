@@ -19,6 +19,10 @@ from numpy.typing import NDArray
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 Csc = tuple[F64, I64, I64]
+# The eigensolver's keywords ``(tol, seed, dirichlet, method)`` (``_arrays.solver``).
+Solver = tuple[float, int, list[int] | None, str]
+# A Python weight function's values at ``filter_eigenvalues`` and its name (for messages).
+Weights = tuple[F64, str]
 # The picture options of both ``render``s, checked by the Python layer (``_render_args``).
 Figure = TypedDict(
     "Figure",
@@ -36,6 +40,8 @@ Figure = TypedDict(
         "dpi": int | None,
     },
 )
+# What both ``render``s draw after the mesh: ``(values, marks, labels, figure, path)``.
+Picture = tuple[F64, list[int], list[int] | None, Figure, str | PathLike[str] | None]
 
 __version__: str
 
@@ -65,10 +71,7 @@ def eigenbasis(
     k: int,
     kind: str,
     normalize: bool,
-    tol: float,
-    seed: int,
-    dirichlet: list[int] | None,
-    method: str,
+    solver: Solver,
     progress: Callable[[dict], object] | None = None,
     certify: bool = False,
     dtype: str | None = None,
@@ -101,15 +104,7 @@ def save_basis(
 def load_basis(path: str | PathLike[str]) -> tuple[F64, F64, Csc, dict]:
     """``(evals, evecs (n, k), mass CSC arrays, meta)``."""
 
-def render(
-    v: F64,
-    f: I64,
-    values: F64,
-    marks: list[int],
-    labels: list[int] | None,
-    figure: Figure,
-    path: str | PathLike[str] | None,
-) -> NDArray[np.uint8] | None:
+def render(v: F64, f: I64, picture: Picture) -> NDArray[np.uint8] | None:
     """Writes ``path`` (format from its extension) and returns None, or returns the
     ``(size, size, 4)`` RGBA picture."""
 
@@ -151,10 +146,7 @@ class Analysis:
         f: I64,
         kind: str,
         normalize: bool,
-        tol: float,
-        seed: int,
-        dirichlet: list[int] | None,
-        method: str,
+        solver: Solver,
     ) -> Analysis: ...
     @staticmethod
     def from_points(
@@ -163,10 +155,7 @@ class Analysis:
         neighbors: int | None,
         mollify_factor: float | None,
         normalize: bool,
-        tol: float,
-        seed: int,
-        dirichlet: list[int] | None,
-        method: str,
+        solver: Solver,
     ) -> Analysis:
         """The analysis of a point cloud (its point-cloud Laplacian, kind robust); given
         normals give the tangent planes; ``None`` parameters are the library's defaults."""
@@ -178,10 +167,7 @@ class Analysis:
         mollify_factor: float | None,
         use_normals: bool,
         normalize: bool,
-        tol: float,
-        seed: int,
-        dirichlet: list[int] | None,
-        method: str,
+        solver: Solver,
     ) -> Analysis:
         """The analysis of a mesh or point-cloud file; point-cloud parameters given with a
         mesh raise ``ValueError``."""
@@ -225,28 +211,17 @@ class Analysis:
     def filter_eigenvalues(self, k: int) -> tuple[list[int], F64]:
         """``(pair indices, eigenvalues)`` of the first ``k`` pairs a filter weighs (the
         library's zero-eigenvalue rule); a Python weight function is evaluated at these."""
-    def distances_weighted(
-        self, sources: list[int], weights: F64, name: str, k: int
-    ) -> F64:
+    def distances_weighted(self, sources: list[int], weights: Weights, k: int) -> F64:
         """Distances ``(n, len(sources))`` with a weight function's values at
         :meth:`filter_eigenvalues` (checked: strictly positive and finite)."""
-    def green_weighted(self, source: int, weights: F64, name: str, k: int) -> F64: ...
-    def spectral_function_weighted(self, weights: F64, name: str, k: int) -> F64: ...
-    def embedding_weighted(self, weights: F64, name: str, k: int) -> F64: ...
-    def embedding_component_weighted(
-        self, weights: F64, name: str, component: int, k: int
-    ) -> F64: ...
+    def green_weighted(self, source: int, weights: Weights, k: int) -> F64: ...
+    def spectral_function_weighted(self, weights: Weights, k: int) -> F64: ...
+    def embedding_weighted(self, weights: Weights, k: int) -> F64: ...
+    def embedding_component_weighted(self, weights: Weights, component: int, k: int) -> F64: ...
     def set_basis(self, evals: F64, evecs_t: F64) -> None: ...
     def save_basis(self, path: str | PathLike[str]) -> None: ...
     def load_basis(self, path: str | PathLike[str]) -> int: ...
-    def render(
-        self,
-        values: F64,
-        marks: list[int],
-        labels: list[int] | None,
-        figure: Figure,
-        path: str | PathLike[str] | None,
-    ) -> NDArray[np.uint8] | None: ...
+    def render(self, picture: Picture) -> NDArray[np.uint8] | None: ...
     def options(self) -> dict:
         """kind, normalize, tol, seed, dirichlet and point_cloud (the point-cloud
         Laplacian's parameters, or None for a mesh)."""

@@ -93,7 +93,7 @@ pub(super) async fn download(
     // A picture takes its pixels (size^2 x 4 bytes, several buffers); a text or mesh file
     // about 64 bytes per vertex and triangle.
     let n = reply.field.values.len();
-    let pixels = options.size as usize * options.height() as usize;
+    let pixels = options.canvas.size as usize * options.canvas.height() as usize;
     let need = match format.as_str() {
         "png" => 16 * pixels + 200 * n,
         _ => 200 * n,

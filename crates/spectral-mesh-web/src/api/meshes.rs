@@ -163,25 +163,19 @@ pub(super) fn check_size(
     m: usize,
 ) -> ApiResult<()> {
     let l = &s.config.limits;
-    if n > l.max_vertices {
-        return Err(ApiError(
-            StatusCode::PAYLOAD_TOO_LARGE,
-            format!(
-                "{what} has {n} {noun}, more than this server's limit of {} (--max-vertices)",
-                l.max_vertices
-            ),
-        ));
-    }
-    if m > l.max_faces {
-        return Err(ApiError(
-            StatusCode::PAYLOAD_TOO_LARGE,
-            format!(
-                "{what} has {m} triangles, more than this server's limit of {} (--max-faces)",
-                l.max_faces
-            ),
-        ));
-    }
-    Ok(())
+    let within = |count: usize, noun: &str, limit: usize, option: &str| {
+        if count > limit {
+            return Err(ApiError(
+                StatusCode::PAYLOAD_TOO_LARGE,
+                format!(
+                    "{what} has {count} {noun}, more than this server's limit of {limit} ({option})"
+                ),
+            ));
+        }
+        Ok(())
+    };
+    within(n, noun, l.max_vertices, "--max-vertices")?;
+    within(m, "triangles", l.max_faces, "--max-faces")
 }
 
 /// The loaded entry of `id`, if any.
