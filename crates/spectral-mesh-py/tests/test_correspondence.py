@@ -122,8 +122,10 @@ def test_match_pairs_on_a_local_dask_cluster(tmp_path):
     distributed = pytest.importorskip("distributed")
     src, pairs, perm = _pair_set(tmp_path)
     out = tmp_path / "out"
-    with distributed.LocalCluster(host="127.0.0.1", n_workers=1, threads_per_worker=1,
-                                  processes=False, dashboard_address=None) as cluster, \
+    # One in-process worker, over TCP on the loopback interface only.
+    with distributed.LocalCluster(host="127.0.0.1", protocol="tcp://", n_workers=1,
+                                  threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
         records = sm.match_pairs(src, out, pairs=pairs, client=client, timeout=240,
                                  **PAIR_PARAMS)
