@@ -14,22 +14,9 @@ use spectral_mesh::correspondence::{
 };
 use spectral_mesh::geodesic::{GeodesicParams, GeodesicSolver};
 use spectral_mesh::mesh::Mesh;
+use spectral_mesh::perturb::rng::Rng;
 use spectral_mesh::spectral::eigenbasis::{EigenParams, compute_eigenbasis};
 use spectral_mesh::{Eigenbasis, Laplacian, Operators};
-
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> u64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        self.0 >> 33
-    }
-    fn unit(&mut self) -> f64 {
-        self.next() as f64 / (1u64 << 31) as f64
-    }
-}
 
 fn basis(mesh: &Mesh, k: usize) -> Eigenbasis {
     let ops = Operators::new(mesh, Laplacian::Fem);
@@ -400,13 +387,13 @@ fn exact_solution_has_the_lowest_energy() {
             assert!((1..k).all(|i| c.get(i, 0) == 0.0));
         }
         // Any perturbation of the free entries raises the energy.
-        let mut rng = Lcg(99);
+        let mut rng = Rng::new(99);
         let first = if weights.fix_constant { k } else { 0 };
         for scale in [1e-6, 1e-3, 1e-1] {
             for _ in 0..5 {
                 let mut p = c.clone();
                 for v in &mut p.c[first..] {
-                    *v += scale * (rng.unit() - 0.5);
+                    *v += scale * (rng.uniform() - 0.5);
                 }
                 let e = problem.energy(&p);
                 assert!(e >= e0 - 1e-12 * e0.abs(), "{e} < {e0}");
