@@ -89,27 +89,28 @@ fn library_values() -> BTreeMap<String, Vec<String>> {
     );
     assert_eq!(truncation.reference, TruncationReference::Auto);
     put("study truncation/reference", s("auto"));
-    // `match`: the library's correspondence defaults.
-    {
+    // `match` and `match-pairs`: the library's correspondence defaults.
+    for cmd in ["match", "match-pairs"] {
         use spectral_mesh::correspondence as c;
-        put("match/k", s(c::DEFAULT_K));
-        put("match/zoomout", s(c::DEFAULT_ZOOMOUT_K));
-        put("match/step", s(c::DEFAULT_ZOOMOUT_STEP));
-        put("match/zoomout_direction", s(c::DEFAULT_ZOOMOUT_DIRECTION));
-        put(
-            "match/descriptor",
-            s(c::descriptors::DescriptorKind::default()),
-        );
-        put(
-            "match/descriptors",
-            s(c::descriptors::DEFAULT_DESCRIPTOR_COUNT),
-        );
-        put("match/subsample", s(c::descriptors::DEFAULT_SUBSAMPLE_STEP));
-        put("match/w_descr", s(c::energy::DEFAULT_W_DESCRIPTORS));
-        put("match/w_lap", s(c::energy::DEFAULT_W_LAPLACIAN));
-        put("match/w_dcomm", s(c::energy::DEFAULT_W_COMMUTATIVITY));
-        put("match/w_orient", s(c::energy::DEFAULT_W_ORIENTATION));
+        let mut put = |k: &str, v: Vec<String>| put(&format!("{cmd}/{k}"), v);
+        put("k", s(c::DEFAULT_K));
+        put("zoomout", s(c::DEFAULT_ZOOMOUT_K));
+        put("step", s(c::DEFAULT_ZOOMOUT_STEP));
+        put("zoomout_direction", s(c::DEFAULT_ZOOMOUT_DIRECTION));
+        put("descriptor", s(c::descriptors::DescriptorKind::default()));
+        put("descriptors", s(c::descriptors::DEFAULT_DESCRIPTOR_COUNT));
+        put("subsample", s(c::descriptors::DEFAULT_SUBSAMPLE_STEP));
+        put("w_descr", s(c::energy::DEFAULT_W_DESCRIPTORS));
+        put("w_lap", s(c::energy::DEFAULT_W_LAPLACIAN));
+        put("w_dcomm", s(c::energy::DEFAULT_W_COMMUTATIVITY));
+        put("w_orient", s(c::energy::DEFAULT_W_ORIENTATION));
     }
+    put(
+        "match-pairs/geodesic_sources",
+        s(spectral_mesh::batch::PairParams::default()
+            .max_geodesic_sources
+            .unwrap_or(usize::MAX)),
+    );
     // `serve`: the library's server limits.
     put("host", s(server::HOST));
     put("port", s(server::PORT));

@@ -61,6 +61,9 @@ enum Command {
     /// Match two shapes: functional map, ZoomOut, point map (one target vertex per
     /// source vertex).
     Match(commands::matching::Args),
+    /// Match pairs of a collection (all, consecutive or listed): a map per pair and
+    /// pairs.csv.
+    MatchPairs(commands::match_pairs::Args),
     /// Perturb a mesh (noise, scaling, resampling, holes, ...) and map it to the original.
     Perturb(commands::perturb::Args),
     /// Run one of the paper's experiments with its defaults and outputs.
@@ -108,6 +111,7 @@ fn main() -> std::process::ExitCode {
         Command::Segment(a) => commands::segment::run(a),
         Command::Embed(a) => commands::embed::run(a),
         Command::Match(a) => commands::matching::run(a),
+        Command::MatchPairs(a) => commands::match_pairs::run(a),
         Command::Perturb(a) => commands::perturb::run(a),
         Command::Experiment(e) => commands::experiment::run(e),
         Command::Run(a) => commands::run::run(a),

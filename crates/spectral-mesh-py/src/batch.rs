@@ -22,7 +22,7 @@ use crate::errors::Failure;
 use crate::run::run;
 
 /// The shared pool of `threads` threads.
-fn pool(threads: usize) -> Result<Arc<rayon::ThreadPool>, Failure> {
+pub(crate) fn pool(threads: usize) -> Result<Arc<rayon::ThreadPool>, Failure> {
     static POOLS: OnceLock<Mutex<HashMap<usize, Arc<rayon::ThreadPool>>>> = OnceLock::new();
     let mut pools = POOLS
         .get_or_init(Mutex::default)

@@ -3,8 +3,14 @@
 //! transpose of the eigenvectors, with the mesh whose mass matrix (of `kind`) they are
 //! orthonormal in.
 
+use std::path::PathBuf;
+
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
+use spectral_mesh::batch::{
+    PairJob, PairParams, PairRecord, Pairing, plan_pairs, process_pair, resolve_inputs,
+    write_pairs_summary,
+};
 use spectral_mesh::correspondence::{
     CorrespondenceError, FunctionalMap, MatchParams, Refined, ZoomoutDirection, fmap_to_p2p,
     fmap_to_p2p_12, match_shapes, zoomout,
@@ -243,4 +249,96 @@ pub fn point_map<'py>(
         })
     })?;
     Ok(to_vector(py, p2p))
+}
+
+/// JSON text of a value.
+fn json<T: serde::Serialize>(v: &T) -> Result<String, Failure> {
+    serde_json::to_string(v).map_err(|e| Failure::Internal(e.to_string()))
+}
+
+/// Matching over pairs of a collection (the library's `batch::pairs`): the inputs
+/// resolved, the pairs planned and the parameters checked. `pairing` and `params` are
+/// JSON (`Pairing` and `PairParams` in their serde forms); returns the jobs (JSON text
+/// each, plain data for a Dask task) and the canonical parameters.
+#[pyfunction]
+pub fn pairs_plan(
+    py: Python<'_>,
+    specs: Vec<String>,
+    pairing: &str,
+    params: &str,
+) -> PyResult<(Vec<String>, String)> {
+    let parse = || -> Result<(Pairing, PairParams), Failure> {
+        let pairing =
+            serde_json::from_str(pairing).map_err(|e| Failure::value(format!("pairs: {e}")))?;
+        let params: PairParams =
+            serde_json::from_str(params).map_err(|e| Failure::value(format!("parameters: {e}")))?;
+        params
+            .validate()
+            .map_err(|e| Failure::value(e.to_string()))?;
+        Ok((pairing, params))
+    };
+    let (pairing, params) = parse().map_err(|e| e.into_pyerr(py))?;
+    run(py, move |_| {
+        let inputs = resolve_inputs(&specs).map_err(|e| Failure::value(e.to_string()))?;
+        let jobs = plan_pairs(&inputs, &pairing).map_err(|e| Failure::value(e.to_string()))?;
+        Ok((
+            jobs.iter().map(json).collect::<Result<_, _>>()?,
+            json(&params)?,
+        ))
+    })
+}
+
+/// One pair: its record as JSON text (`process_pair`), in the shared pool of `threads`
+/// threads (0: the global pool); never raises for a bad mesh (its record says why).
+#[pyfunction]
+pub fn match_pair(
+    py: Python<'_>,
+    job: &str,
+    params: &str,
+    out: PathBuf,
+    threads: usize,
+) -> PyResult<String> {
+    let parse = || -> Result<(PairJob, PairParams), Failure> {
+        Ok((
+            serde_json::from_str(job).map_err(|e| Failure::value(format!("job: {e}")))?,
+            serde_json::from_str(params).map_err(|e| Failure::value(format!("parameters: {e}")))?,
+        ))
+    };
+    let (job, params) = parse().map_err(|e| e.into_pyerr(py))?;
+    run(py, move |token| {
+        let work = || process_pair(&job, &params, &out, token);
+        let record = if threads > 0 {
+            crate::batch::pool(threads)?.install(work)
+        } else {
+            work()
+        };
+        json(&record)
+    })
+}
+
+/// A failed record of `job` with `message` (a Dask task that failed), as JSON text.
+#[pyfunction]
+pub fn pair_failed(py: Python<'_>, job: &str, params: &str, message: &str) -> PyResult<String> {
+    let make = || -> Result<String, Failure> {
+        let job: PairJob =
+            serde_json::from_str(job).map_err(|e| Failure::value(format!("job: {e}")))?;
+        let params: PairParams =
+            serde_json::from_str(params).map_err(|e| Failure::value(format!("parameters: {e}")))?;
+        json(&PairRecord::failed(&job, &params, message))
+    };
+    make().map_err(|e| e.into_pyerr(py))
+}
+
+/// Writes `out/pairs.csv` from the records (JSON text each); returns its path.
+#[pyfunction]
+pub fn pairs_summary(py: Python<'_>, out: PathBuf, records: Vec<String>) -> PyResult<String> {
+    run(py, move |_| {
+        let records: Vec<PairRecord> = records
+            .iter()
+            .map(|r| serde_json::from_str(r).map_err(|e| Failure::value(format!("record: {e}"))))
+            .collect::<Result<_, _>>()?;
+        let path =
+            write_pairs_summary(&out, &records).map_err(|e| Failure::value(e.to_string()))?;
+        Ok(path.display().to_string())
+    })
 }

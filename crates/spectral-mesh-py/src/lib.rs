@@ -723,6 +723,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(correspondence::functional_map, m)?)?;
     m.add_function(wrap_pyfunction!(correspondence::zoomout_refine, m)?)?;
     m.add_function(wrap_pyfunction!(correspondence::point_map, m)?)?;
+    m.add_function(wrap_pyfunction!(correspondence::pairs_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(correspondence::match_pair, m)?)?;
+    m.add_function(wrap_pyfunction!(correspondence::pair_failed, m)?)?;
+    m.add_function(wrap_pyfunction!(correspondence::pairs_summary, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_params, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_inputs, m)?)?;
     m.add_function(wrap_pyfunction!(batch::batch_prepare, m)?)?;

@@ -58,3 +58,75 @@ def test_zoomout_both_directions_on_a_shuffled_pair():
     assert sm.zoomout(V1, F1, V2, F2, C, 30)[1].shape == (len(V2),)
     with pytest.raises(ValueError, match="forward, reverse or both"):
         sm.zoomout(V1, F1, V2, F2, C, 30, direction="sideways")
+
+
+def _pair_set(tmp_path):
+    """A blob, a shuffled copy with its true map, and a broken file."""
+    src = tmp_path / "in"
+    src.mkdir()
+    V1, F1 = blob()
+    V2, F2, perm = shuffled(V1, F1, 5)
+    sm.write_mesh(src / "blob.off", V1, F1)
+    sm.write_mesh(src / "copy.off", V2, F2)
+    (src / "broken.off").write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n")
+    truth = src / "truth.txt"
+    truth.write_text("".join(f"{v}\n" for v in perm))
+    pairs = [("copy.off", "blob.off", truth), ("broken.off", "blob.off")]
+    return src, pairs, perm
+
+
+PAIR_PARAMS = dict(k=20, zoomout_k=40, direction="both")
+
+
+def _check_pairs(records, out, perm):
+    import csv
+
+    assert [r["name"] for r in records] == ["copy.off--blob.off", "broken.off--blob.off"]
+    ok, bad = records
+    assert ok["status"] == "ok", ok["error"]
+    assert ok["n_source"] == ok["n_target"] == len(perm)
+    assert ok["k_final"] == 40 and ok["direction"] == "both"
+    assert ok["mean_geodesic_error"] < 0.01 and ok["exact_share"] > 0.99
+    assert ok["outputs"] == ["maps/copy.off--blob.off.txt", "maps/copy.off--blob.off.reverse.txt"]
+    mapped = np.loadtxt(out / "maps" / "copy.off--blob.off.txt", dtype=np.int64)
+    assert np.mean(mapped == perm) > 0.99
+    back = np.loadtxt(out / "maps" / "copy.off--blob.off.reverse.txt", dtype=np.int64)
+    assert np.mean(mapped[back] == np.arange(len(perm))) > 0.99
+    assert bad["status"] == "failed" and "broken.off" in bad["error"]
+    with open(out / "pairs.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["name"] for r in rows] == [r["name"] for r in records]
+    assert float(rows[0]["mean_geodesic_error"]) == ok["mean_geodesic_error"]
+    assert rows[1]["status"] == "failed" and "broken.off" in rows[1]["error"]
+
+
+def test_match_pairs_locally(tmp_path):
+    src, pairs, perm = _pair_set(tmp_path)
+    out = tmp_path / "out"
+    seen = []
+    records = sm.match_pairs(src, out, pairs=pairs, progress=lambda d, n, r: seen.append((d, n)),
+                             **PAIR_PARAMS)
+    _check_pairs(records, out, perm)
+    assert seen == [(1, 2), (2, 2)]
+    # Pairings by rule: three inputs give three pairs ("all") or two ("consecutive").
+    names = [r["name"] for r in sm.match_pairs(src, tmp_path / "c", pairs="consecutive",
+                                               k=10, zoomout_k=0)]
+    assert names == ["blob.off--broken.off", "broken.off--copy.off"]
+    with pytest.raises(ValueError, match="names none"):
+        sm.match_pairs(src, tmp_path / "d", pairs=[("nothere.off", 0)])
+    with pytest.raises(ValueError, match="'all', 'consecutive'"):
+        sm.match_pairs(src, tmp_path / "d", pairs="every")
+
+
+def test_match_pairs_on_a_local_dask_cluster(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    src, pairs, perm = _pair_set(tmp_path)
+    out = tmp_path / "out"
+    # One in-process worker, over TCP on the loopback interface only.
+    with distributed.LocalCluster(host="127.0.0.1", protocol="tcp://", n_workers=1,
+                                  threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        records = sm.match_pairs(src, out, pairs=pairs, client=client, timeout=240,
+                                 **PAIR_PARAMS)
+    _check_pairs(records, out, perm)

@@ -217,6 +217,24 @@ WHERE: dict[str, dict[str, str]] = {
         "kind": "analysis/kind",
     },
     "render": _FIGURE,
+    "match_pairs": {
+        "pairs": "pairs/pairing",
+        "k": "pairs/matching/k",
+        "zoomout_k": "pairs/matching/zoomout_k",
+        "step": "pairs/matching/zoomout_step",
+        "direction": "pairs/matching/zoomout_direction",
+        "descriptor": "pairs/matching/descriptors/kind",
+        "n_descr": "pairs/matching/descriptors/count",
+        "subsample_step": "pairs/matching/descriptors/subsample_step",
+        "w_descr": "pairs/matching/weights/descriptors",
+        "w_lap": "pairs/matching/weights/laplacian",
+        "w_dcomm": "pairs/matching/weights/commutativity",
+        "w_orient": "pairs/matching/weights/orientation",
+        "laplacian": "pairs/laplacian",
+        "normalize": "pairs/normalize",
+        "tol": "pairs/tolerance",
+        "geodesic_sources": "pairs/max_geodesic_sources",
+    },
     "batch": {
         "k": "batch/k",
         "laplacian": "batch/laplacian",
@@ -271,6 +289,7 @@ NOT_LIBRARY = {
     # How the Python face runs and reports (no effect on any number); `certify` is an
     # opt-in check that adds a third item to the result, as `eigs --certify` is a flag.
     "batch": {"retries", "retry_failed", "force"},
+    "match_pairs": {"force"},
     "load_basis": {"with_mass"},
     "Analysis.field": {"return_info"},
     # Which map and which way (pyFM's keywords), and what is returned.

@@ -9,27 +9,14 @@
 use spectral_mesh::correspondence::{
     DescriptorParams, FmapProblem, FmapWeights, FunctionalMap, MatchParams, MatchShape,
     ZoomoutDirection, cumulative_curve, default_thresholds, descriptors, fmap_to_p2p,
-    fmap_to_p2p_12, geodesic_errors, match_shapes, p2p_to_fmap, transfer, transfer_spectral,
-    zoomout,
+    fmap_to_p2p_12, geodesic_errors, match_shapes, p2p_to_fmap, shuffled_copy, transfer,
+    transfer_spectral, zoomout,
 };
 use spectral_mesh::geodesic::{GeodesicParams, GeodesicSolver};
 use spectral_mesh::mesh::Mesh;
+use spectral_mesh::perturb::rng::Rng;
 use spectral_mesh::spectral::eigenbasis::{EigenParams, compute_eigenbasis};
 use spectral_mesh::{Eigenbasis, Laplacian, Operators};
-
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> u64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        self.0 >> 33
-    }
-    fn unit(&mut self) -> f64 {
-        self.next() as f64 / (1u64 << 31) as f64
-    }
-}
 
 fn basis(mesh: &Mesh, k: usize) -> Eigenbasis {
     let ops = Operators::new(mesh, Laplacian::Fem);
@@ -70,23 +57,9 @@ fn mirror_blob(res: u32) -> Mesh {
     .unwrap()
 }
 
-/// The mesh with its vertices renumbered: vertex `i` of the copy is vertex `perm[i]` of
-/// `mesh` (so `perm` is the true `p2p_21` from the copy to `mesh`).
+/// The mesh with its vertices renumbered and the true map from the copy to it.
 fn shuffled(mesh: &Mesh, seed: u64) -> (Mesh, Vec<usize>) {
-    let n = mesh.n_vertices();
-    let mut perm: Vec<usize> = (0..n).collect();
-    let mut rng = Lcg(seed);
-    for i in (1..n).rev() {
-        let j = (rng.next() as usize) % (i + 1);
-        perm.swap(i, j);
-    }
-    let mut inv = vec![0; n];
-    for (i, &p) in perm.iter().enumerate() {
-        inv[p] = i;
-    }
-    let pos: Vec<[f64; 3]> = perm.iter().map(|&p| mesh.positions()[p]).collect();
-    let tris: Vec<[usize; 3]> = mesh.triangles().iter().map(|t| t.map(|v| inv[v])).collect();
-    (Mesh::new(pos, tris).unwrap(), perm)
+    shuffled_copy(mesh, seed).unwrap()
 }
 
 /// For each vertex of `b`, the nearest vertex of `a` in space.
@@ -147,6 +120,21 @@ fn run_pair(m1: &Mesh, m2: &Mesh, gt_21: &[usize], params: &MatchParams) -> f64 
     e.mean
 }
 
+/// [`run_pair`], printed under `label` and asserted below `bound`; returns the error.
+fn assert_pair(
+    label: &str,
+    m1: &Mesh,
+    m2: &Mesh,
+    gt_21: &[usize],
+    params: &MatchParams,
+    bound: f64,
+) -> f64 {
+    let err = run_pair(m1, m2, gt_21, params);
+    println!("{label}: mean geodesic error {err:.3e} sqrt(area)");
+    assert!(err < bound, "{label}: mean error {err}");
+    err
+}
+
 fn small_params() -> MatchParams {
     MatchParams {
         k: 20,
@@ -159,18 +147,21 @@ fn small_params() -> MatchParams {
 fn shuffled_asymmetric_pair_is_recovered() {
     let m1 = blob(3);
     let (m2, gt) = shuffled(&m1, 7);
-    let err = run_pair(&m1, &m2, &gt, &small_params());
-    println!("shuffled blob: mean geodesic error {err:.2e} sqrt(area)");
-    assert!(err < 0.01, "mean error {err}");
+    assert_pair("shuffled blob", &m1, &m2, &gt, &small_params(), 0.01);
 }
 
 #[test]
 fn shuffled_mirror_symmetric_pair_keeps_left_and_right() {
     let m1 = mirror_blob(3);
     let (m2, gt) = shuffled(&m1, 11);
-    let err = run_pair(&m1, &m2, &gt, &small_params());
-    println!("shuffled mirror blob, orientation-preserving: {err:.2e}");
-    assert!(err < 0.01, "mean error {err}");
+    let err = assert_pair(
+        "shuffled mirror blob, orientation-preserving",
+        &m1,
+        &m2,
+        &gt,
+        &small_params(),
+        0.01,
+    );
     // The orientation-reversing term picks the mirror image: a large error.
     let mut rev = small_params();
     rev.weights.orientation = 1.0;
@@ -297,9 +288,7 @@ fn zoomout_direction_names() {
 fn same_surface_at_two_resolutions() {
     let (m1, m2) = (blob(3), blob(4));
     let gt = nearest_in_space(&m1, &m2);
-    let err = run_pair(&m1, &m2, &gt, &small_params());
-    println!("blob res 3 <- res 4: mean geodesic error {err:.3e}");
-    assert!(err < 0.03, "mean error {err}");
+    assert_pair("blob res 3 <- res 4", &m1, &m2, &gt, &small_params(), 0.03);
 }
 
 #[test]
@@ -310,14 +299,24 @@ fn shared_mesh_and_its_subdivision() {
     let m1 = spectral_mesh::io::read_mesh(&path).unwrap().mesh;
     let m2 = subdivide(&m1);
     let gt = nearest_in_space(&m1, &m2);
-    let err = run_pair(&m1, &m2, &gt, &small_params());
-    println!("cow <- subdivided cow: mean geodesic error {err:.3e}");
-    assert!(err < 0.03, "mean error {err}");
+    assert_pair(
+        "cow <- subdivided cow",
+        &m1,
+        &m2,
+        &gt,
+        &small_params(),
+        0.03,
+    );
     // Shuffled cow with the default parameters (k = 30, ZoomOut to 100).
     let (m3, gt3) = shuffled(&m1, 3);
-    let err3 = run_pair(&m1, &m3, &gt3, &MatchParams::default());
-    println!("cow <- shuffled cow: mean geodesic error {err3:.2e}");
-    assert!(err3 < 0.01, "mean error {err3}");
+    assert_pair(
+        "cow <- shuffled cow",
+        &m1,
+        &m3,
+        &gt3,
+        &MatchParams::default(),
+        0.01,
+    );
 }
 
 #[test]
@@ -333,9 +332,7 @@ fn near_isometric_bend() {
         })
         .unwrap();
     let (m2, gt) = shuffled(&bent, 5);
-    let err = run_pair(&long, &m2, &gt, &small_params());
-    println!("bent blob: mean geodesic error {err:.3e}");
-    assert!(err < 0.05, "mean error {err}");
+    assert_pair("bent blob", &long, &m2, &gt, &small_params(), 0.05);
 }
 
 #[test]
@@ -390,13 +387,13 @@ fn exact_solution_has_the_lowest_energy() {
             assert!((1..k).all(|i| c.get(i, 0) == 0.0));
         }
         // Any perturbation of the free entries raises the energy.
-        let mut rng = Lcg(99);
+        let mut rng = Rng::new(99);
         let first = if weights.fix_constant { k } else { 0 };
         for scale in [1e-6, 1e-3, 1e-1] {
             for _ in 0..5 {
                 let mut p = c.clone();
                 for v in &mut p.c[first..] {
-                    *v += scale * (rng.unit() - 0.5);
+                    *v += scale * (rng.uniform() - 0.5);
                 }
                 let e = problem.energy(&p);
                 assert!(e >= e0 - 1e-12 * e0.abs(), "{e} < {e0}");

@@ -37,13 +37,9 @@ use crate::engine::{self, resolve_laplacian};
 use crate::input;
 use crate::output::{check_writable, write};
 
-/// Arguments of `match`.
+/// The match pipeline's options, shared by `match` and `match-pairs`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
-    /// The mesh whose vertices are mapped (file or built-in shape).
-    pub source: String,
-    /// The mesh they are mapped onto.
-    pub target: String,
+pub struct MatchFlags {
     /// Size of both bases of the first functional map.
     #[arg(long, short = 'k', default_value_t = DEFAULT_K)]
     pub k: usize,
@@ -53,8 +49,8 @@ pub struct Args {
     /// ZoomOut step.
     #[arg(long, default_value_t = DEFAULT_ZOOMOUT_STEP)]
     pub step: usize,
-    /// Which map ZoomOut refines: forward (-o, a target vertex per source vertex),
-    /// reverse (--reverse-out, a source vertex per target vertex) or both.
+    /// Which map ZoomOut refines: forward (a target vertex per source vertex), reverse (a
+    /// source vertex per target vertex) or both.
     #[arg(long, default_value_t = DEFAULT_ZOOMOUT_DIRECTION)]
     pub zoomout_direction: ZoomoutDirection,
     /// Descriptor: wks or hks.
@@ -81,15 +77,53 @@ pub struct Args {
     /// Use the orientation-reversing term (for a mirrored target).
     #[arg(long)]
     pub orient_reversing: bool,
-    /// Landmarks: a text file of lines `SOURCE_VERTEX TARGET_VERTEX` (0-based).
-    #[arg(long)]
-    pub landmarks: Option<PathBuf>,
     /// Discretization (default: fem).
     #[arg(long)]
     pub laplacian: Option<Laplacian>,
     /// Use the shapes as given instead of scaled to unit area.
     #[arg(long)]
     pub no_normalize: bool,
+}
+
+impl MatchFlags {
+    /// The library's parameters of these flags, checked.
+    pub fn params(&self) -> Result<MatchParams> {
+        let params = MatchParams {
+            k: self.k,
+            zoomout_k: self.zoomout,
+            zoomout_step: self.step,
+            zoomout_direction: self.zoomout_direction,
+            descriptors: DescriptorParams {
+                kind: self.descriptor,
+                count: self.descriptors,
+                subsample_step: self.subsample,
+            },
+            weights: FmapWeights {
+                descriptors: self.w_descr,
+                laplacian: self.w_lap,
+                commutativity: self.w_dcomm,
+                orientation: self.w_orient,
+                orientation_reversing: self.orient_reversing,
+                ..FmapWeights::default()
+            },
+        };
+        params.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+        Ok(params)
+    }
+}
+
+/// Arguments of `match`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The mesh whose vertices are mapped (file or built-in shape).
+    pub source: String,
+    /// The mesh they are mapped onto.
+    pub target: String,
+    #[command(flatten)]
+    pub flags: MatchFlags,
+    /// Landmarks: a text file of lines `SOURCE_VERTEX TARGET_VERTEX` (0-based).
+    #[arg(long)]
+    pub landmarks: Option<PathBuf>,
     /// Keep computed bases in this folder and reuse them.
     #[arg(long)]
     pub cache: Option<PathBuf>,
@@ -142,7 +176,7 @@ pub fn run(args: Args) -> Result<()> {
     if args.truth.is_none() && outputs.iter().all(|o| o.is_none()) {
         bail!("nothing to do: give -o MAP.txt, --fmap C.npy, --picture P.png or --truth MAP.txt");
     }
-    if !args.zoomout_direction.reverse()
+    if !args.flags.zoomout_direction.reverse()
         && (args.reverse_out.is_some() || args.reverse_fmap.is_some())
     {
         bail!(
@@ -152,26 +186,7 @@ pub fn run(args: Args) -> Result<()> {
     for p in outputs.into_iter().flatten() {
         check_writable(p, args.force)?;
     }
-    let params = MatchParams {
-        k: args.k,
-        zoomout_k: args.zoomout,
-        zoomout_step: args.step,
-        zoomout_direction: args.zoomout_direction,
-        descriptors: DescriptorParams {
-            kind: args.descriptor,
-            count: args.descriptors,
-            subsample_step: args.subsample,
-        },
-        weights: FmapWeights {
-            descriptors: args.w_descr,
-            laplacian: args.w_lap,
-            commutativity: args.w_dcomm,
-            orientation: args.w_orient,
-            orientation_reversing: args.orient_reversing,
-            ..FmapWeights::default()
-        },
-    };
-    params.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let params = args.flags.params()?;
     let source = load_mesh(&args.source)?;
     let target = load_mesh(&args.target)?;
     let kb = params.basis_size();
@@ -216,8 +231,8 @@ pub fn run(args: Args) -> Result<()> {
     let analysis = |mesh: Mesh| -> Result<Analysis> {
         let input = spectral_mesh::analysis::AnalysisInput::Mesh(mesh);
         let options = AnalysisOptions {
-            laplacian: resolve_laplacian(args.laplacian, &input)?,
-            normalize: !args.no_normalize,
+            laplacian: resolve_laplacian(args.flags.laplacian, &input)?,
+            normalize: !args.flags.no_normalize,
             eigen: EigenParams::default(),
         };
         Ok(Analysis::from_input(input, options)?)

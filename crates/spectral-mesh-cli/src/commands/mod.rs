@@ -9,6 +9,7 @@ pub mod experiment;
 pub mod geodesic;
 pub mod heat;
 pub mod info;
+pub mod match_pairs;
 pub mod matching;
 pub mod operators;
 pub mod perturb;

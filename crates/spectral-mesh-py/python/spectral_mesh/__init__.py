@@ -35,7 +35,7 @@ from __future__ import annotations
 from . import _native
 from ._analysis import Analysis, CriticalPoints, LevelSet
 from ._batch import batch
-from ._correspondence import functional_map, p2p, zoomout
+from ._correspondence import functional_map, match_pairs, p2p, zoomout
 from ._geodesic import GeodesicSolver, geodesic_distance, point_cloud_geodesic_distance
 from ._api import (
     eigenbasis,
@@ -82,6 +82,7 @@ __all__ = [
     "geodesic_distance",
     "laplacian",
     "load_basis",
+    "match_pairs",
     "num_threads",
     "p2p",
     "point_cloud_geodesic_distance",

@@ -12,7 +12,9 @@ computed. Every number comes from the Rust library; defaults from
 from __future__ import annotations
 
 import json
-from typing import Any, Sequence
+import os
+import time
+from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -175,3 +177,150 @@ def p2p(
         bool(to_second),
     )
     return out.astype(np.int64)
+
+
+#: ``match_pairs``'s defaults (the library's ``PairParams``: ``matching``, ``laplacian``,
+#: ``normalize``, ``tolerance``, ``max_geodesic_sources``; and ``pairing``).
+PAIRS: dict = _native.defaults()["pairs"]
+_PM: dict = PAIRS["matching"]
+
+
+def _pair_task(job: str, params: str, out: str, threads: int | None) -> dict:
+    """One pair (run here or as a Dask task): its record as a dict. On a Dask worker,
+    ``threads=None`` holds our threads to the worker's ``nthreads``."""
+    if threads is None:
+        threads = 0
+        try:
+            from distributed import get_worker
+
+            w = get_worker()
+            threads = int(getattr(getattr(w, "state", w), "nthreads", 0) or w.nthreads)
+        except (ImportError, ValueError, AttributeError):
+            threads = 0
+    return dict(json.loads(_native.match_pair(job, params, out, threads)))
+
+
+def _pairing(pairs: Any) -> str:
+    if isinstance(pairs, str):
+        if pairs.strip().lower() in ("all", "consecutive"):
+            return json.dumps(pairs.strip().lower())
+        raise ValueError(f"pairs = {pairs!r}: use 'all', 'consecutive' or a list of pairs")
+    listed = []
+    for p in pairs:
+        p = tuple(p)
+        if len(p) not in (2, 3):
+            raise ValueError(f"pair {p!r}: expected (source, target) or (source, target, truth)")
+        entry: dict[str, Any] = {"source": os.fspath(p[0]) if not isinstance(p[0], int) else str(p[0]),
+                                 "target": os.fspath(p[1]) if not isinstance(p[1], int) else str(p[1])}
+        if len(p) == 3 and p[2] is not None:
+            entry["truth"] = os.path.abspath(os.fspath(p[2]))
+        listed.append(entry)
+    return json.dumps({"list": listed})
+
+
+def match_pairs(
+    paths: str | os.PathLike[str] | Iterable[str | os.PathLike[str]],
+    out: str | os.PathLike[str],
+    *,
+    pairs: str | Sequence[Sequence[Any]] = PAIRS["pairing"],
+    k: int = _PM["k"],
+    zoomout_k: int = _PM["zoomout_k"],
+    step: int = _PM["zoomout_step"],
+    direction: str = _PM["zoomout_direction"],
+    descriptor: str = _PM["descriptors"]["kind"],
+    n_descr: int = _PM["descriptors"]["count"],
+    subsample_step: int = _PM["descriptors"]["subsample_step"],
+    w_descr: float = _PM["weights"]["descriptors"],
+    w_lap: float = _PM["weights"]["laplacian"],
+    w_dcomm: float = _PM["weights"]["commutativity"],
+    w_orient: float = _PM["weights"]["orientation"],
+    laplacian: str = PAIRS["laplacian"],
+    normalize: bool = PAIRS["normalize"],
+    tol: float = PAIRS["tolerance"],
+    geodesic_sources: int | None = PAIRS["max_geodesic_sources"],
+    client: Any = None,
+    threads: int | None = None,
+    force: bool = False,
+    timeout: float | None = None,
+    progress: Callable[[int, int, dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Match pairs of a collection with the library's pipeline (:func:`functional_map`,
+    :func:`zoomout`, the point map) and write, under ``out``, one map per pair
+    (``maps/SOURCE--TARGET.txt``: for each source vertex a target vertex, 0-based, one per
+    line; ``maps/SOURCE--TARGET.reverse.txt`` with ``direction`` ``"reverse"`` or
+    ``"both"``) and ``pairs.csv`` (one row per pair, written by the library); returns the
+    records (dicts: the CSV's columns) in the order of the pairs.
+
+    ``paths``: files, folders, glob patterns and ``"@manifest"`` files, as for
+    :func:`batch`. ``pairs``: ``"all"`` (every unordered pair, the earlier input the
+    source), ``"consecutive"``, or a list of ``(source, target)`` or
+    ``(source, target, truth)``, each shape an input's name, path or position, ``truth`` a
+    file holding the true map (then the record has ``mean_geodesic_error`` in units of
+    ``sqrt(area)`` of the target, at most ``geodesic_sources`` geodesic solves, and
+    ``exact_share``). A bad mesh gives a record with ``status="failed"`` and an ``error``
+    naming the file; the other pairs go on.
+
+    ``client=None`` runs the pairs here, one after the other (each on ``threads`` threads,
+    default all); with a ``dask.distributed.Client`` one task per pair on that cluster
+    (the files must be reachable from every worker). ``timeout`` (seconds) raises
+    ``TimeoutError``; ``progress(done, total, record)`` is called after every pair.
+    """
+    specs = [os.fspath(paths)] if isinstance(paths, (str, os.PathLike)) else [os.fspath(p) for p in paths]
+    out = os.fspath(out)
+    raw = {
+        "matching": {
+            "k": k, "zoomout_k": zoomout_k, "zoomout_step": step,
+            "zoomout_direction": str(direction).lower(),
+            "descriptors": {"kind": str(descriptor).lower(), "count": n_descr,
+                            "subsample_step": subsample_step},
+            "weights": {**_PM["weights"], "descriptors": float(w_descr), "laplacian": float(w_lap),
+                        "commutativity": float(w_dcomm), "orientation": float(w_orient)},
+        },
+        "laplacian": laplacian, "normalize": bool(normalize), "tolerance": float(tol),
+        "max_geodesic_sources": geodesic_sources,
+    }
+    jobs, params = _native.pairs_plan(specs, _pairing(pairs), json.dumps(raw))
+    _native.batch_prepare(out, bool(force))
+    deadline = None if timeout is None else time.monotonic() + timeout
+
+    def left() -> float | None:
+        if deadline is None:
+            return None
+        remaining = deadline - time.monotonic()
+        if remaining <= 0:
+            raise TimeoutError("the pairs did not finish in time")
+        return remaining
+
+    records: dict[int, dict] = {}
+    if client is None:
+        for i, job in enumerate(jobs):
+            left()
+            records[i] = _pair_task(job, params, out, threads or 0)
+            if progress is not None:
+                progress(len(records), len(jobs), records[i])
+    else:
+        from distributed import as_completed
+
+        futures = {
+            client.submit(_pair_task, job, params, out, threads,
+                          key=f"spectral-mesh-pair-{i}-{json.loads(job)['name']}", pure=False): i
+            for i, job in enumerate(jobs)
+        }
+        try:
+            for f in as_completed(list(futures), timeout=left()):
+                i = futures[f]
+                try:
+                    records[i] = f.result()
+                except Exception as e:  # the task failed, or its workers died
+                    records[i] = json.loads(_native.pair_failed(
+                        jobs[i], params, f"the Dask task failed: {type(e).__name__}: {e}"))
+                if progress is not None:
+                    progress(len(records), len(jobs), records[i])
+        except Exception as e:
+            if type(e).__name__ == "TimeoutError":
+                client.cancel(list(futures))
+                raise TimeoutError("the pairs did not finish in time") from e
+            raise
+    ordered = [records[i] for i in range(len(jobs))]
+    _native.pairs_summary(out, [json.dumps(r) for r in ordered])
+    return ordered

@@ -2,7 +2,7 @@
 //! job per shape, resumable and idempotent. The faces run the jobs (the command line on
 //! worker processes, Python on a process pool or a Dask cluster); the job itself, the
 //! file layout, the hashes and the summary are here, so that every face writes the same
-//! files.
+//! files. Matching over pairs of a collection is [`pairs`] (its own layout and summary).
 //!
 //! # Layout of the output folder
 //! ```text
@@ -46,6 +46,7 @@
 mod inputs;
 mod job;
 pub mod memory;
+pub mod pairs;
 mod params;
 mod record;
 pub mod summary;
@@ -54,6 +55,10 @@ use std::path::Path;
 
 pub use inputs::{BatchInput, SCANNED_EXTENSIONS, resolve_inputs};
 pub use job::{BatchMeta, JobOptions, ResultMeta, Thumbnailer, process_one};
+pub use pairs::{
+    PairJob, PairParams, PairRecord, PairSpec, Pairing, pairs_csv, plan_pairs, process_pair,
+    write_pairs_summary,
+};
 pub use params::{BatchParams, RESULT_VERSION, Schedule};
 pub use record::{BatchRecord, InputKind, Status};
 pub use summary::write_summary;

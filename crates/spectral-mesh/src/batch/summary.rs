@@ -94,7 +94,7 @@ fn cells(r: &BatchRecord) -> Vec<Cell> {
     ]
 }
 
-fn csv_cell(s: &str) -> String {
+pub(crate) fn csv_cell(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {

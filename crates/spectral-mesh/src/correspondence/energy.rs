@@ -167,6 +167,14 @@ fn multiplication_operator(basis: BasisView<'_>, f: &[f64]) -> Vec<f64> {
     gram(basis.vectors, &mfx, n, k, k)
 }
 
+/// `sum_d ||C X_d - Y_d C||_F^2 / 2` over the operator pairs `ops` (the descriptor
+/// commutativity or orientation term, unweighted).
+fn operators_energy(c: &[f64], ops: &[(Vec<f64>, Vec<f64>)], k1: usize, k2: usize) -> f64 {
+    ops.iter()
+        .map(|(x, y)| commutator_energy(c, x, y, k1, k2))
+        .sum()
+}
+
 /// `0.5 ||C X - Y C||^2` for `C` (`k2 x k1`), `X` (`k1 x k1`), `Y` (`k2 x k2`).
 fn commutator_energy(c: &[f64], x: &[f64], y: &[f64], k1: usize, k2: usize) -> f64 {
     let cx = product(c, x, k2, k1, k1);
@@ -306,11 +314,7 @@ impl FmapProblem {
         if weights.orientation > 0.0 {
             let eye = FunctionalMap::identity(k1, k2);
             let rest = problem.terms(&eye).total();
-            let orient: f64 = problem
-                .orientation_ops
-                .iter()
-                .map(|(x, y)| commutator_energy(&eye.c, x, y, k1, k2))
-                .sum();
+            let orient = operators_energy(&eye.c, &problem.orientation_ops, k1, k2);
             // pyFM 1.3's scaling: the rest of the energy at I with its weights summing
             // to 1, over the unweighted orientation energy at I.
             let others = weights.descriptors + weights.laplacian + weights.commutativity;
@@ -347,20 +351,12 @@ impl FmapProblem {
                     .sum::<f64>();
         }
         if self.w_commutativity > 0.0 {
-            t.commutativity = self.w_commutativity
-                * self
-                    .commutativity_ops
-                    .iter()
-                    .map(|(x, y)| commutator_energy(&c.c, x, y, k1, k2))
-                    .sum::<f64>();
+            t.commutativity =
+                self.w_commutativity * operators_energy(&c.c, &self.commutativity_ops, k1, k2);
         }
         if self.w_orientation > 0.0 {
-            t.orientation = self.w_orientation
-                * self
-                    .orientation_ops
-                    .iter()
-                    .map(|(x, y)| commutator_energy(&c.c, x, y, k1, k2))
-                    .sum::<f64>();
+            t.orientation =
+                self.w_orientation * operators_energy(&c.c, &self.orientation_ops, k1, k2);
         }
         t
     }

@@ -242,6 +242,27 @@ impl FunctionalMap {
     }
 }
 
+/// A copy of `mesh` with its vertices renumbered by a seeded shuffle, and the true point
+/// map from the copy to `mesh` (`p2p_21` with the copy as shape 2 and `mesh` as shape 1):
+/// vertex `i` of the copy is vertex `map[i]` of `mesh`. The simplest pair with a known
+/// correspondence (the tests' and the benchmarks').
+pub fn shuffled_copy(mesh: &Mesh, seed: u64) -> Result<(Mesh, Vec<usize>), crate::mesh::MeshError> {
+    let n = mesh.n_vertices();
+    let mut map: Vec<usize> = (0..n).collect();
+    crate::perturb::rng::Rng::new(seed).shuffle(&mut map);
+    let mut inverse = vec![0; n];
+    for (i, &p) in map.iter().enumerate() {
+        inverse[p] = i;
+    }
+    let positions = map.iter().map(|&p| mesh.positions()[p]).collect();
+    let triangles = mesh
+        .triangles()
+        .iter()
+        .map(|t| t.map(|v| inverse[v]))
+        .collect();
+    Ok((Mesh::new(positions, triangles)?, map))
+}
+
 /// The first `k` pairs of `basis` (checked: `BasisTooSmall` names `shape`).
 pub(crate) fn truncate<'a>(
     basis: BasisView<'a>,

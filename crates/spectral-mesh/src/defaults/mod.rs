@@ -118,6 +118,7 @@ pub fn to_json() -> Value {
             "geodesic": bp.geodesic,
         },
         "correspondence": serde_json::to_value(crate::correspondence::MatchParams::default()).unwrap_or(Value::Null),
+        "pairs": crate::batch::pairs::defaults_json(),
         "pictures": {
             "levels": LEVELS,
             "max_levels": MAX_LEVELS,
