@@ -188,9 +188,12 @@ fn build(rows: &[f64], d: usize, idx: &mut [usize]) -> Subtree {
         };
     }
     let r = |i: usize| &rows[i * d..(i + 1) * d];
+    // The far-apart rows among at most about 256 of them (a direction, not a bound: any
+    // would do for exactness).
+    let stride = (len / 256).max(1);
     let farthest = |from: &[f64]| {
         let mut best = (-1.0, idx[0]);
-        for &i in idx.iter() {
+        for &i in idx.iter().step_by(stride) {
             let s = dist2(r(i), from);
             if s > best.0 {
                 best = (s, i);
