@@ -9,6 +9,8 @@
 //! that `grad_t g = sum_v g_v J_{t,v} / |t|`. In the basis: `Phi^T M O_f Phi` (`k x k`).
 //! Triangles of zero area carry nothing.
 
+use rayon::prelude::*;
+
 use crate::linalg::dense_ops::gram;
 use crate::linalg::sym_spmm;
 use crate::mesh::{Mesh, cross, dot, norm, scale, sub};
@@ -40,6 +42,7 @@ pub(crate) fn triangle_frames(mesh: &Mesh) -> Vec<Option<Frame>> {
 
 /// `Phi^T M O_f Phi` (`k x k`, column-major) for the function `f` (`n` values), with
 /// `frames` from [`triangle_frames`] and `areas` the vertex areas (row sums of `M`).
+/// `O_f Phi` column by column on both cores (each column's sums in the triangles' order).
 pub(crate) fn reduced_operator(
     mesh: &Mesh,
     basis: BasisView<'_>,
@@ -49,41 +52,52 @@ pub(crate) fn reduced_operator(
 ) -> Vec<f64> {
     let n = basis.n;
     let k = basis.k();
+    // Per triangle of positive area, the weight of each corner's value.
+    let coefs: Vec<([usize; 3], [f64; 3])> = mesh
+        .triangles()
+        .iter()
+        .zip(frames)
+        .filter_map(|(tri, frame)| {
+            let (nrm, j) = frame.as_ref()?;
+            // |t| grad_t f = sum_v f_v J_v, rotated by the normal.
+            let mut gf = [0.0; 3];
+            for c in 0..3 {
+                let fv = f[tri[c]];
+                for d in 0..3 {
+                    gf[d] += fv * j[c][d];
+                }
+            }
+            let rot = cross(*nrm, gf);
+            // |t| <n x grad f, grad g> = sum_v g_v <n x grad f, J_v>: with `rot` = |t| n x
+            // grad f, one more 1/|t|; a third to each corner.
+            let area2 = norm(cross(
+                sub(mesh.positions()[tri[1]], mesh.positions()[tri[0]]),
+                sub(mesh.positions()[tri[2]], mesh.positions()[tri[0]]),
+            ));
+            let inv_area = 2.0 / area2;
+            Some((
+                *tri,
+                [
+                    dot(rot, j[0]) * inv_area / 3.0,
+                    dot(rot, j[1]) * inv_area / 3.0,
+                    dot(rot, j[2]) * inv_area / 3.0,
+                ],
+            ))
+        })
+        .collect();
     let mut op_phi = vec![0.0; n * k];
-    let mut s = vec![0.0; k];
-    for (tri, frame) in mesh.triangles().iter().zip(frames) {
-        let Some((nrm, j)) = frame else { continue };
-        // |t| grad_t f = sum_v f_v J_v, rotated by the normal.
-        let mut gf = [0.0; 3];
-        for c in 0..3 {
-            let fv = f[tri[c]];
-            for d in 0..3 {
-                gf[d] += fv * j[c][d];
-            }
-        }
-        let rot = cross(*nrm, gf);
-        // |t| <n x grad f, grad g> = sum_v g_v <n x grad f, J_v>: with `rot` = |t| n x
-        // grad f, one more 1/|t|; a third to each corner.
-        let area2 = norm(cross(
-            sub(mesh.positions()[tri[1]], mesh.positions()[tri[0]]),
-            sub(mesh.positions()[tri[2]], mesh.positions()[tri[0]]),
-        ));
-        let inv_area = 2.0 / area2;
-        let coef = [
-            dot(rot, j[0]) * inv_area / 3.0,
-            dot(rot, j[1]) * inv_area / 3.0,
-            dot(rot, j[2]) * inv_area / 3.0,
-        ];
-        for (q, sq) in s.iter_mut().enumerate() {
-            let x = &basis.vectors[q * n..(q + 1) * n];
-            *sq = coef[0] * x[tri[0]] + coef[1] * x[tri[1]] + coef[2] * x[tri[2]];
-        }
-        for &v in tri {
-            let w = 1.0 / areas[v];
-            for (q, sq) in s.iter().enumerate() {
-                op_phi[q * n + v] += w * sq;
-            }
-        }
+    if n > 0 {
+        op_phi
+            .par_chunks_mut(n)
+            .zip(basis.vectors.par_chunks(n))
+            .for_each(|(out, x)| {
+                for (tri, coef) in &coefs {
+                    let sq = coef[0] * x[tri[0]] + coef[1] * x[tri[1]] + coef[2] * x[tri[2]];
+                    for &v in tri {
+                        out[v] += (1.0 / areas[v]) * sq;
+                    }
+                }
+            });
     }
     let m_op = sym_spmm(basis.mass, &op_phi, k);
     gram(basis.vectors, &m_op, n, k, k)
