@@ -4,8 +4,10 @@
 //!
 //! `cargo run --release -p spectral-mesh-web --example field_bench -- [SHAPE] [K] [REPEATS]`
 //! (defaults `torus:res=5` (100,352 vertices), 200, 15). The in-process part loads the
-//! basis from `/tmp/field-bench-ID-K.npz` when it is there (else computes and saves it);
-//! the HTTP part starts the server on 127.0.0.1 and computes the basis through the API.
+//! basis from `/tmp/field-bench-ID-K.npz` when it is there (else computes and saves it;
+//! `FIELD_BENCH_COMPUTE=1` always computes it), and splits the critical points into their
+//! classification and their persistence pairing; the HTTP part starts the server on
+//! 127.0.0.1 and computes the basis through the API (`FIELD_BENCH_NO_HTTP=1` skips it).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -18,6 +20,8 @@ use std::time::{Duration, Instant};
 use serde_json::{Value, json};
 use spectral_mesh::analysis::{Analysis, AnalysisOptions, FieldRequest};
 use spectral_mesh::cancel::CancelToken;
+use spectral_mesh::fields::critical_points::{BoundaryRule, CriticalPointFinder};
+use spectral_mesh::fields::persistence::{finite_for_critical, persistence};
 use spectral_mesh::spectral::store::{BasisMeta, load_npz, save_npz};
 use spectral_mesh_web::field::{field_reply, parse_reply};
 use spectral_mesh_web::{ServeConfig, spawn};
@@ -61,7 +65,19 @@ fn http(addr: SocketAddr, method: &str, path: &str, body: &Value) -> (u16, Vec<u
     (status, body)
 }
 
+/// What `--help` prints.
+const USAGE: &str = "field_bench [SHAPE] [K] [REPEATS]   (defaults torus:res=5 200 15)
+  Server time of a field request at SHAPE with K eigenpairs: in-process (field, critical
+  points, level sets, encoding; critical points split into classification and persistence
+  pairing) and through HTTP on 127.0.0.1. Medians of REPEATS requests per interaction.
+  FIELD_BENCH_COMPUTE=1: compute the basis even when /tmp/field-bench-ID-K.npz exists.
+  FIELD_BENCH_NO_HTTP=1: in-process only.";
+
 fn main() {
+    if std::env::args().any(|a| a == "--help" || a == "-h") {
+        println!("{USAGE}");
+        return;
+    }
     let (args, spec, k) = common::spec_and_k("torus:res=5", 200);
     let repeats: usize = args.get(2).map_or(15, |s| s.parse().unwrap());
     // A pool of its own, made first, as the server's field threads (see AppState::fields).
@@ -104,6 +120,11 @@ fn main() {
     );
     // The interactions take turns, so that the load of the moment falls on all three.
     let mut cols: Vec<[Vec<f64>; 5]> = WHAT.iter().map(|_| Default::default()).collect();
+    // The critical points again, outside the timed reply: classification, pairing; and
+    // the counts (raw and shown: minima, saddles, maxima) of the last request.
+    let finder = CriticalPointFinder::new(&mesh);
+    let mut parts: Vec<[Vec<f64>; 2]> = WHAT.iter().map(|_| Default::default()).collect();
+    let mut counts = vec![String::new(); WHAT.len()];
     for i in 0..repeats {
         for (w, what) in WHAT.iter().enumerate() {
             let req: FieldRequest = serde_json::from_value(requests(what, i, n, k)).unwrap();
@@ -122,13 +143,38 @@ fn main() {
             c[2].push(tm.levels);
             c[3].push(total - tm.total);
             c[4].push(total);
+            let values = finite_for_critical(&r.field.values);
+            let (raw, classify_ms, pairing_ms, p) = pool.install(|| {
+                let t = Instant::now();
+                let raw = finder.find(&values, BoundaryRule::default()).unwrap();
+                let classify_ms = t.elapsed().as_secs_f64() * 1e3;
+                let t = Instant::now();
+                let p = persistence(&finder, &values, raw.clone()).unwrap();
+                (raw, classify_ms, t.elapsed().as_secs_f64() * 1e3, p)
+            });
+            parts[w][0].push(classify_ms);
+            parts[w][1].push(pairing_ms);
+            let count = |c: &spectral_mesh::fields::critical_points::CriticalPoints| {
+                format!("{}/{}/{}", c.minima.len(), c.saddle_count(), c.maxima.len())
+            };
+            counts[w] = format!("{} | {}", count(&raw), count(&p.shown));
         }
     }
     for (what, c) in WHAT.iter().zip(cols) {
         let m: Vec<String> = c.into_iter().map(|c| format!("{:.1}", median(c))).collect();
         println!("| {what} | {} |", m.join(" | "));
     }
+    println!(
+        "\ncritical points in-process, medians in ms: | interaction | classification | persistence pairing | raw min/saddles/max (last) | shown |"
+    );
+    for ((what, c), counts) in WHAT.iter().zip(parts).zip(&counts) {
+        let m: Vec<String> = c.into_iter().map(|c| format!("{:.2}", median(c))).collect();
+        println!("| {what} | {} | {counts} |", m.join(" | "));
+    }
     drop(an);
+    if std::env::var_os("FIELD_BENCH_NO_HTTP").is_some() {
+        return;
+    }
 
     // Through HTTP: the server on 127.0.0.1, the basis computed through the API.
     let server = spawn(ServeConfig {

@@ -243,8 +243,9 @@ pub struct CriticalPointFinder {
     /// `(lowest vertex, vertices)` of each component.
     components: Vec<(usize, usize)>,
     /// `neighbours[neighbour_offsets[v]..neighbour_offsets[v + 1]]`: the neighbours of `v`
-    /// (the ends of its link edges), ascending, each once. The persistence sweeps walk
-    /// them (see [`crate::fields::persistence`]).
+    /// (the ends of its link edges), each once: around the cycle when the link is one
+    /// simple cycle, else ascending. The persistence sweeps walk them (see
+    /// [`crate::fields::persistence`]).
     neighbour_offsets: Vec<usize>,
     neighbours: Vec<u32>,
 }
@@ -269,7 +270,7 @@ impl CriticalPointFinder {
             }
             offsets.push(edges.len());
         }
-        let simple = (0..n)
+        let simple: Vec<bool> = (0..n)
             .into_par_iter()
             .with_min_len(FIND_CHUNK)
             .map(|v| is_simple_cycle(&edges[offsets[v]..offsets[v + 1]]))
@@ -295,7 +296,7 @@ impl CriticalPointFinder {
             component[v] = root_id[r];
             components[root_id[r] as usize].1 += 1;
         }
-        let (neighbour_offsets, neighbours) = neighbour_lists(&offsets, &edges);
+        let (neighbour_offsets, neighbours) = neighbour_lists(&offsets, &edges, &simple);
         Self {
             offsets,
             edges,
@@ -356,15 +357,15 @@ impl CriticalPointFinder {
         &self.edges[self.offsets[v]..self.offsets[v + 1]]
     }
 
-    /// The neighbours of `v` (the ends of its link edges), ascending, each once.
-    pub(crate) fn neighbours(&self, v: usize) -> &[u32] {
-        &self.neighbours[self.neighbour_offsets[v]..self.neighbour_offsets[v + 1]]
-    }
-
-    /// Connected component of every vertex (as [`CriticalPointFinder::component_of`]),
-    /// `u32::MAX` for a vertex no triangle uses.
-    pub(crate) fn component_ids(&self) -> &[u32] {
-        &self.component
+    /// The neighbours of `v` (the ends of its link edges), each once, and whether they are
+    /// in the order of the link cycle (the link is one simple cycle: consecutive
+    /// neighbours, the last and the first included, share a triangle edge); else
+    /// ascending.
+    pub(crate) fn neighbours(&self, v: usize) -> (&[u32], bool) {
+        (
+            &self.neighbours[self.neighbour_offsets[v]..self.neighbour_offsets[v + 1]],
+            self.simple[v],
+        )
     }
 
     /// Connected component of `v` (through triangles, numbered by lowest vertex), `None`
@@ -470,30 +471,55 @@ impl CriticalPointFinder {
     }
 }
 
-/// The neighbour lists (ascending, without repeats) of the link edges
-/// `edges[offsets[v]..offsets[v + 1]]` of every vertex, in compressed form.
-fn neighbour_lists(offsets: &[usize], edges: &[(usize, usize)]) -> (Vec<usize>, Vec<u32>) {
+/// The neighbour lists of every vertex from its link edges `edges[offsets[v]..offsets[v +
+/// 1]]`, in compressed form: in the order of the cycle for a link that is one simple cycle
+/// (`simple`; consecutive neighbours, the last and the first included, share a triangle
+/// edge), else ascending without repeats.
+fn neighbour_lists(
+    offsets: &[usize],
+    edges: &[(usize, usize)],
+    simple: &[bool],
+) -> (Vec<usize>, Vec<u32>) {
     let n = offsets.len() - 1;
     let mut nbr_offsets = Vec::with_capacity(n + 1);
     nbr_offsets.push(0);
+    // Vertex ids fit in u32, as in the component numbering.
     let mut nbrs: Vec<u32> = Vec::with_capacity(edges.len() + edges.len() / 4);
     for v in 0..n {
+        let link = &edges[offsets[v]..offsets[v + 1]];
         let start = nbrs.len();
-        for &(a, b) in &edges[offsets[v]..offsets[v + 1]] {
-            // The component numbering already holds vertex ids in u32.
-            nbrs.push(a as u32);
-            nbrs.push(b as u32);
-        }
-        nbrs[start..].sort_unstable();
-        let mut kept = start;
-        for i in start..nbrs.len() {
-            if kept == start || nbrs[kept - 1] != nbrs[i] {
-                nbrs[kept] = nbrs[i];
-                kept += 1;
+        if simple[v] {
+            // Walk the cycle (at most 64 edges: see `simple_cycle_changes`).
+            let first = link[0].0;
+            let mut cur = link[0].1;
+            let mut used: u64 = 1;
+            nbrs.push(first as u32);
+            while cur != first {
+                nbrs.push(cur as u32);
+                let next = link
+                    .iter()
+                    .enumerate()
+                    .find(|&(i, &(a, b))| used & (1 << i) == 0 && (a == cur || b == cur));
+                let Some((i, &(a, b))) = next else { break };
+                used |= 1 << i;
+                cur = if a == cur { b } else { a };
             }
+        } else {
+            for &(a, b) in link {
+                nbrs.push(a as u32);
+                nbrs.push(b as u32);
+            }
+            nbrs[start..].sort_unstable();
+            let mut kept = start;
+            for i in start..nbrs.len() {
+                if kept == start || nbrs[kept - 1] != nbrs[i] {
+                    nbrs[kept] = nbrs[i];
+                    kept += 1;
+                }
+            }
+            nbrs.truncate(kept);
         }
-        nbrs.truncate(kept);
-        nbr_offsets.push(kept);
+        nbr_offsets.push(nbrs.len());
     }
     (nbr_offsets, nbrs)
 }
@@ -502,16 +528,22 @@ fn neighbour_lists(offsets: &[usize], edges: &[(usize, usize)]) -> (Vec<usize>, 
 /// (differences below the tolerance become ties); unchanged when that step is zero (a
 /// field of zeros or without finite values).
 pub(crate) fn quantized(field: &[f64]) -> Vec<f64> {
+    let q = quantizer(field);
+    field.iter().map(|&x| q(x)).collect()
+}
+
+/// The rounding of [`quantized`] as a function of one value of `field`.
+pub(crate) fn quantizer(field: &[f64]) -> impl Fn(f64) -> f64 + Copy + Sync {
     let (mut lo, mut scale) = (f64::INFINITY, 0.0f64);
     for &x in field.iter().filter(|x| x.is_finite()) {
         lo = lo.min(x);
         scale = scale.max(x.abs());
     }
     let tol = FLAT_RELATIVE_TOLERANCE * scale;
-    if tol <= 0.0 || !tol.is_finite() {
-        return field.to_vec();
+    let rounds = tol > 0.0 && tol.is_finite();
+    move |x: f64| {
+        if rounds { ((x - lo) / tol).round() } else { x }
     }
-    field.iter().map(|&x| ((x - lo) / tol).round()).collect()
 }
 
 /// True when the link edges form one simple cycle (see [`simple_cycle_changes`]).

@@ -37,8 +37,10 @@
 //!
 //! The raw set stays available ([`Persistence::raw`]) with its own check.
 
+use rayon::prelude::*;
+
 use crate::fields::critical_points::{
-    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError, quantized,
+    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError, quantizer,
 };
 
 /// A pair whose persistence is below this fraction of the field's range (`max - min`) is
@@ -142,33 +144,41 @@ pub fn persistence(
             got: field.len(),
         });
     }
-    // The classification's order: rounded values, ties by index; the sweep down walks it
-    // backwards. Both sweeps at once.
-    let order = sweep_order(finder, &quantized(field));
-    let ((up_pairs, up_essential), (down_pairs, down_essential)) = rayon::join(
-        || sweep(finder, &order, false),
-        || sweep(finder, &order, true),
-    );
-
-    // Range and scale over finite values; per component as well.
+    // The classification's order: rounded values, ties by index. Both sweeps at once.
+    let keys = sort_keys(field);
+    let local = local_order(finder, &keys);
     let nc = finder.n_components();
-    let mut lo = vec![f64::INFINITY; nc];
-    let mut hi = vec![f64::NEG_INFINITY; nc];
-    let mut finite = vec![true; nc];
-    let mut first = vec![usize::MAX; nc];
-    for v in 0..n {
-        let Some(c) = finder.component_of(v) else {
-            continue;
-        };
-        first[c] = first[c].min(v);
-        let x = field[v];
-        if x.is_finite() {
-            lo[c] = lo[c].min(x);
-            hi[c] = hi[c].max(x);
-        } else {
-            finite[c] = false;
+    // Range and scale over finite values; per component as well (meanwhile).
+    let ranges = || {
+        let mut lo = vec![f64::INFINITY; nc];
+        let mut hi = vec![f64::NEG_INFINITY; nc];
+        let mut finite = vec![true; nc];
+        let mut first = vec![usize::MAX; nc];
+        for v in 0..n {
+            let Some(c) = finder.component_of(v) else {
+                continue;
+            };
+            first[c] = first[c].min(v);
+            let x = field[v];
+            if x.is_finite() {
+                lo[c] = lo[c].min(x);
+                hi[c] = hi[c].max(x);
+            } else {
+                finite[c] = false;
+            }
         }
-    }
+        (lo, hi, finite, first)
+    };
+    let (((up_pairs, up_essential), (down_pairs, down_essential)), (lo, hi, finite, first)) =
+        rayon::join(
+            || {
+                rayon::join(
+                    || sweep(finder, &keys, &local, false),
+                    || sweep(finder, &keys, &local, true),
+                )
+            },
+            ranges,
+        );
     let (glo, ghi) = (0..nc).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
         (a.min(lo[c]), b.max(hi[c]))
     });
@@ -341,89 +351,159 @@ pub fn finite_for_critical(field: &[f64]) -> std::borrow::Cow<'_, [f64]> {
     }
 }
 
-/// The vertices a triangle uses, ascending by `q` (in [`f64::total_cmp`]'s order) with
-/// ties broken by index: a stable least-significant-digit radix sort of the values' bits
-/// (11 bits a pass; a pass whose digit is the same for every vertex is skipped, as most
-/// high digits of rounded values are).
-fn sweep_order(finder: &CriticalPointFinder, q: &[f64]) -> Vec<u32> {
-    const BITS: u32 = 11;
-    const BUCKETS: usize = 1 << BITS;
-    // The bits ordered as `total_cmp` orders the values.
-    let key = |x: f64| {
-        let b = x.to_bits();
-        if b >> 63 == 1 { !b } else { b | (1 << 63) }
-    };
-    let comp = finder.component_ids();
-    let (mut keys, mut order): (Vec<u64>, Vec<u32>) = (0..q.len())
-        .filter(|&v| comp[v] != u32::MAX)
-        .map(|v| (key(q[v]), v as u32))
-        .unzip();
-    if order.is_empty() {
-        return order;
-    }
-    let (mut keys_to, mut order_to) = (vec![0u64; keys.len()], vec![0u32; order.len()]);
-    // The digits that differ somewhere: bits where some key differs from the first.
-    let differ = keys.iter().fold(0u64, |acc, &k| acc | (k ^ keys[0]));
-    let mut count = vec![0usize; BUCKETS];
-    let mut shift = 0;
-    while shift < 64 {
-        let mask = (BUCKETS as u64 - 1) << shift;
-        if differ & mask != 0 {
-            count.fill(0);
-            for &k in &keys {
-                count[((k >> shift) as usize) & (BUCKETS - 1)] += 1;
-            }
-            let mut sum = 0;
-            for c in count.iter_mut() {
-                let here = *c;
-                *c = sum;
-                sum += here;
-            }
-            for (&k, &v) in keys.iter().zip(&order) {
-                let d = ((k >> shift) as usize) & (BUCKETS - 1);
-                keys_to[count[d]] = k;
-                order_to[count[d]] = v;
-                count[d] += 1;
-            }
-            std::mem::swap(&mut keys, &mut keys_to);
-            std::mem::swap(&mut order, &mut order_to);
-        }
-        shift += BITS;
-    }
-    order
+/// The bits of every value of `field` as the classification rounds it, ordered as
+/// [`f64::total_cmp`] orders the rounded values: the sweeps' order is that of
+/// `(key, vertex)`.
+fn sort_keys(field: &[f64]) -> Vec<u64> {
+    let q = quantizer(field);
+    field
+        .par_iter()
+        .with_min_len(CHUNK)
+        .map(|&x| {
+            let b = q(x).to_bits();
+            if b >> 63 == 1 { !b } else { b | (1 << 63) }
+        })
+        .collect()
 }
 
-/// No vertex: the parent of a vertex the sweep has not reached yet.
-const UNSWEPT: u32 = u32::MAX;
+/// Vertices per parallel task of the sweeps.
+const CHUNK: usize = 4096;
 
-/// One sweep over `order` (every vertex a triangle uses; backwards when `down`): the pairs
-/// `(extremum, saddle)` of the pieces that die, and the extremum of each piece left at the
-/// end (one per connected component), ascending.
+/// No vertex (a vertex no triangle uses; a basin not yet known).
+const NONE: u32 = u32::MAX;
+
+/// What the sweeps need of one vertex's neighbourhood.
+#[derive(Debug, Clone, Copy)]
+struct Local {
+    /// The lowest neighbour when it is below the vertex, else the vertex itself (a
+    /// minimum); [`NONE`] for a vertex no triangle uses.
+    low: u32,
+    /// The highest neighbour when it is above the vertex, else the vertex (a maximum).
+    high: u32,
+    /// Bit 0: the vertex may join pieces in the sweep up; bit 1: in the sweep down.
+    may_join: u8,
+}
+
+/// [`Local`] of every vertex, in one parallel pass over the neighbours in the order of
+/// `(keys[v], v)`. A vertex whose link is one simple cycle can join pieces only when its
+/// lower neighbours form two arcs or more around the cycle (four changes or more between
+/// lower and upper): consecutive lower neighbours share a triangle edge, below the vertex,
+/// so one arc is already one piece. Any other vertex may join pieces when two of its
+/// neighbours are below it (above it, going down).
+fn local_order(finder: &CriticalPointFinder, keys: &[u64]) -> Vec<Local> {
+    (0..finder.n_vertices() as u32)
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map(|v| {
+            let (nbrs, cyclic) = finder.neighbours(v as usize);
+            let Some(&last) = nbrs.last() else {
+                return Local {
+                    low: NONE,
+                    high: NONE,
+                    may_join: 0,
+                };
+            };
+            let kv = (keys[v as usize], v);
+            let (mut lo, mut hi) = (kv, kv);
+            let mut prev = (keys[last as usize], last) < kv;
+            let (mut below, mut changes) = (0usize, 0usize);
+            for &u in nbrs {
+                let ku = (keys[u as usize], u);
+                let is_below = ku < kv;
+                lo = lo.min(ku);
+                hi = hi.max(ku);
+                below += usize::from(is_below);
+                changes += usize::from(is_below != prev);
+                prev = is_below;
+            }
+            let may_join = if cyclic {
+                if changes >= 4 { 3 } else { 0 }
+            } else {
+                u8::from(below >= 2) | (u8::from(nbrs.len() - below >= 2) << 1)
+            };
+            Local {
+                low: lo.1,
+                high: hi.1,
+                may_join,
+            }
+        })
+        .collect()
+}
+
+/// One sweep (up, or down when `down`) in the order of `(keys[v], v)` over the vertices a
+/// triangle uses: the pairs `(extremum, saddle)` of the pieces that die, and the extremum
+/// of each piece left at the end (one per connected component), ascending.
 ///
-/// A union-find over the vertices swept so far (path halving, union by size) holds the
-/// pieces of the sublevel (superlevel) set; each root keeps the step at which its piece was
-/// born. A vertex joins the pieces of its swept neighbours one at a time: of two pieces
-/// the younger dies at the vertex (the elder rule), which pairs the same extrema with the
-/// same saddles as joining all of them at once to the oldest. O(n log n) for the sort
-/// before it, about O(n) here; no allocation per vertex.
+/// The pieces of the sublevel set (superlevel set when `down`) are found without sweeping
+/// every vertex through a union-find:
+///
+/// 1. Each vertex points to its steepest earlier neighbour (the lowest one going up),
+///    an extremum to itself ([`local_order`]).
+/// 2. Following the pointers gives each vertex the *basin* of its extremum. When a vertex
+///    is reached, the path to its extremum runs through earlier vertices, so it lies in
+///    the same piece as its extremum.
+/// 3. Only the vertices [`local_order`] marks can join pieces (about the saddles); any
+///    other vertex joins the one piece its earlier neighbours lie in.
+/// 4. The marked vertices, sorted, run through a union-find over the basins: where pieces
+///    meet the younger dies (the elder rule) and its extremum is paired with the vertex.
+///
+/// This pairs exactly as a union-find sweep over every vertex in sorted order (kept in the
+/// tests as the reference and compared with this one), in O(n) besides the sort of the
+/// marked vertices, without per-vertex allocation.
 fn sweep(
     finder: &CriticalPointFinder,
-    order: &[u32],
+    keys: &[u64],
+    local: &[Local],
     down: bool,
 ) -> (Vec<(usize, usize)>, Vec<usize>) {
     let n = finder.n_vertices();
-    let len = order.len();
-    let at = |step: usize| -> u32 {
-        if down {
-            order[len - 1 - step]
-        } else {
-            order[step]
-        }
+    // u comes before v in this sweep.
+    let before = |u: u32, v: u32| -> bool {
+        let (a, b) = ((keys[u as usize], u), (keys[v as usize], v));
+        if down { a > b } else { a < b }
     };
-    let mut parent = vec![UNSWEPT; n];
-    let mut size = vec![1u32; n];
-    // At a root: the step at which the piece's extremum was swept.
-    let mut born = vec![0u32; n];
+    let to = |v: u32| -> u32 {
+        let l = local[v as usize];
+        if down { l.high } else { l.low }
+    };
+    // 2. Basins: each path is walked once, then every vertex on it gets its basin.
+    let mut basin = vec![NONE; n];
+    let mut extrema: Vec<u32> = Vec::new();
+    let mut path: Vec<u32> = Vec::new();
+    for v in 0..n as u32 {
+        if to(v) == NONE || basin[v as usize] != NONE {
+            continue;
+        }
+        path.clear();
+        let mut x = v;
+        while basin[x as usize] == NONE && to(x) != x {
+            path.push(x);
+            x = to(x);
+        }
+        let b = if basin[x as usize] == NONE {
+            let b = extrema.len() as u32;
+            extrema.push(x);
+            basin[x as usize] = b;
+            b
+        } else {
+            basin[x as usize]
+        };
+        for &y in &path {
+            basin[y as usize] = b;
+        }
+    }
+    // 3. The vertices that may join pieces, in the order of the sweep.
+    let bit = if down { 2 } else { 1 };
+    let mut joins: Vec<u32> = (0..n as u32)
+        .filter(|&v| local[v as usize].may_join & bit != 0)
+        .collect();
+    joins.sort_unstable_by_key(|&v| (keys[v as usize], v));
+    if down {
+        joins.reverse();
+    }
+    // 4. A union-find over the basins; each root keeps its piece's extremum (the oldest).
+    let mut parent: Vec<u32> = (0..extrema.len() as u32).collect();
+    let oldest = extrema;
     let find = |parent: &mut [u32], mut x: u32| -> u32 {
         while parent[x as usize] != x {
             let up = parent[parent[x as usize] as usize];
@@ -433,48 +513,33 @@ fn sweep(
         x
     };
     let mut pairs = Vec::new();
-    for step in 0..len {
-        let v = at(step);
-        parent[v as usize] = v;
-        born[v as usize] = step as u32;
-        // The root of v's piece; v alone until it meets a swept neighbour.
-        let mut root = v;
-        let mut alone = true;
-        for &u in finder.neighbours(v as usize) {
-            if parent[u as usize] == UNSWEPT {
+    for v in joins {
+        let mut root = NONE;
+        for &u in finder.neighbours(v as usize).0 {
+            if !before(u, v) {
                 continue;
             }
-            let r = find(&mut parent, u);
+            let r = find(&mut parent, basin[u as usize]);
+            if root == NONE {
+                root = r;
+                continue;
+            }
             if r == root {
                 continue;
             }
-            let (elder, younger) = if born[r as usize] < born[root as usize] {
+            let (elder, younger) = if before(oldest[r as usize], oldest[root as usize]) {
                 (r, root)
             } else {
                 (root, r)
             };
-            // The first piece v meets takes v in (v is no extremum); every further one
-            // meets another piece at v, a saddle, and the younger of the two dies.
-            if !alone {
-                pairs.push((at(born[younger as usize] as usize) as usize, v as usize));
-            }
-            alone = false;
-            let oldest = born[elder as usize];
-            let (big, small) = if size[r as usize] >= size[root as usize] {
-                (r, root)
-            } else {
-                (root, r)
-            };
-            parent[small as usize] = big;
-            size[big as usize] += size[small as usize];
-            born[big as usize] = oldest;
-            root = big;
+            pairs.push((oldest[younger as usize] as usize, v as usize));
+            parent[younger as usize] = elder;
+            root = elder;
         }
     }
-    let mut essential: Vec<usize> = (0..len)
-        .map(at)
-        .filter(|&v| parent[v as usize] == v)
-        .map(|v| at(born[v as usize] as usize) as usize)
+    let mut essential: Vec<usize> = (0..parent.len() as u32)
+        .filter(|&r| parent[r as usize] == r)
+        .map(|r| oldest[r as usize] as usize)
         .collect();
     essential.sort_unstable();
     (pairs, essential)
