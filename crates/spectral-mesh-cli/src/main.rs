@@ -5,6 +5,7 @@ mod commands;
 #[cfg(test)]
 mod defaults_test;
 mod engine;
+mod field_output;
 mod figure;
 mod input;
 mod output;

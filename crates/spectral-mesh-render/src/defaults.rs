@@ -6,7 +6,7 @@
 use serde_json::{Value, json};
 
 use crate::Colormap;
-use crate::figure::{FigureOptions, view_name};
+use crate::options::{FigureOptions, view_name};
 
 /// The library's defaults plus `figure` (levels, colour map, view, size, transparent,
 /// critical points, colour bar, legend) and `colormaps`.

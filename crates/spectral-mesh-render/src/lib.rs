@@ -16,6 +16,7 @@ pub mod colormap;
 pub mod defaults;
 pub mod description;
 pub mod figure;
+pub mod options;
 mod overlay;
 pub mod pair;
 pub mod plots;

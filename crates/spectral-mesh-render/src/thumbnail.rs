@@ -4,7 +4,8 @@
 use spectral_mesh::Mesh;
 use spectral_mesh::batch::Thumbnailer;
 
-use crate::figure::{Canvas, Figure, FigureOptions};
+use crate::figure::Figure;
+use crate::options::{Canvas, FigureOptions};
 
 /// Draws batch thumbnails with [`Figure`]: the field in the default colour map with 10
 /// level sets, no critical-point markers and no colour bar, `size x size` pixels.

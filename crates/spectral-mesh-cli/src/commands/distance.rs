@@ -10,7 +10,8 @@ use spectral_mesh::spectral::distances::{ALL_PAIRS_LIMIT, all_pairs};
 use spectral_mesh::spectral::store::npy_f64;
 
 use crate::engine::{self, FieldBasisArgs, check_vertex};
-use crate::output::{FieldOutputArgs, check_writable, extension, write};
+use crate::field_output::FieldOutputArgs;
+use crate::output::{check_writable, extension, write};
 
 /// The syntax of `--distance` / `--filter`, shown in `--help`.
 pub const FILTER_HELP: &str = "The filter, stored as its weight w = 1/phi; \

@@ -9,8 +9,8 @@ use spectral_mesh::analysis::{FieldRequest, Kernel, Signal};
 use spectral_mesh::experiments::paper::FieldStats;
 
 use crate::engine::{self, FieldBasisArgs, check_vertex};
+use crate::field_output::FieldOutputArgs;
 use crate::input::read_field;
-use crate::output::FieldOutputArgs;
 
 /// The kernels, as typed.
 fn kernel_parser() -> impl clap::builder::TypedValueParser<Value = Kernel> {

@@ -10,8 +10,9 @@ use spectral_mesh::fields::segmentation::patch_genera;
 use spectral_mesh_render::figure::field_text;
 
 use crate::engine::{self, FieldBasisArgs};
+use crate::field_output::FieldOutputArgs;
 use crate::input::read_field;
-use crate::output::{FieldOutputArgs, check_outputs, write};
+use crate::output::{check_outputs, write};
 
 /// Help of `--signature`.
 const SIGNATURE_HELP: &str = "The field whose maxima seed the patches:

@@ -16,7 +16,8 @@ use spectral_mesh::spectral::signatures::{
 
 use super::distance::FILTER_HELP;
 use crate::engine::{self, FieldBasisArgs};
-use crate::output::{FieldOutputArgs, extension, write};
+use crate::field_output::FieldOutputArgs;
+use crate::output::{extension, write};
 
 /// Which signature.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]

@@ -17,7 +17,7 @@ use spectral_mesh::shapes::ShapeError;
 use spectral_mesh::{Laplacian, Mesh};
 
 use super::reading::{
-    SHAPE_BYTES_PER_VERTEX, UPLOAD_FACTOR, json_body, no_room, read_body, reserve,
+    SHAPE_BYTES_PER_VERTEX, UPLOAD_FACTOR, check_id, json_body, no_room, read_body, reserve,
 };
 use crate::body;
 use crate::entries::{AnalysisKey, Item, Key, Loaded, MeshEntry, Reservation};
@@ -53,14 +53,6 @@ pub(super) async fn shapes() -> Json<serde_json::Value> {
         })
         .collect();
     Json(json!({ "shapes": list }))
-}
-
-pub(super) fn check_id(id: &str) -> ApiResult<()> {
-    if id.len() == 16 && id.bytes().all(|b| b.is_ascii_hexdigit()) {
-        Ok(())
-    } else {
-        Err(ApiError::bad("a mesh id is 16 hexadecimal digits"))
-    }
 }
 
 /// `k` against an input of `n` vertices or points (`noun`) and `--max-k` (422), in the

@@ -7,12 +7,20 @@ use axum::extract::{FromRequest, FromRequestParts, Path, Request};
 use axum::http::{HeaderMap, StatusCode, header};
 use http_body_util::BodyExt;
 
-use super::meshes::check_id;
 use crate::cache::Shortfall;
 use crate::entries::Reservation;
 use crate::error::{ApiError, ApiResult, internal};
 use crate::limits::{Deadline, mib};
 use crate::state::AppState;
+
+/// A mesh id as the server hands them out: 16 hexadecimal digits (400 otherwise).
+pub(super) fn check_id(id: &str) -> ApiResult<()> {
+    if id.len() == 16 && id.bytes().all(|b| b.is_ascii_hexdigit()) {
+        Ok(())
+    } else {
+        Err(ApiError::bad("a mesh id is 16 hexadecimal digits"))
+    }
+}
 
 /// The answer to a reservation that failed: 503 when other work holds the memory (try
 /// again), `never` (413 or 422) when it could never fit.
