@@ -71,7 +71,7 @@ def generate(a):
     rng = random.Random(a.seed)
     out = Path(a.meshes)
     out.mkdir(parents=True, exist_ok=True)
-    shared = Path(os.environ.get("SPECTRAL_MESH_SHARED_MESHES", "/work/shared/meshes"))
+    shared = Path(os.environ.get("SPECTRAL_MESH_SHARED_MESHES", str(Path(__file__).resolve().parents[2] / "shared" / "meshes")))
     bases = []
     for spec, n in BUILTIN:
         bases.append(("shape", spec, n))

@@ -3,7 +3,7 @@
 `eigs` and `distance` with each discretization that applies; prints a Markdown table.
 
     nice -n 19 python3 bench/real_inputs.py --cli target/release/spectral-mesh \
-        --meshes /work/shared/meshes --points /work/shared/points -k 20 > table.md
+        --meshes ../shared/meshes --points ../shared/points -k 20 > table.md
 
 Meshes take cot, voronoi-cot, fem, mixed-voronoi, uniform and robust; point clouds take
 robust only (their point-cloud Laplacian). A row passes when both commands exit 0 with finite
@@ -19,6 +19,9 @@ import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
+
+SHARED = Path(__file__).resolve().parents[2] / "shared"  # ../shared beside the clone
 
 MESH_LAPLACIANS = ["cot", "voronoi-cot", "fem", "mixed-voronoi", "uniform", "robust"]
 
@@ -256,8 +259,8 @@ def row(cli, name, path, lap, k, tmp, timeout):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cli", required=True)
-    ap.add_argument("--meshes", default="/work/shared/meshes")
-    ap.add_argument("--points", default="/work/shared/points")
+    ap.add_argument("--meshes", default=str(SHARED / "meshes"))
+    ap.add_argument("--points", default=str(SHARED / "points"))
     ap.add_argument("-k", type=int, default=20)
     ap.add_argument("--timeout", type=int, default=900)
     a = ap.parse_args()

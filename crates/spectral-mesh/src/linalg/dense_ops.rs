@@ -7,7 +7,6 @@
 use faer::linalg::matmul::matmul;
 use faer::linalg::solvers::Solve;
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
-use rayon::prelude::*;
 
 fn view(x: &[f64], rows: usize, cols: usize) -> MatRef<'_, f64> {
     MatRef::from_column_major_slice(&x[..rows * cols], rows, cols)
@@ -89,82 +88,9 @@ pub fn solve_symmetric(h: &[f64], n: usize, rhs: &mut [f64]) -> Option<Symmetric
     rhs.iter().take(n).all(|v| v.is_finite()).then_some(route)
 }
 
-/// For each of the `m` rows of `queries` (`m x d`) the index of the nearest of the `n`
-/// rows of `points` (`n x d`) in the Euclidean distance, from `|p|^2 - 2 p.q` computed
-/// by blocked matrix products on both cores. Exact up to the rounding of that
-/// expansion, which can only swap two rows whose squared distances agree to about
-/// `1e-15 |p|^2`. Spectral embeddings have 16 to a few hundred columns, where a k-d tree
-/// prunes almost nothing and this is one to two orders of magnitude faster.
-pub fn nearest_rows_by_products(
-    points: &[f64],
-    n: usize,
-    queries: &[f64],
-    m: usize,
-    d: usize,
-) -> Vec<usize> {
-    const BLOCK: usize = 512;
-    if n == 0 || m == 0 {
-        return vec![0; m];
-    }
-    let norms: Vec<f64> = (0..n)
-        .map(|j| (0..d).map(|c| points[c * n + j].powi(2)).sum())
-        .collect();
-    let p = view(points, n, d);
-    let q = view(queries, m, d);
-    let mut dots = vec![0.0; n * BLOCK.min(m)];
-    let mut out = Vec::with_capacity(m);
-    let mut start = 0;
-    while start < m {
-        let b = BLOCK.min(m - start);
-        if d > 0 {
-            matmul(
-                view_mut(&mut dots, n, b),
-                Accum::Replace,
-                p,
-                q.subrows(start, b).transpose(),
-                1.0,
-                Par::rayon(0),
-            );
-        }
-        let best: Vec<usize> = dots[..n * b]
-            .par_chunks(n)
-            .map(|col| {
-                let mut best = (f64::INFINITY, 0);
-                for (j, (&g, &norm)) in col.iter().zip(&norms).enumerate() {
-                    let s = norm - 2.0 * g;
-                    if s < best.0 {
-                        best = (s, j);
-                    }
-                }
-                best.1
-            })
-            .collect();
-        out.extend(best);
-        start += b;
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn nearest_rows_by_products_equal_an_exhaustive_search() {
-        let (n, m, d) = (300, 700, 40);
-        let pts: Vec<f64> = (0..n * d).map(|i| (i as f64 * 0.731).sin()).collect();
-        let qs: Vec<f64> = (0..m * d).map(|i| (i as f64 * 0.377).cos()).collect();
-        let got = nearest_rows_by_products(&pts, n, &qs, m, d);
-        for (i, &g) in got.iter().enumerate() {
-            let dist = |j: usize| -> f64 {
-                (0..d)
-                    .map(|c| (pts[c * n + j] - qs[c * m + i]).powi(2))
-                    .sum()
-            };
-            let best = (0..n).map(dist).fold(f64::INFINITY, f64::min);
-            assert!(dist(g) <= best * (1.0 + 1e-12), "query {i}");
-        }
-    }
 
     #[test]
     fn products_match_loops() {
