@@ -147,38 +147,71 @@ pub fn persistence(
     // The classification's order: rounded values, ties by index. Both sweeps at once.
     let keys = sort_keys(field);
     let local = local_order(finder, &keys);
+    // Range and scale over finite values, per component as well, meanwhile.
+    let ((up, down), ranges) = rayon::join(
+        || {
+            rayon::join(
+                || sweep(finder, &keys, &local, false),
+                || sweep(finder, &keys, &local, true),
+            )
+        },
+        || component_ranges(finder, field),
+    );
+    Ok(assemble(finder, field, raw, ranges, up, down))
+}
+
+/// Per connected component: the least and largest finite values, whether every value is
+/// finite, and the first vertex.
+pub(super) struct ComponentRanges {
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    finite: Vec<bool>,
+    first: Vec<usize>,
+}
+
+/// The [`ComponentRanges`] of `field`.
+pub(super) fn component_ranges(finder: &CriticalPointFinder, field: &[f64]) -> ComponentRanges {
     let nc = finder.n_components();
-    // Range and scale over finite values; per component as well (meanwhile).
-    let ranges = || {
-        let mut lo = vec![f64::INFINITY; nc];
-        let mut hi = vec![f64::NEG_INFINITY; nc];
-        let mut finite = vec![true; nc];
-        let mut first = vec![usize::MAX; nc];
-        for v in 0..n {
-            let Some(c) = finder.component_of(v) else {
-                continue;
-            };
-            first[c] = first[c].min(v);
-            let x = field[v];
-            if x.is_finite() {
-                lo[c] = lo[c].min(x);
-                hi[c] = hi[c].max(x);
-            } else {
-                finite[c] = false;
-            }
-        }
-        (lo, hi, finite, first)
+    let mut r = ComponentRanges {
+        lo: vec![f64::INFINITY; nc],
+        hi: vec![f64::NEG_INFINITY; nc],
+        finite: vec![true; nc],
+        first: vec![usize::MAX; nc],
     };
-    let (((up_pairs, up_essential), (down_pairs, down_essential)), (lo, hi, finite, first)) =
-        rayon::join(
-            || {
-                rayon::join(
-                    || sweep(finder, &keys, &local, false),
-                    || sweep(finder, &keys, &local, true),
-                )
-            },
-            ranges,
-        );
+    for (v, &x) in field.iter().enumerate().take(finder.n_vertices()) {
+        let Some(c) = finder.component_of(v) else {
+            continue;
+        };
+        r.first[c] = r.first[c].min(v);
+        if x.is_finite() {
+            r.lo[c] = r.lo[c].min(x);
+            r.hi[c] = r.hi[c].max(x);
+        } else {
+            r.finite[c] = false;
+        }
+    }
+    r
+}
+
+/// The persistence result from the two sweeps' pairs and essential extrema (`up`:
+/// minima, `down`: maxima): each pair's persistence, the pairs hidden under the default
+/// threshold (within each raw saddle's share of the Euler count), and the shown set.
+pub(super) fn assemble(
+    finder: &CriticalPointFinder,
+    field: &[f64],
+    raw: CriticalPoints,
+    ranges: ComponentRanges,
+    (up_pairs, up_essential): (Vec<(usize, usize)>, Vec<usize>),
+    (down_pairs, down_essential): (Vec<(usize, usize)>, Vec<usize>),
+) -> Persistence {
+    let n = finder.n_vertices();
+    let nc = finder.n_components();
+    let ComponentRanges {
+        lo,
+        hi,
+        finite,
+        first,
+    } = ranges;
     let (glo, ghi) = (0..nc).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
         (a.min(lo[c]), b.max(hi[c]))
     });
@@ -313,7 +346,7 @@ pub fn persistence(
         .filter(|&v| kept(v))
         .collect();
     let quiet_components = (0..nc).filter(|&c| quiet[c]).map(|c| first[c]).collect();
-    Ok(Persistence {
+    Persistence {
         raw,
         shown,
         pairs,
@@ -321,7 +354,7 @@ pub fn persistence(
         relative_threshold: PERSISTENCE_RELATIVE_THRESHOLD,
         noise_floor: PERSISTENCE_NOISE_FLOOR,
         quiet_components,
-    })
+    }
 }
 
 /// The critical points of `field` on `mesh` (default boundary rule) with their
