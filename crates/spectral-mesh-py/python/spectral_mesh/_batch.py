@@ -37,6 +37,18 @@ def _schedule(value: Any, key: str) -> str | None:
     return ",".join(repr(x) for x in values)
 
 
+def worker_threads() -> int:
+    """On a Dask worker, its ``nthreads`` (every task of the worker process shares one
+    pool of that many threads); elsewhere 0 (the engine's default)."""
+    try:
+        from distributed import get_worker
+
+        w = get_worker()
+        return int(getattr(getattr(w, "state", w), "nthreads", 0) or w.nthreads)
+    except (ImportError, ValueError, AttributeError):
+        return 0
+
+
 def _task(path: str, name: str, params: str, out: str, threads: int | None,
           retry_failed: bool) -> dict:
     """One shape (run in a pool process or as a Dask task): its record as a dict.
@@ -44,14 +56,7 @@ def _task(path: str, name: str, params: str, out: str, threads: int | None,
     On a Dask worker, ``threads=None`` holds our threads to the worker's ``nthreads``:
     every task of the worker process shares one pool of that many threads."""
     if threads is None:
-        threads = 0
-        try:
-            from distributed import get_worker
-
-            w = get_worker()
-            threads = int(getattr(getattr(w, "state", w), "nthreads", 0) or w.nthreads)
-        except (ImportError, ValueError, AttributeError):
-            threads = 0
+        threads = worker_threads()
     if os.environ.get(_TEST_ABORT) == name:
         os.abort()  # the test hook: a crash of the process working on this shape
     return json.loads(_native.batch_one(path, name, params, out, threads, retry_failed))

@@ -21,6 +21,7 @@ import numpy.typing as npt
 
 from . import _arrays, _native
 from ._api import eigenbasis
+from ._batch import worker_threads
 from ._defaults import KIND
 
 _D: dict = _native.defaults()["correspondence"]
@@ -189,14 +190,7 @@ def _pair_task(job: str, params: str, out: str, threads: int | None) -> dict:
     """One pair (run here or as a Dask task): its record as a dict. On a Dask worker,
     ``threads=None`` holds our threads to the worker's ``nthreads``."""
     if threads is None:
-        threads = 0
-        try:
-            from distributed import get_worker
-
-            w = get_worker()
-            threads = int(getattr(getattr(w, "state", w), "nthreads", 0) or w.nthreads)
-        except (ImportError, ValueError, AttributeError):
-            threads = 0
+        threads = worker_threads()
     return dict(json.loads(_native.match_pair(job, params, out, threads)))
 
 
