@@ -36,7 +36,17 @@ SIZE_SPECS = {
     "25k": "irregular-double-torus:res=4",  # 25 782 vertices
     "100k": "irregular-double-torus:res=5",  # 103 160 vertices
     "400k": "irregular-double-torus:res=6",  # 411 010 vertices
+    # Loop subdivisions of a shared mesh (bench/loop_mesh.py, needs NumPy: --python):
+    # fandisk's 6,475 vertices at levels 1-4.
+    "26k": "loop:fandisk.off:1",  # 25 894 vertices
+    "104k": "loop:fandisk.off:2",  # 103 570 vertices
+    "416k": "loop:fandisk.off:3",  # 414 274 vertices
+    "1.66m": "loop:fandisk.off:4",  # 1 657 090 vertices
 }
+
+# Where `loop:NAME:LEVEL` finds NAME: ../shared/meshes beside the clone, or this variable.
+SHARED_MESHES = Path(os.environ.get("SPECTRAL_MESH_SHARED_MESHES",
+                                    str(ROOT.parent / "shared" / "meshes")))
 
 ROUTES = ("ours", "superlu", "cholmod")
 ROUTE_TITLES = {"ours": "ours", "superlu": "SciPy SuperLU", "cholmod": "SciPy CHOLMOD"}
@@ -50,14 +60,24 @@ def mesh_file_name(spec):
     return re.sub(r"[^A-Za-z0-9_.=-]+", "_", spec) + ".off"
 
 
-def resolve_mesh(entry, mesh_dir, cli):
+def resolve_mesh(entry, mesh_dir, cli, python=None):
     """Returns (label, path) for a file path, a size label (25k) or a built-in shape spec.
-    Shapes are written once to mesh_dir as OFF with the CLI and reused afterwards."""
+    Shapes are written once to mesh_dir as OFF with the CLI and reused afterwards;
+    `loop:NAME:LEVEL` (a shared mesh Loop-subdivided LEVEL times) with `python`, which
+    must have NumPy."""
     spec = SIZE_SPECS.get(entry, entry)
     path = Path(spec)
     if path.is_file():
         return path.name, path.resolve()
     out = mesh_dir / mesh_file_name(spec)
+    if spec.startswith("loop:") and not out.is_file():
+        _, name, level = spec.split(":")
+        if python is None:
+            raise SystemExit(f"{spec}: a Loop subdivision needs --python (with NumPy)")
+        mesh_dir.mkdir(parents=True, exist_ok=True)
+        print(f"building {spec} -> {out}", file=sys.stderr)
+        subprocess.run([str(python), str(ROOT / "bench" / "loop_mesh.py"),
+                        str(SHARED_MESHES / name), level, str(out)], check=True)
     if not out.is_file():
         if cli is None:
             raise SystemExit(f"{spec}: not a file, and no --cli to build it as a shape")
@@ -503,7 +523,7 @@ def grid_main(argv, script, parse_args, render_table, run_cell, show_meshes=Fals
         return 0
 
     entries = [s for s in a.sizes.split(",") if s] + a.mesh
-    meshes = [resolve_mesh(e, a.mesh_dir, a.cli) for e in entries]
+    meshes = [resolve_mesh(e, a.mesh_dir, a.cli, a.python) for e in entries]
     meshes = [(label, path, off_vertex_count(path)) for label, path in meshes]
     if show_meshes:
         for label, path, vertices in meshes:
