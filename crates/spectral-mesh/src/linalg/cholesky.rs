@@ -1,19 +1,20 @@
-//! Sparse Cholesky factorization (faer, AMD ordering, supernodal) with the symbolic
+//! Sparse Cholesky factorization (faer, supernodal; nested dissection or AMD ordering) with the symbolic
 //! analysis kept so that a matrix with the same pattern refactors cheaply.
 
 use std::sync::Arc;
 
 use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::perm::PermRef;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use rayon::prelude::*;
 
-use super::SparseMatrix;
+use super::{SparseMatrix, ordering};
 
 /// Errors from the factorization.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
@@ -362,10 +363,24 @@ impl CholeskyAnalysis {
             return Err(CholeskyError::NotSquare(a.nrows(), a.ncols()));
         }
         let m = view(a)?;
+        let n = a.nrows();
+        // Nested dissection on large patterns, AMD on small ones (see `ordering.rs`).
+        let order = (n >= ordering::MIN_ROWS).then(|| {
+            let fwd = ordering::nested_dissection(a);
+            let mut inv = vec![0; n];
+            for (p, &v) in fwd.iter().enumerate() {
+                inv[v] = p;
+            }
+            (fwd, inv)
+        });
+        let ord = match &order {
+            Some((fwd, inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, n)),
+            None => SymmetricOrdering::Amd,
+        };
         let symbolic = factorize_symbolic_cholesky(
             m.symbolic(),
             Side::Lower,
-            Default::default(),
+            ord,
             CholeskySymbolicParams {
                 supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
                 ..Default::default()
@@ -652,6 +667,55 @@ mod tests {
             c.solve_in_place(&mut one);
             assert_eq!(&one[..], &b[j * n..(j + 1) * n]);
         }
+    }
+
+    #[test]
+    fn a_large_pattern_is_dissected_and_solved_exactly() {
+        // A 260 x 260 grid Laplacian plus the identity: above `ordering::MIN_ROWS`, so the
+        // analysis uses nested dissection; the solve and the inertia must not notice.
+        let m = 260;
+        let n = m * m;
+        assert!(n >= ordering::MIN_ROWS);
+        let mut t = Vec::new();
+        for i in 0..m {
+            for j in 0..m {
+                let v = i * m + j;
+                t.push((v, v, 4.5));
+                if i + 1 < m {
+                    t.push((v + m, v, -1.0));
+                    t.push((v, v + m, -1.0));
+                }
+                if j + 1 < m {
+                    t.push((v + 1, v, -1.0));
+                    t.push((v, v + 1, -1.0));
+                }
+            }
+        }
+        let a = SparseMatrix::from_triplets(n, n, &t);
+        let x_true: Vec<f64> = (0..n).map(|i| (0.001 * i as f64).sin()).collect();
+        let b = a.mul_vec(&x_true);
+        let c = SparseCholesky::new(&a).unwrap();
+        let x = c.solve(&b);
+        let err = x
+            .iter()
+            .zip(&x_true)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f64::max);
+        assert!(err < 1e-10, "max error {err}");
+        // Shifted by `shift` the matrix keeps its pattern and has negative eigenvalues
+        // (the grid Laplacian's lie in (0, 8); a shift with no round value, so that no
+        // pivot of the unpivoted LDL^T is exactly zero).
+        let shift = 3.487_123;
+        let shifted = a.add_scaled(1.0, &SparseMatrix::identity(n), -shift);
+        let inertia = c.inertia_of(&shifted).unwrap();
+        // Its eigenvalues are 4.5 - shift - 2 cos(pi i / (m + 1)) - 2 cos(pi j / (m + 1)).
+        let c = |i: usize| (std::f64::consts::PI * i as f64 / (m + 1) as f64).cos();
+        let expected = (1..=m)
+            .flat_map(|i| (1..=m).map(move |j| (i, j)))
+            .filter(|&(i, j)| 4.5 - shift - 2.0 * c(i) - 2.0 * c(j) < 0.0)
+            .count();
+        assert_eq!(inertia.negative, expected);
+        assert_eq!(inertia.negative + inertia.positive, n);
     }
 
     #[test]

@@ -5,6 +5,7 @@
 pub mod cholesky;
 pub mod dense_ops;
 pub mod eigen;
+mod ordering;
 mod scratch;
 pub mod sparse;
 pub mod timing;

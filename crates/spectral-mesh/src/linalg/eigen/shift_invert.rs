@@ -129,7 +129,12 @@ impl ShiftInvert {
                 None => continue,
             };
             match attempt {
-                Ok(chol) => return Ok(Self { chol, shift }),
+                Ok(chol) => {
+                    if crate::linalg::timing::enabled() {
+                        eprintln!("factor: n = {n}, {} values of L", chol.factor_len());
+                    }
+                    return Ok(Self { chol, shift });
+                }
                 Err(e) => {
                     last_err = e.to_string();
                     shift *= 100.0;
