@@ -598,7 +598,8 @@ impl PyAnalysis {
 
     /// The eigenvalues of the first `k` pairs that a filter weighs (the library's
     /// zero-eigenvalue rule): `(pair indices, eigenvalues)`. A Python weight function is
-    /// evaluated at these values and its values passed to the `*_weighted` methods.
+    /// evaluated at these values and its values passed as [`Weights`] to the methods
+    /// that take them.
     fn filter_eigenvalues<'py>(
         &self,
         py: Python<'py>,
