@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use spectral_mesh::Mesh;
-use spectral_mesh::analysis::AnalysisInput;
+use spectral_mesh::analysis::{Analysis, AnalysisInput, AnalysisOptions};
 use spectral_mesh::experiments::file::{parent_dir, relative_path};
 use spectral_mesh::experiments::paper::MeshSummary;
 use spectral_mesh::io::{self, read_input};
@@ -132,6 +132,11 @@ impl Input {
                 self.label()
             ),
         }
+    }
+
+    /// The analysis of this input with `options`, and where the input came from.
+    pub fn into_analysis(self, options: AnalysisOptions) -> Result<(Analysis, MeshInfo)> {
+        Ok((Analysis::from_input(self.shape, options)?, self.info))
     }
 
     /// Sets the point-cloud Laplacian's parameters of a point-cloud input (and of its

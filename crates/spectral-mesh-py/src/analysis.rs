@@ -10,15 +10,13 @@ use pyo3::types::PyTuple;
 use serde_json::json;
 use spectral_mesh::analysis::{AnalysisInput, AnalysisOptions, Signal, SignatureSpec};
 use spectral_mesh::io::read_input;
-use spectral_mesh::operators::{Laplacian, NormalSource, PointCloudParams};
+use spectral_mesh::operators::{Laplacian, PointCloudParams};
 use spectral_mesh::spectral::BasisView;
 use spectral_mesh::spectral::distances::{
-    distances_from_many, distances_from_many_weights, green_row_weights, spectral_function_weights,
-    weighted_pairs, weights_of_pairs,
+    distances_from_many_weights, green_row_weights, spectral_function_weights, weighted_pairs,
+    weights_of_pairs,
 };
-use spectral_mesh::spectral::embedding::{
-    embedding_component, spectral_embedding, spectral_embedding_weights,
-};
+use spectral_mesh::spectral::embedding::{embedding_component, spectral_embedding_weights};
 use spectral_mesh::spectral::filters::{Filter, FilterError};
 use spectral_mesh::spectral::signatures::{hks, hks_auto_times, wks, wks_auto_energies};
 use spectral_mesh::spectral::store::{BasisMeta, load_npz, save_npz};
@@ -26,13 +24,13 @@ use spectral_mesh::{Analysis, CancelToken, Eigenbasis, FieldRequest};
 use spectral_mesh_render::figure::POINT_RADIUS_FACTOR;
 
 use crate::arrays::{
-    self, FieldOut, MeshArrays, Pairs, csc_parts, csc_to_py, mesh_from, to_columns, to_rows,
+    self, FieldOut, Layout, MeshArrays, Pairs, csc_parts, csc_to_py, mesh_from, to_matrix,
     to_vector,
 };
 use crate::errors::Failure;
 use crate::pyjson;
 use crate::run::{Progress, run};
-use crate::{Picture, SolverArgs, draw, laplacian_of, with_values};
+use crate::{CloudArgs, Picture, PointsArgs, SolverArgs, draw, laplacian_of, with_values};
 
 /// The `k` weights of a Python weight function from its values at the eigenvalues of
 /// [`weighted_pairs`] (the library's checks: strictly positive and finite).
@@ -65,8 +63,44 @@ fn embedding_rows(rows: Vec<Vec<f64>>) -> (usize, usize, Vec<f64>) {
     (rows.len(), d, rows.concat())
 }
 
-/// A Python weight function's values at the filter's eigenvalues, and its name.
-type Weights<'a> = (PyReadonlyArray1<'a, f64>, String);
+/// How the pairs of the basis are weighted, as the wrappers pass it: a filter's text, or
+/// a Python weight function's values at [`PyAnalysis::filter_eigenvalues`] and its name.
+#[derive(FromPyObject)]
+enum Weights<'a> {
+    /// A filter (`biharmonic`, `heat:t=0.1`, ...), parsed by the library.
+    Filter(String),
+    /// A weight function's values and its name (for the messages).
+    Function(PyReadonlyArray1<'a, f64>, String),
+}
+
+/// [`Weights`] ready for the worker thread: the filter parsed, the values copied.
+enum PairWeights {
+    Filter(Filter),
+    Given(Vec<f64>, String),
+}
+
+impl Weights<'_> {
+    /// Parses or copies the weights (`what`: the keyword a bad filter is reported under).
+    fn prepare(&self, what: &str) -> Result<PairWeights, Failure> {
+        Ok(match self {
+            Weights::Filter(text) => PairWeights::Filter(parse_filter(text, what)?),
+            Weights::Function(values, name) => {
+                PairWeights::Given(raw_weights(values)?, name.clone())
+            }
+        })
+    }
+}
+
+impl PairWeights {
+    /// One weight per pair of `b`: the filter's, or the function's values checked by the
+    /// library ([`weights_of_pairs`]).
+    fn of(&self, b: BasisView<'_>) -> Result<Vec<f64>, Failure> {
+        match self {
+            PairWeights::Filter(f) => f.weights(b.values).map_err(value_error),
+            PairWeights::Given(given, name) => pair_weights(b, given, name),
+        }
+    }
+}
 
 /// A `ValueError` from a serde message.
 fn request_error(e: serde_json::Error) -> Failure {
@@ -105,26 +139,6 @@ pub struct PyAnalysis {
     default_source: usize,
 }
 
-/// The point-cloud Laplacian's parameters from the Python keywords (`None`: the
-/// library's default; the library checks them when it builds the Laplacian).
-pub(crate) fn cloud_params(
-    neighbors: Option<usize>,
-    mollify_factor: Option<f64>,
-    use_normals: bool,
-) -> PointCloudParams {
-    let d = PointCloudParams::default();
-    PointCloudParams {
-        neighbors: neighbors.unwrap_or(d.neighbors),
-        mollify_factor: mollify_factor.unwrap_or(d.mollify_factor),
-        normals: if use_normals {
-            NormalSource::FromCloud
-        } else {
-            d.normals
-        },
-        ..d
-    }
-}
-
 impl PyAnalysis {
     /// The Python object of an analysis (its fixed properties read once).
     fn wrap(inner: Arc<Analysis>, cloud: Option<PointCloudParams>) -> Self {
@@ -150,36 +164,56 @@ impl PyAnalysis {
         self.with_basis_progress(py, k, Progress::default(), f)
     }
 
-    /// [`PyAnalysis::with_basis`] with the per-pair weights of a Python weight function:
-    /// `weights` are its values at [`PyAnalysis::filter_eigenvalues`], checked by the
-    /// library ([`weights_of_pairs`], `name` says which function) and handed to `f` as one
-    /// weight per pair of the basis.
+    /// [`PyAnalysis::with_basis`] with the per-pair weights of a filter or a Python weight
+    /// function ([`PairWeights::of`]), handed to `f` as one weight per pair of the basis
+    /// (`what`: the keyword a bad filter is reported under).
     fn with_weights<T, F>(
         &self,
         py: Python<'_>,
         k: usize,
-        (weights, name): Weights<'_>,
+        (weights, what): (Weights<'_>, &str),
         f: F,
     ) -> PyResult<T>
     where
         T: Send + 'static,
         F: FnOnce(BasisView<'_>, &[f64]) -> Result<T, Failure> + Send + 'static,
     {
-        let given = raw_weights(&weights).map_err(|e| e.into_pyerr(py))?;
+        let weights = weights.prepare(what).map_err(|e| e.into_pyerr(py))?;
         self.with_basis(py, k, move |b| {
-            let w = pair_weights(b, &given, &name)?;
+            let w = weights.of(b)?;
             f(b, &w)
         })
     }
 
-    /// The `(n, cols)` array of the `cols` per-vertex columns a computation returns.
+    /// [`PyAnalysis::with_weights`] for a library computation of one value per vertex:
+    /// the `(n,)` array, a `ValueError` with the library's message when it fails.
+    fn vertex_values_weighted<'py, E, F>(
+        &self,
+        py: Python<'py>,
+        k: usize,
+        weights: Weights<'_>,
+        f: F,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>>
+    where
+        E: std::fmt::Display,
+        F: FnOnce(BasisView<'_>, &[f64]) -> Result<Vec<f64>, E> + Send + 'static,
+    {
+        let data = self.with_weights(py, k, (weights, "filter"), move |b, w| {
+            f(b, w).map_err(value_error)
+        })?;
+        Ok(to_vector(py, data))
+    }
+
+    /// The `(n, cols)` array of the per-vertex columns a computation returns (`n` values
+    /// each).
     fn columns<'py>(
         &self,
         py: Python<'py>,
-        cols: usize,
-        data: PyResult<Vec<f64>>,
+        columns: PyResult<Vec<Vec<f64>>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        to_columns(py, self.inner.n(), cols, data?)
+        let columns = columns?;
+        let cols = columns.len();
+        to_matrix(py, Layout::Columns, self.inner.n(), cols, columns.concat())
     }
 
     /// [`PyAnalysis::with_basis`] reporting the eigensolve to a Python callback.
@@ -234,19 +268,15 @@ impl PyAnalysis {
     /// `normals` (when given) give the tangent planes where they are non-zero; `None`
     /// parameters take the library's defaults.
     #[staticmethod]
-    #[pyo3(signature = (p, normals, neighbors, mollify_factor, normalize, solver))]
+    #[pyo3(signature = (points, normalize, solver))]
     fn from_points(
         py: Python<'_>,
-        p: PyReadonlyArray2<'_, f64>,
-        normals: Option<PyReadonlyArray2<'_, f64>>,
-        neighbors: Option<usize>,
-        mollify_factor: Option<f64>,
+        points: PointsArgs<'_>,
         normalize: bool,
         solver: SolverArgs,
     ) -> PyResult<Self> {
         let prepare = || -> Result<_, Failure> {
-            let cloud = arrays::cloud_from(&p, normals.as_ref())?;
-            let params = cloud_params(neighbors, mollify_factor, normals.is_some());
+            let (cloud, params) = points.build()?;
             let options = AnalysisOptions {
                 laplacian: Laplacian::Robust,
                 normalize,
@@ -266,14 +296,12 @@ impl PyAnalysis {
     /// (fem for a mesh, robust for a cloud). The point-cloud keywords (`None` / `False`:
     /// the library's defaults) are refused with a mesh, as on the command line.
     #[staticmethod]
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (path, kind, neighbors, mollify_factor, use_normals, normalize, solver))]
+    #[pyo3(signature = (path, kind, cloud, use_normals, normalize, solver))]
     fn from_file(
         py: Python<'_>,
         path: PathBuf,
         kind: Option<String>,
-        neighbors: Option<usize>,
-        mollify_factor: Option<f64>,
+        cloud: CloudArgs,
         use_normals: bool,
         normalize: bool,
         solver: SolverArgs,
@@ -283,21 +311,23 @@ impl PyAnalysis {
             Ok((kind, solver.params()?))
         };
         let (kind, eigen) = prepare().map_err(|e| e.into_pyerr(py))?;
-        let (inner, cloud) = run(py, move |_| {
-            let (input, cloud) = match AnalysisInput::from(read_input(&path)?) {
-                AnalysisInput::Points { cloud, .. } => {
-                    let params = cloud_params(neighbors, mollify_factor, use_normals);
-                    (AnalysisInput::Points { cloud, params }, Some(params))
+        let (inner, params) = run(py, move |_| {
+            let (input, params) = match AnalysisInput::from(read_input(&path)?) {
+                AnalysisInput::Points { cloud: points, .. } => {
+                    let params = cloud.params(use_normals);
+                    (
+                        AnalysisInput::Points {
+                            cloud: points,
+                            params,
+                        },
+                        Some(params),
+                    )
                 }
                 mesh => {
-                    let given: Vec<&str> = [
-                        (neighbors.is_some(), "n_neighbors"),
-                        (mollify_factor.is_some(), "mollify_factor"),
-                        (use_normals, "use_normals"),
-                    ]
-                    .into_iter()
-                    .filter_map(|(set, name)| set.then_some(name))
-                    .collect();
+                    let mut given = cloud.given();
+                    if use_normals {
+                        given.push("use_normals");
+                    }
                     if !given.is_empty() {
                         return Err(Failure::value(format!(
                             "{} {} only to point clouds, and {} is a mesh (its Laplacian is chosen with kind)",
@@ -309,15 +339,15 @@ impl PyAnalysis {
                     (mesh, None)
                 }
             };
-            let laplacian = spectral_mesh::defaults::laplacian_for(kind, cloud.is_some())?;
+            let laplacian = spectral_mesh::defaults::laplacian_for(kind, params.is_some())?;
             let options = AnalysisOptions {
                 laplacian,
                 normalize,
                 eigen,
             };
-            Ok((Arc::new(Analysis::from_input(input, options)?), cloud))
+            Ok((Arc::new(Analysis::from_input(input, options)?), params))
         })?;
-        Ok(Self::wrap(inner, cloud))
+        Ok(Self::wrap(inner, params))
     }
 
     /// Eigenpairs held (0 before the first spectral request).
@@ -336,7 +366,10 @@ impl PyAnalysis {
     fn mesh<'py>(&self, py: Python<'py>) -> PyResult<MeshArrays<'py>> {
         let (v, f) = arrays::mesh_arrays(self.inner.mesh());
         let (n, m) = (v.len() / 3, f.len() / 3);
-        Ok((to_rows(py, n, 3, v)?, to_rows(py, m, 3, f)?))
+        Ok((
+            to_matrix(py, Layout::Rows, n, 3, v)?,
+            to_matrix(py, Layout::Rows, m, 3, f)?,
+        ))
     }
 
     /// The operators in use `(S, B)` as CSC arrays (`B / A` when normalizing).
@@ -364,7 +397,10 @@ impl PyAnalysis {
         let (n, values, vectors) = self.with_basis_progress(py, k, progress, move |b| {
             Ok((b.n, b.values.to_vec(), b.vectors.to_vec()))
         })?;
-        Ok((to_vector(py, values), to_columns(py, n, k, vectors)?))
+        Ok((
+            to_vector(py, values),
+            to_matrix(py, Layout::Columns, n, k, vectors)?,
+        ))
     }
 
     /// Relative residuals of the held basis' pairs (empty without a basis).
@@ -484,7 +520,7 @@ impl PyAnalysis {
         sets.into_iter()
             .map(|(v, flat)| {
                 let s = flat.len() / 6;
-                Ok((v, to_rows(py, s, 6, flat)?))
+                Ok((v, to_matrix(py, Layout::Rows, s, 6, flat)?))
             })
             .collect()
     }
@@ -503,9 +539,8 @@ impl PyAnalysis {
                 Failure::value(format!("t = {t}: times must be finite and > 0")).into_pyerr(py),
             );
         }
-        let cols = times.len();
-        let data = self.with_basis(py, k, move |b| Ok(hks(b, &times, scaled).concat()));
-        self.columns(py, cols, data)
+        let data = self.with_basis(py, k, move |b| Ok(hks(b, &times, scaled)));
+        self.columns(py, data)
     }
 
     /// pyFM's automatic HKS times for the first `k` pairs.
@@ -527,13 +562,10 @@ impl PyAnalysis {
         if let Some(e) = energies.iter().find(|e| !e.is_finite()) {
             return Err(Failure::value(format!("energy {e} is not finite")).into_pyerr(py));
         }
-        let cols = energies.len();
         let data = self.with_basis(py, k, move |b| {
-            Ok(wks(b, &energies, sigma, scaled)
-                .map_err(value_error)?
-                .concat())
+            wks(b, &energies, sigma, scaled).map_err(value_error)
         });
-        self.columns(py, cols, data)
+        self.columns(py, data)
     }
 
     /// pyFM's automatic WKS energies and bandwidth for the first `k` pairs.
@@ -548,25 +580,26 @@ impl PyAnalysis {
         })
     }
 
-    /// The spectral embedding of a filter: `(n, d)`, `d` = pairs with non-zero weight.
+    /// The spectral embedding of a filter or of a weight function's values: `(n, d)`,
+    /// `d` = pairs with non-zero weight.
     fn embedding_matrix<'py>(
         &self,
         py: Python<'py>,
-        filter: &str,
+        weights: Weights<'_>,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let filter = parse_filter(filter, "filter").map_err(|e| e.into_pyerr(py))?;
-        let (n, d, data) = self.with_basis(py, k, move |b| {
-            spectral_embedding(b, &filter, usize::MAX)
+        let (n, d, data) = self.with_weights(py, k, (weights, "filter"), move |b, w| {
+            spectral_embedding_weights(b, w, usize::MAX)
                 .map(embedding_rows)
                 .map_err(value_error)
         })?;
-        to_rows(py, n, d, data)
+        to_matrix(py, Layout::Rows, n, d, data)
     }
 
     /// The eigenvalues of the first `k` pairs that a filter weighs (the library's
     /// zero-eigenvalue rule): `(pair indices, eigenvalues)`. A Python weight function is
-    /// evaluated at these values and its values passed to the `*_weighted` methods.
+    /// evaluated at these values and its values passed as [`Weights`] to the methods
+    /// that take them.
     fn filter_eigenvalues<'py>(
         &self,
         py: Python<'py>,
@@ -578,24 +611,6 @@ impl PyAnalysis {
         Ok((used, to_vector(py, values)))
     }
 
-    /// Filtered spectral distances from several sources with the weights of a function
-    /// evaluated at [`PyAnalysis::filter_eigenvalues`]: `(n, len(sources))`.
-    fn distances_weighted<'py>(
-        &self,
-        py: Python<'py>,
-        sources: Vec<usize>,
-        weights: Weights<'_>,
-        k: usize,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let cols = sources.len();
-        let data = self.with_weights(py, k, weights, move |b, w| {
-            Ok(distances_from_many_weights(b, &sources, w)
-                .map_err(value_error)?
-                .concat())
-        });
-        self.columns(py, cols, data)
-    }
-
     /// A row `G(source, .)` of the Green kernel with the weights of a function: `(n,)`.
     fn green_weighted<'py>(
         &self,
@@ -604,10 +619,7 @@ impl PyAnalysis {
         weights: Weights<'_>,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let data = self.with_weights(py, k, weights, move |b, w| {
-            green_row_weights(b, source, w).map_err(value_error)
-        })?;
-        Ok(to_vector(py, data))
+        self.vertex_values_weighted(py, k, weights, move |b, w| green_row_weights(b, source, w))
     }
 
     /// The generalized spectral function `G(p, p)` with the weights of a function: `(n,)`.
@@ -617,26 +629,7 @@ impl PyAnalysis {
         weights: Weights<'_>,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let data = self.with_weights(py, k, weights, move |b, w| {
-            spectral_function_weights(b, w).map_err(value_error)
-        })?;
-        Ok(to_vector(py, data))
-    }
-
-    /// The spectral embedding with the weights of a function: `(n, d)`, `d` = pairs with
-    /// non-zero weight.
-    fn embedding_weighted<'py>(
-        &self,
-        py: Python<'py>,
-        weights: Weights<'_>,
-        k: usize,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let (n, d, data) = self.with_weights(py, k, weights, move |b, w| {
-            spectral_embedding_weights(b, w, usize::MAX)
-                .map(embedding_rows)
-                .map_err(value_error)
-        })?;
-        to_rows(py, n, d, data)
+        self.vertex_values_weighted(py, k, weights, |b, w| spectral_function_weights(b, w))
     }
 
     /// One coordinate `sqrt(w_c) x_c` of the embedding with the weights of a function
@@ -648,28 +641,24 @@ impl PyAnalysis {
         component: usize,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let data = self.with_weights(py, k, weights, move |b, w| {
-            embedding_component(b, w, component).map_err(value_error)
-        })?;
-        Ok(to_vector(py, data))
+        self.vertex_values_weighted(py, k, weights, move |b, w| {
+            embedding_component(b, w, component)
+        })
     }
 
-    /// Filtered spectral distances from several sources: `(n, len(sources))`.
+    /// Spectral distances from several sources with the weights of a filter or of a
+    /// weight function's values: `(n, len(sources))`.
     fn distances_many<'py>(
         &self,
         py: Python<'py>,
         sources: Vec<usize>,
-        filter: &str,
+        weights: Weights<'_>,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let filter = parse_filter(filter, "distance").map_err(|e| e.into_pyerr(py))?;
-        let cols = sources.len();
-        let data = self.with_basis(py, k, move |b| {
-            Ok(distances_from_many(b, &sources, &filter)
-                .map_err(value_error)?
-                .concat())
+        let data = self.with_weights(py, k, (weights, "distance"), move |b, w| {
+            distances_from_many_weights(b, &sources, w).map_err(value_error)
         });
-        self.columns(py, cols, data)
+        self.columns(py, data)
     }
 
     /// Installs a basis given as arrays: eigenvalues `(k,)` and the eigenvectors' `(k, n)`

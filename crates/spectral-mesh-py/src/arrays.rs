@@ -160,35 +160,30 @@ pub fn pairs(
     Ok((n, values, vectors))
 }
 
-/// A 2-d array of `shape` (C- or Fortran-ordered) owning `data`, without a copy.
-fn to_array<'py, T: numpy::Element>(
-    py: Python<'py>,
-    shape: impl Into<StrideShape<Ix2>>,
-    data: Vec<T>,
-) -> PyResult<Bound<'py, PyArray2<T>>> {
-    let a = Array2::from_shape_vec(shape, data)
-        .map_err(|e| Failure::Internal(format!("array shape: {e}")).into_pyerr(py))?;
-    Ok(PyArray2::from_owned_array(py, a))
+/// How a matrix's data are laid out.
+#[derive(Debug, Clone, Copy)]
+pub enum Layout {
+    /// Row-major: a C-ordered array.
+    Rows,
+    /// Column-major: a Fortran-ordered array.
+    Columns,
 }
 
-/// An `(n, k)` Fortran-ordered array owning `data` (`n x k` column-major), without a copy.
-pub fn to_columns<'py, T: numpy::Element>(
+/// A `(rows, cols)` array owning `data` (laid out as `layout` says), without a copy.
+pub fn to_matrix<'py, T: numpy::Element>(
     py: Python<'py>,
-    n: usize,
-    k: usize,
-    data: Vec<T>,
-) -> PyResult<Bound<'py, PyArray2<T>>> {
-    to_array(py, (n, k).f(), data)
-}
-
-/// An `(rows, cols)` C-ordered array owning `data` (row-major), without a copy.
-pub fn to_rows<'py, T: numpy::Element>(
-    py: Python<'py>,
+    layout: Layout,
     rows: usize,
     cols: usize,
     data: Vec<T>,
 ) -> PyResult<Bound<'py, PyArray2<T>>> {
-    to_array(py, (rows, cols), data)
+    let shape: StrideShape<Ix2> = match layout {
+        Layout::Rows => (rows, cols).into(),
+        Layout::Columns => (rows, cols).f().into(),
+    };
+    let a = Array2::from_shape_vec(shape, data)
+        .map_err(|e| Failure::Internal(format!("array shape: {e}")).into_pyerr(py))?;
+    Ok(PyArray2::from_owned_array(py, a))
 }
 
 /// A vector as a NumPy array, without a copy.

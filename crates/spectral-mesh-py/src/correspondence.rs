@@ -18,7 +18,7 @@ use spectral_mesh::correspondence::{
 use spectral_mesh::spectral::BasisView;
 use spectral_mesh::{Mesh, Operators, SparseMatrix};
 
-use crate::arrays::{columns, mesh_from, to_rows, to_vector, values};
+use crate::arrays::{Layout, columns, mesh_from, to_matrix, to_vector, values};
 use crate::errors::Failure;
 use crate::laplacian_of;
 use crate::run::run;
@@ -52,14 +52,20 @@ impl Shape {
     }
 }
 
-fn shape(
-    v: &PyReadonlyArray2<'_, f64>,
-    f: &PyReadonlyArray2<'_, i64>,
-    evals: Option<&PyReadonlyArray1<'_, f64>>,
-    evecs_t: &PyReadonlyArray2<'_, f64>,
-    kind: &str,
-    which: usize,
-) -> Result<Shape, Failure> {
+/// One shape of a pair as the wrappers pass it: one tuple `(V, F, evals, evecs_t)`, the
+/// eigenvalues `None` where the function needs none.
+#[derive(FromPyObject)]
+pub struct ShapeArgs<'py>(
+    PyReadonlyArray2<'py, f64>,
+    PyReadonlyArray2<'py, i64>,
+    Option<PyReadonlyArray1<'py, f64>>,
+    PyReadonlyArray2<'py, f64>,
+);
+
+/// The shape (`which`: 1 or 2, for the messages) with its mass for the discretization
+/// `kind`, checked against its basis.
+fn shape(args: &ShapeArgs<'_>, kind: &str, which: usize) -> Result<Shape, Failure> {
+    let ShapeArgs(v, f, evals, evecs_t) = args;
     let mesh = mesh_from(v, f)?;
     let (n, k, vectors) = columns(evecs_t, &format!("evecs{which}"))?;
     if n != mesh.n_vertices() {
@@ -107,25 +113,18 @@ pub fn correspondence_defaults() -> PyResult<String> {
 
 /// The functional map `C` (`(k2, k1)`) of the energy and its value.
 #[pyfunction]
-#[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v1, f1, evals1, evecs1_t, v2, f2, evals2, evecs2_t, kind, params, landmarks))]
+#[pyo3(signature = (shape1, shape2, kind, params, landmarks))]
 pub fn functional_map<'py>(
     py: Python<'py>,
-    v1: PyReadonlyArray2<'_, f64>,
-    f1: PyReadonlyArray2<'_, i64>,
-    evals1: PyReadonlyArray1<'_, f64>,
-    evecs1_t: PyReadonlyArray2<'_, f64>,
-    v2: PyReadonlyArray2<'_, f64>,
-    f2: PyReadonlyArray2<'_, i64>,
-    evals2: PyReadonlyArray1<'_, f64>,
-    evecs2_t: PyReadonlyArray2<'_, f64>,
+    shape1: ShapeArgs<'_>,
+    shape2: ShapeArgs<'_>,
     kind: &str,
     params: &str,
     landmarks: Vec<(usize, usize)>,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, f64)> {
     let prep = || -> Result<(Shape, Shape, MatchParams), Failure> {
-        let s1 = shape(&v1, &f1, Some(&evals1), &evecs1_t, kind, 1)?;
-        let s2 = shape(&v2, &f2, Some(&evals2), &evecs2_t, kind, 2)?;
+        let s1 = shape(&shape1, kind, 1)?;
+        let s2 = shape(&shape2, kind, 2)?;
         let mut p = params_from(params)?;
         p.zoomout_k = 0;
         Ok((s1, s2, p))
@@ -143,7 +142,10 @@ pub fn functional_map<'py>(
         )?;
         Ok((res.initial, res.energy))
     })?;
-    Ok((to_rows(py, c.k2, c.k1, c.row_major())?, energy))
+    Ok((
+        to_matrix(py, Layout::Rows, c.k2, c.k1, c.row_major())?,
+        energy,
+    ))
 }
 
 fn truncated(b: BasisView<'_>, k: usize) -> BasisView<'_> {
@@ -161,7 +163,7 @@ type Refinement<'py> = Option<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<us
 fn refinement<'py>(py: Python<'py>, r: Option<Refined>) -> PyResult<Refinement<'py>> {
     r.map(|r| {
         Ok((
-            to_rows(py, r.fmap.k2, r.fmap.k1, r.fmap.row_major())?,
+            to_matrix(py, Layout::Rows, r.fmap.k2, r.fmap.k1, r.fmap.row_major())?,
             to_vector(py, r.p2p),
         ))
     })
@@ -173,15 +175,11 @@ fn refinement<'py>(py: Python<'py>, r: Option<Refined>) -> PyResult<Refinement<'
 /// `p2p_21`; reverse: `C_12` and `p2p_12`).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (v1, f1, evecs1_t, v2, f2, evecs2_t, kind, c, k_final, step, direction))]
+#[pyo3(signature = (shape1, shape2, kind, c, k_final, step, direction))]
 pub fn zoomout_refine<'py>(
     py: Python<'py>,
-    v1: PyReadonlyArray2<'_, f64>,
-    f1: PyReadonlyArray2<'_, i64>,
-    evecs1_t: PyReadonlyArray2<'_, f64>,
-    v2: PyReadonlyArray2<'_, f64>,
-    f2: PyReadonlyArray2<'_, i64>,
-    evecs2_t: PyReadonlyArray2<'_, f64>,
+    shape1: ShapeArgs<'_>,
+    shape2: ShapeArgs<'_>,
     kind: &str,
     c: PyReadonlyArray2<'_, f64>,
     k_final: usize,
@@ -190,8 +188,8 @@ pub fn zoomout_refine<'py>(
 ) -> PyResult<(Refinement<'py>, Refinement<'py>)> {
     let prep = || -> Result<(Shape, Shape, FunctionalMap, ZoomoutDirection), Failure> {
         Ok((
-            shape(&v1, &f1, None, &evecs1_t, kind, 1)?,
-            shape(&v2, &f2, None, &evecs2_t, kind, 2)?,
+            shape(&shape1, kind, 1)?,
+            shape(&shape2, kind, 2)?,
             fmap_from(&c)?,
             direction
                 .parse()

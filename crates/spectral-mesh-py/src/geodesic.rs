@@ -10,11 +10,10 @@ use spectral_mesh::geodesic::{
     farthest_point_sampling,
 };
 
-use crate::analysis::cloud_params;
-use crate::arrays::{cloud_from, mesh_from, to_rows, to_vector};
+use crate::arrays::{Layout, mesh_from, to_matrix, to_vector};
 use crate::errors::Failure;
-use crate::laplacian_of;
 use crate::run::run;
+use crate::{PointsArgs, laplacian_of};
 
 impl From<GeodesicError> for Failure {
     fn from(e: GeodesicError) -> Self {
@@ -105,23 +104,19 @@ impl PyGeodesicSolver {
     /// Builds and factors the solver of a point cloud (point-cloud Laplacian, gradient in
     /// each point's tangent plane); `None` takes the library's default.
     #[staticmethod]
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (p, normals=None, neighbors=None, mollify_factor=None, gradient_neighbors=None, time_factor=None, convention=None))]
+    #[pyo3(signature = (points, gradient_neighbors=None, time_factor=None, convention=None))]
     fn from_points(
         py: Python<'_>,
-        p: PyReadonlyArray2<'_, f64>,
-        normals: Option<PyReadonlyArray2<'_, f64>>,
-        neighbors: Option<usize>,
-        mollify_factor: Option<f64>,
+        points: PointsArgs<'_>,
         gradient_neighbors: Option<usize>,
         time_factor: Option<f64>,
         convention: Option<&str>,
     ) -> PyResult<Self> {
-        let cloud = cloud_from(&p, normals.as_ref()).map_err(|e| e.into_pyerr(py))?;
+        let (cloud, laplacian) = points.build().map_err(|e| e.into_pyerr(py))?;
         let params = geodesic_params(py, time_factor, convention)?;
         let d = CloudGeodesicParams::default();
         let cp = CloudGeodesicParams {
-            laplacian: cloud_params(neighbors, mollify_factor, normals.is_some()),
+            laplacian,
             gradient_neighbors: gradient_neighbors.unwrap_or(d.gradient_neighbors),
             ..d
         };
@@ -154,7 +149,7 @@ impl PyGeodesicSolver {
         let k = vertices.len();
         let n = s.n();
         let d = run(py, move |_| Ok(s.distances_from_vertices(&vertices)?))?;
-        to_rows(py, k, n, d.concat())
+        to_matrix(py, Layout::Rows, k, n, d.concat())
     }
 
     /// The `k x k` distance matrix between sample vertices.
@@ -167,7 +162,7 @@ impl PyGeodesicSolver {
         let s = self.solver.clone();
         let k = samples.len();
         let d = run(py, move |_| Ok(s.distance_matrix(&samples, symmetric)?))?;
-        to_rows(py, k, k, d.concat())
+        to_matrix(py, Layout::Rows, k, k, d.concat())
     }
 
     /// Farthest-point sampling of `k` vertices from `start`.

@@ -17,12 +17,12 @@ use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use serde_json::{Value, json};
 use spectral_mesh::analysis::{AnalysisOptions, Signal, SignatureSpec};
-use spectral_mesh::operators::{Laplacian, Operators};
+use spectral_mesh::operators::{Laplacian, NormalSource, Operators, PointCloudParams};
 use spectral_mesh::spectral::eigenbasis::{
     CertifyReport, EigenMethod, EigenParams, EigenSolver, certify_eigenbasis,
 };
 use spectral_mesh::spectral::store::{BasisDtype, BasisMeta, load_npz, save_npz};
-use spectral_mesh::{Analysis, Eigenbasis, FieldRequest, Mesh, SparseMatrix};
+use spectral_mesh::{Analysis, Eigenbasis, FieldRequest, Mesh, PointCloud, SparseMatrix};
 use spectral_mesh_render::{Canvas, Colormap, Figure, FigureOptions, View};
 
 mod analysis;
@@ -36,8 +36,8 @@ mod pyjson;
 mod run;
 
 use arrays::{
-    Archive, MeshArrays, Pairs, csc_from, csc_parts, csc_to_py, mesh_arrays, mesh_from, to_columns,
-    to_rows, to_vector,
+    Archive, Layout, MeshArrays, Pairs, csc_from, csc_parts, csc_to_py, mesh_arrays, mesh_from,
+    to_matrix, to_vector,
 };
 use errors::Failure;
 use run::run;
@@ -54,7 +54,10 @@ type MeshFile<'py> = (
 
 fn mesh_to_py<'py>(py: Python<'py>, v: Vec<f64>, f: Vec<i64>) -> PyResult<MeshArrays<'py>> {
     let (n, m) = (v.len() / 3, f.len() / 3);
-    Ok((to_rows(py, n, 3, v)?, to_rows(py, m, 3, f)?))
+    Ok((
+        to_matrix(py, Layout::Rows, n, 3, v)?,
+        to_matrix(py, Layout::Rows, m, 3, f)?,
+    ))
 }
 
 /// Parses a discretization name.
@@ -88,6 +91,59 @@ impl SolverArgs {
     pub(crate) fn params(self) -> Result<EigenParams, Failure> {
         let Self(tol, seed, dirichlet, method) = self;
         eigen_params(tol, seed, dirichlet, &method)
+    }
+}
+
+/// The point-cloud Laplacian's Python keywords as the wrappers pass them: one tuple
+/// `(n_neighbors, mollify_factor)`, `None` for the library's default.
+#[derive(FromPyObject)]
+pub(crate) struct CloudArgs(Option<usize>, Option<f64>);
+
+impl CloudArgs {
+    /// The library's parameters (it checks them when it builds the Laplacian);
+    /// `use_normals`: the cloud's normals give the tangent planes where they are non-zero.
+    pub(crate) fn params(&self, use_normals: bool) -> PointCloudParams {
+        let d = PointCloudParams::default();
+        PointCloudParams {
+            neighbors: self.0.unwrap_or(d.neighbors),
+            mollify_factor: self.1.unwrap_or(d.mollify_factor),
+            normals: if use_normals {
+                NormalSource::FromCloud
+            } else {
+                d.normals
+            },
+            ..d
+        }
+    }
+
+    /// The Python keywords given (not `None`), by name.
+    pub(crate) fn given(&self) -> Vec<&'static str> {
+        [
+            (self.0.is_some(), "n_neighbors"),
+            (self.1.is_some(), "mollify_factor"),
+        ]
+        .into_iter()
+        .filter_map(|(set, name)| set.then_some(name))
+        .collect()
+    }
+}
+
+/// A point cloud as the wrappers pass it: one tuple `(P, normals, cloud)`, `normals`
+/// `None` or `(n, 3)` (zero rows: unknown) and `cloud` the Laplacian's keywords.
+#[derive(FromPyObject)]
+pub(crate) struct PointsArgs<'py>(
+    PyReadonlyArray2<'py, f64>,
+    Option<PyReadonlyArray2<'py, f64>>,
+    CloudArgs,
+);
+
+impl PointsArgs<'_> {
+    /// The cloud (checked) and its Laplacian's parameters: given normals give the tangent
+    /// planes where they are non-zero; without them the planes are estimated.
+    pub(crate) fn build(&self) -> Result<(PointCloud, PointCloudParams), Failure> {
+        let Self(p, normals, cloud) = self;
+        let points = arrays::cloud_from(p, normals.as_ref())?;
+        Ok((points, cloud.params(normals.is_some())))
     }
 }
 
@@ -229,28 +285,26 @@ fn read_points<'py>(py: Python<'py>, path: PathBuf) -> PyResult<PointsFile<'py>>
     })?;
     let n = p.len() / 3;
     let normals = match normals {
-        Some(nr) => Some(to_rows(py, n, 3, nr)?),
+        Some(nr) => Some(to_matrix(py, Layout::Rows, n, 3, nr)?),
         None => None,
     };
-    Ok((to_rows(py, n, 3, p)?, normals, pyjson::to_py(py, &info)?))
+    Ok((
+        to_matrix(py, Layout::Rows, n, 3, p)?,
+        normals,
+        pyjson::to_py(py, &info)?,
+    ))
 }
 
 /// The point-cloud Laplacian `(S, B)` of `P` (`n x n` each, as CSC arrays) and the total
 /// mass `1^T B 1` as assembled ([`Operators::from_points`]).
 #[pyfunction]
-#[pyo3(signature = (p, normals, neighbors, mollify_factor, normalize))]
+#[pyo3(signature = (points, normalize))]
 fn point_laplacian<'py>(
     py: Python<'py>,
-    p: PyReadonlyArray2<'_, f64>,
-    normals: Option<PyReadonlyArray2<'_, f64>>,
-    neighbors: usize,
-    mollify_factor: f64,
+    points: PointsArgs<'_>,
     normalize: bool,
 ) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyTuple>, f64)> {
-    let cloud = arrays::cloud_from(&p, normals.as_ref()).map_err(|e| e.into_pyerr(py))?;
-    // Given normals give the tangent planes (where non-zero), as documented; without them
-    // the planes are estimated.
-    let params = analysis::cloud_params(Some(neighbors), Some(mollify_factor), normals.is_some());
+    let (cloud, params) = points.build().map_err(|e| e.into_pyerr(py))?;
     let (s, b, total) = run(py, move |_| {
         let mut ops =
             Operators::from_points(&cloud, &params).map_err(|e| Failure::value(e.to_string()))?;
@@ -339,11 +393,18 @@ fn eigenbasis<'py>(
     let (evals, evecs) = match dtype {
         BasisDtype::Float64 => (
             to_vector(py, values).into_any(),
-            to_columns(py, n, k, vectors)?.into_any(),
+            to_matrix(py, Layout::Columns, n, k, vectors)?.into_any(),
         ),
         BasisDtype::Float32 => (
             to_vector(py, values.iter().map(|&x| x as f32).collect()).into_any(),
-            to_columns(py, n, k, vectors.iter().map(|&x| x as f32).collect())?.into_any(),
+            to_matrix(
+                py,
+                Layout::Columns,
+                n,
+                k,
+                vectors.iter().map(|&x| x as f32).collect(),
+            )?
+            .into_any(),
         ),
     };
     let report = match report {
@@ -433,7 +494,10 @@ fn eigsh<'py>(
         drop(solver);
         Ok(take_pairs(basis, k))
     })?;
-    Ok((to_vector(py, values), to_columns(py, n, k, vectors)?))
+    Ok((
+        to_vector(py, values),
+        to_matrix(py, Layout::Columns, n, k, vectors)?,
+    ))
 }
 
 /// Writes an eigenbasis archive (`.npz`) from arrays: eigenvalues `(k,)`, the
@@ -506,7 +570,7 @@ fn load_basis<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Archive<'py>> {
     let (n, k) = (basis.n, basis.k());
     Ok((
         to_vector(py, basis.values),
-        to_columns(py, n, k, basis.vectors)?,
+        to_matrix(py, Layout::Columns, n, k, basis.vectors)?,
         mass,
         pyjson::to_py(py, &meta)?,
     ))
@@ -698,46 +762,36 @@ pub(crate) fn with_values(req: &mut FieldRequest, values: Vec<f64>) -> Result<()
     Ok(())
 }
 
-/// The native module.
+/// The native module `spectral_mesh._native`: the functions and classes the Python package
+/// wraps.
 #[pymodule]
-fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
-    m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
-    m.add_function(wrap_pyfunction!(shape, m)?)?;
-    m.add_function(wrap_pyfunction!(shape_names, m)?)?;
-    m.add_function(wrap_pyfunction!(laplacian, m)?)?;
-    m.add_function(wrap_pyfunction!(read_points, m)?)?;
-    m.add_function(wrap_pyfunction!(point_laplacian, m)?)?;
-    m.add_function(wrap_pyfunction!(eigenbasis, m)?)?;
-    m.add_function(wrap_pyfunction!(eigsh, m)?)?;
-    m.add_function(wrap_pyfunction!(save_basis, m)?)?;
-    m.add_function(wrap_pyfunction!(load_basis, m)?)?;
-    m.add_function(wrap_pyfunction!(render, m)?)?;
-    m.add_function(wrap_pyfunction!(defaults, m)?)?;
-    m.add_function(wrap_pyfunction!(num_threads, m)?)?;
-    m.add_function(wrap_pyfunction!(
-        correspondence::correspondence_defaults,
-        m
-    )?)?;
-    m.add_function(wrap_pyfunction!(correspondence::functional_map, m)?)?;
-    m.add_function(wrap_pyfunction!(correspondence::zoomout_refine, m)?)?;
-    m.add_function(wrap_pyfunction!(correspondence::point_map, m)?)?;
-    m.add_function(wrap_pyfunction!(correspondence::pairs_plan, m)?)?;
-    m.add_function(wrap_pyfunction!(correspondence::match_pair, m)?)?;
-    m.add_function(wrap_pyfunction!(correspondence::pair_failed, m)?)?;
-    m.add_function(wrap_pyfunction!(correspondence::pairs_summary, m)?)?;
-    m.add_function(wrap_pyfunction!(batch::batch_params, m)?)?;
-    m.add_function(wrap_pyfunction!(batch::batch_inputs, m)?)?;
-    m.add_function(wrap_pyfunction!(batch::batch_prepare, m)?)?;
-    m.add_function(wrap_pyfunction!(batch::batch_one, m)?)?;
-    m.add_function(wrap_pyfunction!(batch::batch_failed, m)?)?;
-    m.add_function(wrap_pyfunction!(batch::batch_summary, m)?)?;
-    m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
-    m.add_function(wrap_pyfunction!(_work_for_tests, m)?)?;
-    m.add_function(wrap_pyfunction!(learning::learning_operators, m)?)?;
-    m.add_function(wrap_pyfunction!(learning::learning_defaults, m)?)?;
-    m.add_class::<analysis::PyAnalysis>()?;
-    m.add_class::<geodesic::PyGeodesicSolver>()?;
-    Ok(())
+mod _native {
+    #[pymodule_export]
+    use super::{
+        _panic_for_tests, _work_for_tests, defaults, eigenbasis, eigsh, laplacian, load_basis,
+        num_threads, point_laplacian, read_mesh, read_points, render, save_basis, shape,
+        shape_names, write_mesh,
+    };
+    #[pymodule_export]
+    use crate::analysis::PyAnalysis;
+    #[pymodule_export]
+    use crate::batch::{
+        batch_failed, batch_inputs, batch_one, batch_params, batch_prepare, batch_summary,
+    };
+    #[pymodule_export]
+    use crate::correspondence::{
+        correspondence_defaults, functional_map, match_pair, pair_failed, pairs_plan,
+        pairs_summary, point_map, zoomout_refine,
+    };
+    #[pymodule_export]
+    use crate::geodesic::PyGeodesicSolver;
+    #[pymodule_export]
+    use crate::learning::{learning_defaults, learning_operators};
+    use pyo3::prelude::*;
+
+    /// The module's `__version__`: the crate's.
+    #[pymodule_init]
+    fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
+        m.add("__version__", env!("CARGO_PKG_VERSION"))
+    }
 }

@@ -21,11 +21,11 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 use spectral_mesh::CancelToken;
 use spectral_mesh::linalg::EigenProgress;
 
 use crate::errors::Failure;
+use crate::pyjson;
 
 /// How often the waiting thread checks for signals.
 pub const POLL: Duration = Duration::from_millis(50);
@@ -110,42 +110,10 @@ impl Progress {
             return;
         }
         let outcome = Python::attach(|py| -> PyResult<()> {
-            let d = PyDict::new(py);
-            match event {
-                EigenProgress::Dense { n } => {
-                    d.set_item("stage", "dense")?;
-                    d.set_item("n", n)?;
-                }
-                EigenProgress::Factorization { n, shift } => {
-                    d.set_item("stage", "factorization")?;
-                    d.set_item("n", n)?;
-                    d.set_item("shift", shift)?;
-                }
-                EigenProgress::Iteration {
-                    iteration,
-                    converged,
-                    wanted,
-                    basis,
-                } => {
-                    d.set_item("stage", "iteration")?;
-                    d.set_item("iteration", iteration)?;
-                    d.set_item("converged", converged)?;
-                    d.set_item("wanted", wanted)?;
-                    d.set_item("basis", basis)?;
-                }
-                EigenProgress::Finished {
-                    iterations,
-                    solves,
-                    max_residual,
-                    orthogonality_error,
-                } => {
-                    d.set_item("stage", "finished")?;
-                    d.set_item("iterations", iterations)?;
-                    d.set_item("solves", solves)?;
-                    d.set_item("max_residual", max_residual)?;
-                    d.set_item("orthogonality_error", orthogonality_error)?;
-                }
-            }
+            // A dict tagged by `stage`, with the event's fields (the library's serde form).
+            let event = serde_json::to_value(event)
+                .map_err(|e| Failure::Internal(format!("progress event: {e}")).into_pyerr(py))?;
+            let d = pyjson::to_py(py, &event)?;
             cb.call1(py, (d,))?;
             Ok(())
         });

@@ -302,8 +302,8 @@ def test_defaults_come_from_the_library(sphere):
 
 
 def test_stubs_match_the_native_module():
-    """Every function and method the stub declares exists, and every public native one is
-    declared."""
+    """Every function, method and read-only attribute the stub declares exists, and every
+    public native one is declared."""
     import ast
 
     stub = Path(sm.__file__).with_name("_native.pyi")
@@ -311,6 +311,11 @@ def test_stubs_match_the_native_module():
     declared = {n.name for n in tree.body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
     cls = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "Analysis")
     methods = {n.name for n in cls.body if isinstance(n, ast.FunctionDef)}
+    methods |= {
+        n.target.id
+        for n in cls.body
+        if isinstance(n, ast.AnnAssign) and isinstance(n.target, ast.Name)
+    }
     native = {
         x for x in dir(sm._native) if not x.startswith("__") and callable(getattr(sm._native, x))
     }

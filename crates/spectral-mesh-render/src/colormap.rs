@@ -66,8 +66,8 @@ impl Colormap {
         let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
         let c = match self {
             Colormap::Hue => hsv_to_rgb(300.0 * t, 1.0, 1.0),
-            Colormap::Viridis => viridis(t),
-            Colormap::Turbo => turbo(t),
+            Colormap::Viridis => polynomial_rgb(&VIRIDIS, t),
+            Colormap::Turbo => polynomial_rgb(&TURBO, t),
             Colormap::Diverging => diverging(t),
             Colormap::Grey => [t, t, t],
         };
@@ -130,13 +130,15 @@ pub fn hsv_to_rgb(h_deg: f64, s: f64, v: f64) -> [f64; 3] {
     [r + m, g + m, b + m]
 }
 
-fn horner(c: &[f64], t: f64) -> f64 {
-    c.iter().rev().fold(0.0, |acc, &k| acc * t + k)
+/// A colour map whose channels are polynomials in `t`: `c[channel]` holds the
+/// coefficients from the constant term up, evaluated by Horner's rule.
+fn polynomial_rgb<const N: usize>(c: &[[f64; N]; 3], t: f64) -> [f64; 3] {
+    c.map(|channel| channel.iter().rev().fold(0.0, |acc, &k| acc * t + k))
 }
 
-/// Viridis, per-channel degree-6 polynomial in `t` (coefficients from the constant term up).
-fn viridis(t: f64) -> [f64; 3] {
-    const R: [f64; 7] = [
+/// Viridis: per-channel (R, G, B) degree-6 polynomials for [`polynomial_rgb`].
+const VIRIDIS: [[f64; 7]; 3] = [
+    [
         0.277_727_327_223_417_7,
         0.105_093_043_108_577_4,
         -0.330_861_828_725_556_3,
@@ -144,8 +146,8 @@ fn viridis(t: f64) -> [f64; 3] {
         6.228_269_936_347_081,
         4.776_384_997_670_288,
         -5.435_455_855_934_631,
-    ];
-    const G: [f64; 7] = [
+    ],
+    [
         0.005_407_344_544_966_578,
         1.404_613_529_898_575,
         0.214_847_559_468_213,
@@ -153,8 +155,8 @@ fn viridis(t: f64) -> [f64; 3] {
         14.179_933_366_805_09,
         -13.745_145_377_746_01,
         4.645_852_612_178_535,
-    ];
-    const B: [f64; 7] = [
+    ],
+    [
         0.334_099_805_335_306_1,
         1.384_590_162_594_685,
         0.095_095_163_028_236_59,
@@ -162,38 +164,36 @@ fn viridis(t: f64) -> [f64; 3] {
         56.690_552_600_681_05,
         -65.353_032_633_372_34,
         26.312_435_249_583_2,
-    ];
-    [horner(&R, t), horner(&G, t), horner(&B, t)]
-}
+    ],
+];
 
-/// Turbo, per-channel degree-5 polynomial in `t` (coefficients from the constant term up).
-fn turbo(t: f64) -> [f64; 3] {
-    const R: [f64; 6] = [
+/// Turbo: per-channel (R, G, B) degree-5 polynomials for [`polynomial_rgb`].
+const TURBO: [[f64; 6]; 3] = [
+    [
         0.135_721_38,
         4.615_392_60,
         -42.660_322_58,
         132.131_082_34,
         -152.942_393_96,
         59.286_379_43,
-    ];
-    const G: [f64; 6] = [
+    ],
+    [
         0.091_402_61,
         2.194_188_39,
         4.842_966_58,
         -14.185_033_33,
         4.277_298_57,
         2.829_566_04,
-    ];
-    const B: [f64; 6] = [
+    ],
+    [
         0.106_673_30,
         12.641_946_08,
         -60.582_048_36,
         110.362_767_71,
         -89.903_109_12,
         27.348_249_73,
-    ];
-    [horner(&R, t), horner(&G, t), horner(&B, t)]
-}
+    ],
+];
 
 /// Blue (59, 76, 192) → white → red (180, 4, 38).
 fn diverging(t: f64) -> [f64; 3] {
@@ -238,15 +238,30 @@ mod tests {
         (0..3).all(|i| (a[i] as i32 - b[i] as i32).abs() <= tol)
     }
 
+    /// Hue goes red, yellow, green, cyan, blue, magenta; diverging blue, white, red; grey
+    /// black to white: exact colours at evenly spaced `t` from 0 to 1.
     #[test]
-    fn hue_goes_red_yellow_green_cyan_blue_magenta() {
+    fn exact_colours_at_evenly_spaced_points() {
+        use Colormap::{Diverging, Grey, Hue};
+        let samples: [(Colormap, &[u32]); 3] = [
+            (
+                Hue,
+                &[0xff0000, 0xffff00, 0x00ff00, 0x00ffff, 0x0000ff, 0xff00ff],
+            ),
+            (Diverging, &[0x3b4cc0, 0xffffff, 0xb40426]),
+            (Grey, &[0x000000, 0x808080, 0xffffff]),
+        ];
+        for (m, colours) in samples {
+            for (i, &h) in colours.iter().enumerate() {
+                let t = i as f64 / (colours.len() - 1) as f64;
+                assert_eq!(m.map(t), hex(h), "{m} at {t}");
+            }
+        }
+    }
+
+    #[test]
+    fn hue_clamps_out_of_range_and_nan() {
         let m = Colormap::Hue;
-        assert_eq!(m.map(0.0), [255, 0, 0]);
-        assert_eq!(m.map(0.2), [255, 255, 0]);
-        assert_eq!(m.map(0.4), [0, 255, 0]);
-        assert_eq!(m.map(0.6), [0, 255, 255]);
-        assert_eq!(m.map(0.8), [0, 0, 255]);
-        assert_eq!(m.map(1.0), [255, 0, 255]);
         assert_eq!(m.map(-3.0), m.map(0.0));
         assert_eq!(m.map(7.0), m.map(1.0));
         assert_eq!(m.map(f64::NAN), m.map(0.0));
@@ -283,17 +298,6 @@ mod tests {
                 .unwrap_or(0)
         };
         assert!(peak(2) < peak(1) && peak(1) < peak(0));
-    }
-
-    #[test]
-    fn diverging_and_grey() {
-        let d = Colormap::Diverging;
-        assert_eq!(d.map(0.5), [255, 255, 255]);
-        assert_eq!(d.map(0.0), [59, 76, 192]);
-        assert_eq!(d.map(1.0), [180, 4, 38]);
-        assert_eq!(Colormap::Grey.map(0.0), [0, 0, 0]);
-        assert_eq!(Colormap::Grey.map(1.0), [255, 255, 255]);
-        assert_eq!(Colormap::Grey.map(0.5), [128, 128, 128]);
     }
 
     #[test]

@@ -13,7 +13,7 @@ use spectral_mesh_web::ServeConfig;
 use spectral_mesh_web::field::{ParsedReply, parse_reply};
 
 mod common;
-use common::{Reply, get, post_field, post_json, start_with};
+use common::{Reply, get, post_download, post_field, post_json, start_with};
 
 /// The reply of a field request, parsed (asserting status 200).
 trait FieldReply {
@@ -58,6 +58,15 @@ async fn send(addr: std::net::SocketAddr, req: Req) -> Reply {
             request(addr, method, &path, ct, extra, &body).await
         }
     }
+}
+
+/// The text of the `.txt` download of the field request `field` for mesh `id`, which must
+/// succeed.
+async fn download_txt(addr: std::net::SocketAddr, id: &str, mut field: Value) -> String {
+    field["format"] = json!("txt");
+    let r = post_download(addr, id, field).await;
+    assert_eq!(r.status, 200, "{}", r.error());
+    r.text()
 }
 
 async fn start(max_upload: usize) -> std::net::SocketAddr {
@@ -472,7 +481,7 @@ async fn every_kind_with_defaults_is_the_librarys_field() {
         }
         let mut dl = body.clone();
         dl["format"] = json!("txt");
-        let r = post_json(addr, &format!("/api/mesh/{id}/download"), dl).await;
+        let r = post_download(addr, &id, dl).await;
         assert_eq!(r.status, 200, "{body}: {}", r.text());
         let txt = numbers(&r.text());
         assert_eq!(lib.values.len(), n);
@@ -676,14 +685,8 @@ async fn geodesic_fields_need_no_basis_and_say_what_they_cannot_reach() {
     for (a, b) in f.values.iter().zip(&lib.values) {
         assert_eq!(*a, *b as f32);
     }
-    let r = post_json(
-        addr,
-        &format!("/api/mesh/{id}/download"),
-        json!({"kind": "geodesic", "source": 5, "format": "txt"}),
-    )
-    .await;
-    assert_eq!(r.status, 200, "{}", r.error());
-    assert_eq!(numbers(&r.text()), lib.values);
+    let text = download_txt(addr, &id, json!({"kind": "geodesic", "source": 5})).await;
+    assert_eq!(numbers(&text), lib.values);
 
     // Two tetrahedra: the second is out of reach of a source on the first.
     let two = b"OFF\n8 8 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n5 0 0\n6 0 0\n5 1 0\n5 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 4 6 5\n3 4 5 7\n3 4 7 6\n3 5 6 7\n";
@@ -716,14 +719,8 @@ async fn geodesic_fields_need_no_basis_and_say_what_they_cannot_reach() {
             "{cp}"
         );
     }
-    let r = post_json(
-        addr,
-        &format!("/api/mesh/{two_id}/download"),
-        json!({"kind": "geodesic", "source": 0, "format": "txt"}),
-    )
-    .await;
-    assert_eq!(r.status, 200, "{}", r.error());
-    assert!(r.text().lines().skip(4).all(|l| l == "inf"), "{}", r.text());
+    let text = download_txt(addr, &two_id, json!({"kind": "geodesic", "source": 0})).await;
+    assert!(text.lines().skip(4).all(|l| l == "inf"), "{text}");
 
     for (body, says) in [
         (

@@ -18,8 +18,18 @@ use spectral_mesh_web::{ServeConfig, spawn};
 #[path = "common/blocking.rs"]
 mod blocking;
 
-fn http(addr: SocketAddr, method: &str, path: &str, body: Option<&Value>) -> (u16, Vec<u8>) {
-    let (s, _, b) = blocking::exchange(addr, method, path, body, Duration::from_secs(120));
+/// `POST /api/figure`: the figure of `summary` described again with `options`.
+fn figure_again(addr: SocketAddr, summary: &Value, options: Value) -> (u16, Vec<u8>) {
+    post(
+        addr,
+        "/api/figure",
+        &json!({ "summary": summary, "options": options }),
+    )
+}
+
+/// (status, body) of `POST path` with the JSON `body`.
+fn post(addr: SocketAddr, path: &str, body: &Value) -> (u16, Vec<u8>) {
+    let (s, _, b) = blocking::exchange(addr, "POST", path, Some(body), Duration::from_secs(120));
     (s, b)
 }
 
@@ -34,12 +44,7 @@ fn the_reply_describes_the_figure_and_the_download_uses_the_camera() {
     // A harmonic map (no basis): values 0 and 1 at two constrained vertices.
     let req = json!({"kind": "harmonic", "constraints": 2, "colormap": "diverging", "levels": 6,
                      "segments": false});
-    let (status, b) = http(
-        srv.addr,
-        "POST",
-        &format!("/api/mesh/{id}/field"),
-        Some(&req),
-    );
+    let (status, b) = post(srv.addr, &format!("/api/mesh/{id}/field"), &req);
     assert_eq!(status, 200, "{}", String::from_utf8_lossy(&b));
     let r = parse_reply(&b).unwrap();
     let h = &r.header;
@@ -80,12 +85,8 @@ fn the_reply_describes_the_figure_and_the_download_uses_the_camera() {
     );
     assert_eq!(fig["colorbar"]["title"], "harmonic map value");
     // Described again for viridis and 4 levels, from the summary alone.
-    let (status, b) = http(
-        srv.addr,
-        "POST",
-        "/api/figure",
-        Some(&json!({"summary": fig["summary"], "options": {"colormap": "viridis", "levels": 4}})),
-    );
+    let options = json!({"colormap": "viridis", "levels": 4});
+    let (status, b) = figure_again(srv.addr, &fig["summary"], options);
     assert_eq!(status, 200, "{}", String::from_utf8_lossy(&b));
     let again: Value = serde_json::from_slice(&b).unwrap();
     assert_eq!(again["range"], json!([min, max]));
@@ -96,12 +97,7 @@ fn the_reply_describes_the_figure_and_the_download_uses_the_camera() {
             .unwrap()
             .contains("4 level sets, spacing")
     );
-    let (status, b) = http(
-        srv.addr,
-        "POST",
-        "/api/figure",
-        Some(&json!({"summary": fig["summary"], "options": {"colormap": "jet"}})),
-    );
+    let (status, b) = figure_again(srv.addr, &fig["summary"], json!({"colormap": "jet"}));
     assert_eq!(status, 400, "{}", String::from_utf8_lossy(&b));
     // The PNG of the page's camera at its canvas size, at 300 dpi.
     let mut dl = req.clone();
@@ -111,12 +107,7 @@ fn the_reply_describes_the_figure_and_the_download_uses_the_camera() {
     dl["height"] = json!(200);
     dl["scale"] = json!(1.0);
     dl["dpi"] = json!(300);
-    let (status, png) = http(
-        srv.addr,
-        "POST",
-        &format!("/api/mesh/{id}/download"),
-        Some(&dl),
-    );
+    let (status, png) = post(srv.addr, &format!("/api/mesh/{id}/download"), &dl);
     assert_eq!(status, 200, "{}", String::from_utf8_lossy(&png));
     let dec = png::Decoder::new(std::io::Cursor::new(png));
     let reader = dec.read_info().unwrap();
@@ -126,12 +117,7 @@ fn the_reply_describes_the_figure_and_the_download_uses_the_camera() {
     assert_eq!((dims.xppu, dims.unit), (11811, png::Unit::Meter));
     // A bad camera is refused, naming the key.
     dl["view"] = json!("camera:0,0,0,0,0,0,0,1,0,40");
-    let (status, b) = http(
-        srv.addr,
-        "POST",
-        &format!("/api/mesh/{id}/download"),
-        Some(&dl),
-    );
+    let (status, b) = post(srv.addr, &format!("/api/mesh/{id}/download"), &dl);
     assert_eq!(status, 400, "{}", String::from_utf8_lossy(&b));
     assert!(String::from_utf8_lossy(&b).contains("figure.view"));
 }

@@ -112,7 +112,7 @@ async fn cloud_matches_the_library(addr: SocketAddr, name: &str, bytes: &[u8], k
     // The server's numbers at full precision (the text download) against the library's.
     let mut dl = body.clone();
     dl["format"] = json!("txt");
-    let r = post_json(addr, &format!("/api/mesh/{id}/download"), dl).await;
+    let r = post_download(addr, &id, dl).await;
     assert_eq!(r.status, 200, "{name}: {}", r.text());
     let txt: Vec<f64> = r.text().lines().map(|l| l.parse().unwrap()).collect();
     assert_eq!(txt.len(), n);
@@ -152,12 +152,12 @@ async fn uploaded_clouds_give_the_librarys_fields() {
     let mut png = body.clone();
     png["format"] = json!("png");
     png["size"] = json!(64);
-    let r = post_json(addr, &format!("/api/mesh/{id}/download"), png).await;
+    let r = post_download(addr, &id, png).await;
     assert_eq!(r.status, 200, "{}", r.text());
     assert_eq!(&r.body[..4], b"\x89PNG");
     let mut ply = body.clone();
     ply["format"] = json!("ply");
-    let r = post_json(addr, &format!("/api/mesh/{id}/download"), ply).await;
+    let r = post_download(addr, &id, ply).await;
     assert_eq!(r.status, 200, "{}", r.text());
     let head = String::from_utf8_lossy(&r.body[..r.body.len().min(400)]).into_owned();
     assert!(
@@ -167,7 +167,7 @@ async fn uploaded_clouds_give_the_librarys_fields() {
     assert!(!head.contains("element face 1"), "a point set: {head}");
     let mut toml = body.clone();
     toml["format"] = json!("toml");
-    let r = post_json(addr, &format!("/api/mesh/{id}/download"), toml).await;
+    let r = post_download(addr, &id, toml).await;
     let t = r.text();
     assert!(
         t.contains("mesh = \"sphere600.xyz\"") && t.contains("laplacian = \"robust\""),

@@ -301,15 +301,11 @@ pub fn run_field(input: Input, setup: &FieldSetup, o: &Outputs) -> Result<()> {
         SUMMARY_FILE,
     ];
     let paths = o.prepare(&all)?;
-    let Input { shape, info } = input;
-    let an = Analysis::from_input(
-        shape,
-        AnalysisOptions {
-            laplacian,
-            normalize: setup.normalize,
-            eigen: EigenParams::default(),
-        },
-    )?;
+    let (an, info) = input.into_analysis(AnalysisOptions {
+        laplacian,
+        normalize: setup.normalize,
+        eigen: EigenParams::default(),
+    })?;
     let mesh_summary = info.summary(an.mesh(), an.topology());
     let bar = EigenBar::new(setup.basis_k.or(request.eigenpairs()).unwrap_or(0));
     let t0 = std::time::Instant::now();
@@ -455,24 +451,15 @@ pub fn run_harmonic(
     names.push(SUMMARY_FILE.into());
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
     let paths = o.prepare(&name_refs)?;
-    let Input { shape, info } = input;
     // The analysis holds the mesh (a point cloud's triangle union), its topology and the
     // hash; the maps need no basis. On a point cloud the maps use the robust Laplacian of
     // that union (the point-cloud Laplacian itself where its consensus set has no holes).
-    let an = Analysis::from_input(
-        shape,
-        AnalysisOptions {
-            laplacian,
-            ..AnalysisOptions::default()
-        },
-    )?;
-    let run = paper::run_harmonic(
-        an.mesh(),
-        info.summary(an.mesh(), an.topology()),
-        constraints,
-        order,
+    let (an, info) = input.into_analysis(AnalysisOptions {
         laplacian,
-    )?;
+        ..AnalysisOptions::default()
+    })?;
+    let mesh_summary = info.summary(an.mesh(), an.topology());
+    let run = paper::run_harmonic(an.mesh(), mesh_summary, constraints, order, laplacian)?;
     for (i, map) in run.maps.iter().enumerate() {
         let constrained: Vec<usize> = map.constraints.iter().map(|c| c.vertex).collect();
         let mut fig = Figure::new(

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use spectral_mesh::Mesh;
+use spectral_mesh::experiments::study::closest_point_barycentric;
 use spectral_mesh::io::{MeshFormat, WriteOptions, write_mesh_to};
 use spectral_mesh::mesh::topology::VertexTriangles;
 use spectral_mesh::perturb::{SurfaceMap, apply, parse_perturbation};
@@ -95,51 +96,6 @@ fn compose(prev: &[Combo], map: &SurfaceMap, before: &Mesh, n_after: usize) -> R
     }
 }
 
-/// Closest point of triangle `abc` to `p`, as barycentric coordinates, and the distance.
-fn closest_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> ([f64; 3], f64) {
-    use spectral_mesh::mesh::{dot, norm, sub};
-    let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(p, a));
-    let (d1, d2) = (dot(ab, ap), dot(ac, ap));
-    let point = |w: [f64; 3]| -> ([f64; 3], f64) {
-        let q: [f64; 3] = std::array::from_fn(|i| w[0] * a[i] + w[1] * b[i] + w[2] * c[i]);
-        (w, norm(sub(p, q)))
-    };
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return point([1.0, 0.0, 0.0]);
-    }
-    let bp = sub(p, b);
-    let (d3, d4) = (dot(ab, bp), dot(ac, bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return point([0.0, 1.0, 0.0]);
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return point([1.0 - v, v, 0.0]);
-    }
-    let cp = sub(p, c);
-    let (d5, d6) = (dot(ab, cp), dot(ac, cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return point([0.0, 0.0, 1.0]);
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return point([1.0 - w, 0.0, w]);
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return point([0.0, 1.0 - w, w]);
-    }
-    let denom = va + vb + vc;
-    if denom.abs() < f64::MIN_POSITIVE {
-        return point([1.0, 0.0, 0.0]);
-    }
-    let (v, w) = (vb / denom, vc / denom);
-    point([1.0 - v - w, v, w])
-}
-
 /// One line of the map: original triangle and barycentric coordinates; `None` for a
 /// point on no triangle (an unreferenced original vertex). The flag says whether the
 /// triangle had to be chosen by the closest point (the combination spans several
@@ -173,9 +129,9 @@ fn to_triangle(
     for &(v, _) in combo {
         for &t in vt.of(v) {
             let [a, b, c] = original.corners(t);
-            let (w, d) = closest_on_triangle(p, a, b, c);
-            if best.as_ref().is_none_or(|x| d < x.2) {
-                best = Some((t, w, d));
+            let (w, d2) = closest_point_barycentric(p, a, b, c);
+            if best.as_ref().is_none_or(|x| d2 < x.2) {
+                best = Some((t, w, d2));
             }
         }
     }

@@ -250,10 +250,7 @@ class Analysis:
         P = _arrays.vertices(P, "P")
         nr = None if normals is None else _arrays.vertices(normals, "normals")
         native = _native.Analysis.from_points(
-            P,
-            nr,
-            _arrays.count(n_neighbors, "n_neighbors"),
-            _arrays.real(mollify_factor, "mollify_factor"),
+            (P, nr, _arrays.cloud(n_neighbors, mollify_factor)),
             bool(normalize),
             _arrays.solver(tol, seed, dirichlet, method),
         )
@@ -285,13 +282,10 @@ class Analysis:
         (``use_normals``: the file's normals give the tangent planes where non-zero), take
         the library's defaults when ``None``; given with a mesh they raise ``ValueError``.
         """
-        nb = None if n_neighbors is None else _arrays.count(n_neighbors, "n_neighbors")
-        mf = None if mollify_factor is None else _arrays.real(mollify_factor, "mollify_factor")
         native = _native.Analysis.from_file(
             os.fspath(path),
             None if kind is None else str(kind),
-            nb,
-            mf,
+            _arrays.cloud(n_neighbors, mollify_factor),
             bool(use_normals),
             bool(normalize),
             _arrays.solver(tol, seed, dirichlet, method),
@@ -556,7 +550,7 @@ class Analysis:
                 srcs = [_arrays.count(source, "source")]
             else:
                 srcs = [_arrays.count(x, "source") for x in source]
-            d = self._native.distances_weighted(srcs, self._function_weights(distance, k), k)
+            d = self._native.distances_many(srcs, self._function_weights(distance, k), k)
             return d[:, 0] if one else d
         if source is not None and not isinstance(source, (int, np.integer)):
             sources = [_arrays.count(s, "source") for s in source]
@@ -694,7 +688,7 @@ class Analysis:
         if callable(filter):
             weights = self._function_weights(filter, k)
             if component is None:
-                return self._native.embedding_weighted(weights, k)
+                return self._native.embedding_matrix(weights, k)
             c = _arrays.count(component, "component")
             return self._native.embedding_component_weighted(weights, c, k)
         if component is None:

@@ -155,13 +155,8 @@ def point_cloud_laplacian(
     nr = None if normals is None else _arrays.vertices(normals, "normals")
     if nr is not None and nr.shape[0] != P.shape[0]:
         raise ValueError(f"normals has {nr.shape[0]} rows but P has {P.shape[0]} points")
-    s, b, _total = _native.point_laplacian(
-        P,
-        nr,
-        _arrays.count(n_neighbors, "n_neighbors", 2),
-        _arrays.real(mollify_factor, "mollify_factor"),
-        bool(normalize),
-    )
+    cloud = (_arrays.count(n_neighbors, "n_neighbors", 2), _arrays.real(mollify_factor, "mollify_factor"))
+    s, b, _total = _native.point_laplacian((P, nr, cloud), bool(normalize))
     n = P.shape[0]
     return _arrays.csr_from_parts(s, n), _arrays.csr_from_parts(b, n)
 

@@ -214,3 +214,12 @@ def solver(
     ``(tol, seed, dirichlet, method)``, each checked."""
     d = None if dirichlet is None else [count(i, "dirichlet vertex") for i in dirichlet]
     return real(tol, "tol"), count(seed, "seed"), d, str(method)
+
+
+def cloud(n_neighbors: Any, mollify_factor: Any) -> tuple[int | None, float | None]:
+    """The point-cloud Laplacian's keywords as the native functions take them: one tuple
+    ``(n_neighbors, mollify_factor)``, each checked (``None``: the library's default)."""
+    return (
+        None if n_neighbors is None else count(n_neighbors, "n_neighbors"),
+        None if mollify_factor is None else real(mollify_factor, "mollify_factor"),
+    )

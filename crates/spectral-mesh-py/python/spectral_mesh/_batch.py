@@ -155,7 +155,7 @@ def batch(
     params, params_hash = _native.batch_params(json.dumps(raw))
     inputs = _native.batch_inputs(specs)
     _native.batch_prepare(out, bool(force))
-    deadline = None if timeout is None else time.monotonic() + timeout
+    deadline = Deadline(timeout, "the batch did not finish in time (a rerun resumes it)")
     if client is None:
         records = _local(inputs, params, params_hash, out, processes, threads, retry_failed,
                          deadline, progress)
@@ -167,13 +167,49 @@ def batch(
     return records
 
 
-def _remaining(deadline: float | None) -> float | None:
-    if deadline is None:
-        return None
-    left = deadline - time.monotonic()
-    if left <= 0:
-        raise TimeoutError("the batch did not finish in time (a rerun resumes it)")
-    return left
+class Deadline:
+    """When a set of tasks must be done (``timeout`` seconds from now; ``None``: no limit)
+    and what the ``TimeoutError`` says when they are not."""
+
+    def __init__(self, timeout: float | None, message: str) -> None:
+        self.at = None if timeout is None else time.monotonic() + timeout
+        self.message = message
+
+    def remaining(self) -> float | None:
+        """The seconds left (``None``: no limit); ``TimeoutError`` when there are none."""
+        if self.at is None:
+            return None
+        left = self.at - time.monotonic()
+        if left <= 0:
+            raise TimeoutError(self.message)
+        return left
+
+
+def gather(client: Any, futures: dict[Any, int], total: int, deadline: Deadline,
+           failed: Callable[[int, str], dict], progress: Callable[..., Any] | None,
+           ) -> dict[int, dict]:
+    """The records of Dask ``futures`` (future -> task index) as they finish: a task that
+    failed on every try (or whose workers died) gets ``failed(index, message)``. Reports
+    each to ``progress(done, total, record)``; at the deadline cancels the rest and raises
+    its ``TimeoutError``."""
+    from distributed import as_completed
+
+    records: dict[int, dict] = {}
+    try:
+        for f in as_completed(list(futures), timeout=deadline.remaining()):
+            i = futures[f]
+            try:
+                records[i] = f.result()
+            except Exception as e:  # the task failed on every try, or its workers died
+                records[i] = failed(i, f"the Dask task failed: {type(e).__name__}: {e}")
+            if progress is not None:
+                progress(len(records), total, records[i])
+    except Exception as e:
+        if type(e).__name__ == "TimeoutError":
+            client.cancel(list(futures))
+            raise TimeoutError(deadline.message) from e
+        raise
+    return records
 
 
 _STARTED: Any = None
@@ -221,11 +257,11 @@ def _local(inputs, params, params_hash, out, processes, threads, retry_failed, d
             }
             pending = []
             while futures:
-                done, _ = wait(futures, timeout=_remaining(deadline), return_when=FIRST_COMPLETED)
+                done, _ = wait(futures, timeout=deadline.remaining(), return_when=FIRST_COMPLETED)
                 if not done:
                     for f in futures:
                         f.cancel()
-                    _remaining(deadline)
+                    deadline.remaining()
                 while not started_queue.empty():
                     started.add(started_queue.get())
                 for f in done:
@@ -252,8 +288,6 @@ def _local(inputs, params, params_hash, out, processes, threads, retry_failed, d
 
 def _dask(client, inputs, params, params_hash, out, threads, retries, resources, retry_failed,
           deadline, progress) -> list[dict]:
-    from distributed import as_completed
-
     futures = {}
     for i, (path, name) in enumerate(inputs):
         res = resources
@@ -267,21 +301,10 @@ def _dask(client, inputs, params, params_hash, out, threads, retries, resources,
                           key=f"spectral-mesh-batch-{params_hash[:12]}-{i}-{name}",
                           pure=False, retries=retries, resources=dict(res) if res else None)
         futures[f] = i
-    records: dict[int, dict] = {}
-    try:
-        for f in as_completed(list(futures), timeout=_remaining(deadline)):
-            i = futures[f]
-            path, name = inputs[i]
-            try:
-                records[i] = f.result()
-            except Exception as e:  # the task failed on every try, or its workers died
-                records[i] = _failed(path, name, params_hash,
-                                     f"the Dask task failed: {type(e).__name__}: {e}")
-            if progress is not None:
-                progress(len(records), len(inputs), records[i])
-    except Exception as e:
-        if type(e).__name__ == "TimeoutError":
-            client.cancel(list(futures))
-            raise TimeoutError("the batch did not finish in time (a rerun resumes it)") from e
-        raise
+
+    def failed(i: int, message: str) -> dict:
+        path, name = inputs[i]
+        return _failed(path, name, params_hash, message)
+
+    records = gather(client, futures, len(inputs), deadline, failed, progress)
     return [records[i] for i in range(len(inputs))]

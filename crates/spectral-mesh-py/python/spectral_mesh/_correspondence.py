@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import os
-import time
 from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
@@ -21,7 +20,7 @@ import numpy.typing as npt
 
 from . import _arrays, _native
 from ._api import eigenbasis
-from ._batch import worker_threads
+from ._batch import Deadline, gather, worker_threads
 from ._defaults import KIND
 
 _D: dict = _native.defaults()["correspondence"]
@@ -99,8 +98,8 @@ def functional_map(
             raise ValueError("landmarks must be a (p, 2) integer array")
         lm = [(int(p), int(q)) for p, q in a]
     C, energy = _native.functional_map(
-        v1, f1, e1[:k], _arrays.columns_t(x1[:, :k], "evecs1"),
-        v2, f2, e2[:k], _arrays.columns_t(x2[:, :k], "evecs2"),
+        (v1, f1, e1[:k], _arrays.columns_t(x1[:, :k], "evecs1")),
+        (v2, f2, e2[:k], _arrays.columns_t(x2[:, :k], "evecs2")),
         str(kind), json.dumps(params), lm,
     )
     return (C, energy) if return_energy else C
@@ -136,8 +135,8 @@ def zoomout(
     _e1, x1 = _basis(v1, f1, basis1, kf, kind, 1)
     _e2, x2 = _basis(v2, f2, basis2, kf, kind, 2)
     forward, reverse = _native.zoomout_refine(
-        v1, f1, _arrays.columns_t(x1[:, :kf], "evecs1"),
-        v2, f2, _arrays.columns_t(x2[:, :kf], "evecs2"),
+        (v1, f1, None, _arrays.columns_t(x1[:, :kf], "evecs1")),
+        (v2, f2, None, _arrays.columns_t(x2[:, :kf], "evecs2")),
         str(kind), np.ascontiguousarray(c.T), kf, _arrays.count(step, "step", 1),
         str(direction),
     )
@@ -275,46 +274,25 @@ def match_pairs(
     }
     jobs, params = _native.pairs_plan(specs, _pairing(pairs), json.dumps(raw))
     _native.batch_prepare(out, bool(force))
-    deadline = None if timeout is None else time.monotonic() + timeout
-
-    def left() -> float | None:
-        if deadline is None:
-            return None
-        remaining = deadline - time.monotonic()
-        if remaining <= 0:
-            raise TimeoutError("the pairs did not finish in time")
-        return remaining
-
+    deadline = Deadline(timeout, "the pairs did not finish in time")
     records: dict[int, dict] = {}
     if client is None:
         for i, job in enumerate(jobs):
-            left()
+            deadline.remaining()
             records[i] = _pair_task(job, params, out, threads or 0)
             if progress is not None:
                 progress(len(records), len(jobs), records[i])
     else:
-        from distributed import as_completed
-
         futures = {
             client.submit(_pair_task, job, params, out, threads,
                           key=f"spectral-mesh-pair-{i}-{json.loads(job)['name']}", pure=False): i
             for i, job in enumerate(jobs)
         }
-        try:
-            for f in as_completed(list(futures), timeout=left()):
-                i = futures[f]
-                try:
-                    records[i] = f.result()
-                except Exception as e:  # the task failed, or its workers died
-                    records[i] = json.loads(_native.pair_failed(
-                        jobs[i], params, f"the Dask task failed: {type(e).__name__}: {e}"))
-                if progress is not None:
-                    progress(len(records), len(jobs), records[i])
-        except Exception as e:
-            if type(e).__name__ == "TimeoutError":
-                client.cancel(list(futures))
-                raise TimeoutError("the pairs did not finish in time") from e
-            raise
+
+        def failed(i: int, message: str) -> dict:
+            return json.loads(_native.pair_failed(jobs[i], params, message))
+
+        records = gather(client, futures, len(jobs), deadline, failed, progress)
     ordered = [records[i] for i in range(len(jobs))]
     _native.pairs_summary(out, [json.dumps(r) for r in ordered])
     return ordered

@@ -38,3 +38,6 @@ KIND: str = ANALYSIS["kind"]
 METHOD: str = ANALYSIS["method"]
 #: The point-cloud Laplacian's defaults (``n_neighbors``, ``mollify_factor``).
 POINT_CLOUD: dict = DEFAULTS["point_cloud"]
+#: The learning operators' defaults (``k_eig``, ``laplacian``, ``grad_regularization``,
+#: ``n_neighbors``, ``tol``, ``mass_eps``: the library's ``LearningParams``).
+LEARNING: dict = _native.learning_defaults()

@@ -86,11 +86,10 @@ class GeodesicSolver:
         P = _arrays.vertices(P, "P")
         nr = None if normals is None else _arrays.vertices(normals, "normals")
         tf = None if time_factor is None else _arrays.real(time_factor, "time_factor")
-        nn = None if n_neighbors is None else _arrays.count(n_neighbors, "n_neighbors")
         gn = None if gradient_neighbors is None else _arrays.count(gradient_neighbors, "gradient_neighbors")
-        mf = None if mollify_factor is None else _arrays.real(mollify_factor, "mollify_factor")
         self = cls.__new__(cls)
-        self._native = _native.GeodesicSolver.from_points(P, nr, nn, mf, gn, tf, convention)
+        points = (P, nr, _arrays.cloud(n_neighbors, mollify_factor))
+        self._native = _native.GeodesicSolver.from_points(points, gn, tf, convention)
         return self
 
     n: NativeAttribute[int] = NativeAttribute("The number of vertices (or points).")

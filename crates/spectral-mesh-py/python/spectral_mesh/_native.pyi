@@ -11,7 +11,7 @@ worker thread, raises ``KeyboardInterrupt`` on Ctrl-C and never lets a Rust pani
 """
 
 from os import PathLike
-from typing import Any, Callable, TypedDict
+from typing import Any, Callable, Final, TypedDict
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,8 +21,17 @@ I64 = NDArray[np.int64]
 Csc = tuple[F64, I64, I64]
 # The eigensolver's keywords ``(tol, seed, dirichlet, method)`` (``_arrays.solver``).
 Solver = tuple[float, int, list[int] | None, str]
-# A Python weight function's values at ``filter_eigenvalues`` and its name (for messages).
-Weights = tuple[F64, str]
+# The point-cloud Laplacian's keywords ``(n_neighbors, mollify_factor)``, ``None`` for
+# the library's default (``_arrays.cloud``).
+Cloud = tuple[int | None, float | None]
+# A point cloud: ``(P, normals or None, cloud keywords)``.
+Points = tuple[F64, F64 | None, Cloud]
+# One shape of a pair: ``(V, F, evals or None, evecs_t)`` (``evecs_t``: the ``(k, n)``
+# transpose of the eigenvectors).
+PairShape = tuple[F64, I64, F64 | None, F64]
+# How the pairs are weighted: a filter's text, or a Python weight function's values at
+# ``filter_eigenvalues`` and its name (for messages; checked: strictly positive, finite).
+Weights = str | tuple[F64, str]
 # The picture options of both ``render``s, checked by the Python layer (``_render_args``).
 Figure = TypedDict(
     "Figure",
@@ -60,9 +69,7 @@ def laplacian(v: F64, f: I64, kind: str, normalize: bool) -> tuple[Csc, Csc, flo
 def read_points(path: str | PathLike[str]) -> tuple[F64, F64 | None, dict]:
     """``(P (n, 3), normals (n, 3) or None, info)``; info: format, warnings."""
 
-def point_laplacian(
-    p: F64, normals: F64 | None, neighbors: int, mollify_factor: float, normalize: bool
-) -> tuple[Csc, Csc, float]:
+def point_laplacian(points: Points, normalize: bool) -> tuple[Csc, Csc, float]:
     """``(S, B, A)`` of a point cloud (B diagonal), A = ``1^T B 1`` as assembled."""
 
 def eigenbasis(
@@ -150,10 +157,7 @@ class Analysis:
     ) -> Analysis: ...
     @staticmethod
     def from_points(
-        p: F64,
-        normals: F64 | None,
-        neighbors: int | None,
-        mollify_factor: float | None,
+        points: Points,
         normalize: bool,
         solver: Solver,
     ) -> Analysis:
@@ -163,32 +167,22 @@ class Analysis:
     def from_file(
         path: str | PathLike[str],
         kind: str | None,
-        neighbors: int | None,
-        mollify_factor: float | None,
+        cloud: Cloud,
         use_normals: bool,
         normalize: bool,
         solver: Solver,
     ) -> Analysis:
         """The analysis of a mesh or point-cloud file; point-cloud parameters given with a
         mesh raise ``ValueError``."""
-    @property
-    def n(self) -> int: ...
-    @property
-    def is_point_cloud(self) -> bool: ...
-    @property
-    def point_spacing(self) -> float | None: ...
-    @property
-    def held_k(self) -> int: ...
-    @property
-    def normalized(self) -> bool: ...
-    @property
-    def kind(self) -> str: ...
-    @property
-    def input_total_mass(self) -> float: ...
-    @property
-    def factorizations(self) -> int: ...
-    @property
-    def default_source(self) -> int: ...
+    n: Final[int]
+    is_point_cloud: Final[bool]
+    point_spacing: Final[float | None]
+    held_k: Final[int]
+    normalized: Final[bool]
+    kind: Final[str]
+    input_total_mass: Final[float]
+    factorizations: Final[int]
+    default_source: Final[int]
     def mesh(self) -> tuple[F64, I64]: ...
     def operators(self) -> tuple[Csc, Csc]: ...
     def basis(
@@ -206,17 +200,13 @@ class Analysis:
     def hks_auto_times(self, count: int, k: int) -> list[float]: ...
     def wks_many(self, energies: list[float], sigma: float, scaled: bool, k: int) -> F64: ...
     def wks_auto_energies(self, count: int, k: int) -> tuple[list[float], float]: ...
-    def embedding_matrix(self, filter: str, k: int) -> F64: ...
-    def distances_many(self, sources: list[int], filter: str, k: int) -> F64: ...
+    def embedding_matrix(self, weights: Weights, k: int) -> F64: ...
+    def distances_many(self, sources: list[int], weights: Weights, k: int) -> F64: ...
     def filter_eigenvalues(self, k: int) -> tuple[list[int], F64]:
         """``(pair indices, eigenvalues)`` of the first ``k`` pairs a filter weighs (the
         library's zero-eigenvalue rule); a Python weight function is evaluated at these."""
-    def distances_weighted(self, sources: list[int], weights: Weights, k: int) -> F64:
-        """Distances ``(n, len(sources))`` with a weight function's values at
-        :meth:`filter_eigenvalues` (checked: strictly positive and finite)."""
     def green_weighted(self, source: int, weights: Weights, k: int) -> F64: ...
     def spectral_function_weighted(self, weights: Weights, k: int) -> F64: ...
-    def embedding_weighted(self, weights: Weights, k: int) -> F64: ...
     def embedding_component_weighted(self, weights: Weights, component: int, k: int) -> F64: ...
     def set_basis(self, evals: F64, evecs_t: F64) -> None: ...
     def save_basis(self, path: str | PathLike[str]) -> None: ...
@@ -247,10 +237,7 @@ class GeodesicSolver:
     ) -> None: ...
     @staticmethod
     def from_points(
-        p: F64,
-        normals: F64 | None = None,
-        neighbors: int | None = None,
-        mollify_factor: float | None = None,
+        points: Points,
         gradient_neighbors: int | None = None,
         time_factor: float | None = None,
         convention: str | None = None,
@@ -259,34 +246,21 @@ class GeodesicSolver:
     def distances(self, vertices: list[int]) -> F64: ...
     def distance_matrix(self, samples: list[int], symmetric: bool) -> F64: ...
     def farthest_point_sampling(self, k: int, start: int) -> list[int]: ...
-    @property
-    def t(self) -> float: ...
-    @property
-    def h(self) -> float: ...
-    @property
-    def n(self) -> int: ...
+    t: Final[float]
+    h: Final[float]
+    n: Final[int]
 
 def correspondence_defaults() -> str: ...
 def functional_map(
-    v1: F64,
-    f1: I64,
-    evals1: F64,
-    evecs1_t: F64,
-    v2: F64,
-    f2: I64,
-    evals2: F64,
-    evecs2_t: F64,
+    shape1: PairShape,
+    shape2: PairShape,
     kind: str,
     params: str,
     landmarks: list[tuple[int, int]],
 ) -> tuple[F64, float]: ...
 def zoomout_refine(
-    v1: F64,
-    f1: I64,
-    evecs1_t: F64,
-    v2: F64,
-    f2: I64,
-    evecs2_t: F64,
+    shape1: PairShape,
+    shape2: PairShape,
     kind: str,
     c: F64,
     k_final: int,

@@ -31,26 +31,23 @@ Laplacian and eigensolver into geomfum.
 
 from __future__ import annotations
 
+import inspect
 import os
 import sys
 import types
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable, ParamSpec, TypeVar
 
 import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
 
 from . import _arrays, _native
+from ._defaults import LEARNING
 
 #: The library's defaults of the learning operators (``k_eig``, ``laplacian``,
 #: ``grad_regularization``, ``n_neighbors``, ``tol``, ``mass_eps``).
-DEFAULTS: dict = _native.learning_defaults()
-K_EIG: int = DEFAULTS["k_eig"]
-LAPLACIAN: str = DEFAULTS["laplacian"]
-GRAD_REGULARIZATION: float = DEFAULTS["grad_regularization"]
-N_NEIGHBORS: int = DEFAULTS["n_neighbors"]
-TOL: float = DEFAULTS["tol"]
+DEFAULTS: dict = LEARNING
 
 
 @dataclass(frozen=True)
@@ -73,6 +70,23 @@ class Operators:
         return (self.frames, self.mass, self.L, self.evals, self.evecs, self.gradX, self.gradY)
 
 
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+
+
+def _parameters_of(f: Callable[_P, Any]) -> Callable[[Callable[..., _R]], Callable[_P, _R]]:
+    """A decorator for a function that passes its arguments on to ``f``: it gets ``f``'s
+    parameters, for the type checker and for ``inspect.signature`` and ``help``."""
+
+    def decorate(g: Callable[..., _R]) -> Callable[_P, _R]:
+        returns = inspect.signature(g).return_annotation
+        g.__signature__ = inspect.signature(f).replace(  # type: ignore[attr-defined]
+            return_annotation=returns)
+        return g
+
+    return decorate
+
+
 def _dtype_name(dtype: Any, verts: np.ndarray) -> str:
     if dtype is None:
         return "float32" if verts.dtype == np.float32 else "float64"
@@ -88,15 +102,15 @@ def _dtype_name(dtype: Any, verts: np.ndarray) -> str:
 def operators(
     verts: npt.ArrayLike,
     faces: npt.ArrayLike | None = None,
-    k_eig: int = K_EIG,
+    k_eig: int = LEARNING["k_eig"],
     op_cache_dir: str | os.PathLike[str] | None = None,
     dtype: Any = None,
     *,
     normals: npt.ArrayLike | None = None,
-    laplacian: str = LAPLACIAN,
-    grad_regularization: float = GRAD_REGULARIZATION,
-    n_neighbors: int = N_NEIGHBORS,
-    tol: float = TOL,
+    laplacian: str = LEARNING["laplacian"],
+    grad_regularization: float = LEARNING["grad_regularization"],
+    n_neighbors: int = LEARNING["n_neighbors"],
+    tol: float = LEARNING["tol"],
 ) -> Operators:
     """The learning operators of a mesh ``(verts, faces)``, or of a point cloud when
     ``faces`` is None or empty, as an :class:`Operators` (see :func:`get_operators`)."""
@@ -130,19 +144,8 @@ def operators(
     return Operators(frames, mass, csc(L), evals, evecs, csc(gx), csc(gy), hit, path)
 
 
-def get_operators(
-    verts: npt.ArrayLike,
-    faces: npt.ArrayLike | None = None,
-    k_eig: int = K_EIG,
-    op_cache_dir: str | os.PathLike[str] | None = None,
-    dtype: Any = None,
-    *,
-    normals: npt.ArrayLike | None = None,
-    laplacian: str = LAPLACIAN,
-    grad_regularization: float = GRAD_REGULARIZATION,
-    n_neighbors: int = N_NEIGHBORS,
-    tol: float = TOL,
-) -> tuple[Any, ...]:
+@_parameters_of(operators)
+def get_operators(*args: Any, **kwargs: Any) -> tuple[Any, ...]:
     """DiffusionNet's ``get_operators``: ``(frames, mass, L, evals, evecs, gradX, gradY)``
     of a mesh ``(verts (n, 3), faces (m, 3))``, or of a point cloud when ``faces`` is None
     or empty.
@@ -176,18 +179,7 @@ def get_operators(
     ``OSError`` when the cache folder cannot be written, :class:`SolverError` and
     :class:`NoConvergenceError` for numerical failures.
     """
-    return operators(
-        verts,
-        faces,
-        k_eig,
-        op_cache_dir,
-        dtype,
-        normals=normals,
-        laplacian=laplacian,
-        grad_regularization=grad_regularization,
-        n_neighbors=n_neighbors,
-        tol=tol,
-    ).astuple()
+    return operators(*args, **kwargs).astuple()
 
 
 # ------------------------------------------------------------------------------ geomfum
@@ -197,8 +189,8 @@ def register_geomfum(
     which: str = "spectral_mesh",
     *,
     as_default: bool = False,
-    laplacian: str = LAPLACIAN,
-    n_neighbors: int = N_NEIGHBORS,
+    laplacian: str = LEARNING["laplacian"],
+    n_neighbors: int = LEARNING["n_neighbors"],
 ) -> types.ModuleType:
     """Registers the library's Laplacians in geomfum's Laplacian-finder registry under the
     key ``which``, for meshes and for point clouds (``as_default``: also make them
@@ -261,7 +253,7 @@ def register_geomfum(
         """geomfum's eigensolver interface on :func:`spectral_mesh.eigsh`: the
         ``spectrum_size`` smallest pairs of ``A x = lambda M x``."""
 
-        def __init__(self, spectrum_size: int = K_EIG) -> None:
+        def __init__(self, spectrum_size: int = LEARNING["k_eig"]) -> None:
             self.spectrum_size = spectrum_size
 
         def __call__(self, A: Any, M: Any = None) -> tuple[Any, Any]:
@@ -270,7 +262,7 @@ def register_geomfum(
             return gs.from_numpy(vals), gs.from_numpy(vecs)
 
     def spectrum_finder(
-        spectrum_size: int = K_EIG,
+        spectrum_size: int = LEARNING["k_eig"],
         *,
         mesh: bool = True,
         nonzero: bool = False,

@@ -170,6 +170,11 @@ pub async fn post_field(addr: SocketAddr, id: &str, body: Value) -> Reply {
     post_json(addr, &format!("/api/mesh/{id}/field"), body).await
 }
 
+/// Posts a download request (a field request with its `format`) for mesh `id`.
+pub async fn post_download(addr: SocketAddr, id: &str, body: Value) -> Reply {
+    post_json(addr, &format!("/api/mesh/{id}/download"), body).await
+}
+
 /// Asserts `|got[i] - want[i]| <= rel * max |want|` for every `i` of `want` (the message
 /// names `what` and `i`).
 pub fn assert_close(got: &[f64], want: &[f64], rel: f64, what: &str) {

@@ -101,8 +101,10 @@ impl Default for SparseEigenOptions {
     }
 }
 
-/// Progress of the eigensolver.
-#[derive(Debug, Clone, PartialEq)]
+/// Progress of the eigensolver. Serialized as an object tagged by `stage` (`dense`,
+/// `factorization`, `iteration`, `finished`) with the variant's fields.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(tag = "stage", rename_all = "snake_case")]
 pub enum EigenProgress {
     /// The dense path started (all pairs of an `n x n` problem).
     Dense {
