@@ -70,8 +70,8 @@ fn library_values() -> BTreeMap<String, Vec<String>> {
     put("constraints", list(&harmonic.constraint_counts));
     put("order", s(harmonic.order));
     put("batch/k", s(batch.k));
-    put("batch/laplacian", s(batch.laplacian));
-    put("batch/tolerance", s(batch.tolerance));
+    put("batch/laplacian", s(batch.solve.laplacian));
+    put("batch/tolerance", s(batch.solve.tolerance));
     put(
         "study truncation/laplacian",
         list(truncation.laplacians.iter().map(|l| l.name())),

@@ -117,9 +117,9 @@ impl FieldSummary {
         let n = field.values.len();
         let mut marks = Vec::new();
         if let Some(r) = report {
-            s.flat = r.flat;
+            s.flat = r.left_out.flat;
             s.hidden = r.hidden.minima + r.hidden.maxima + r.hidden.saddles;
-            s.persistence_threshold = Some(r.persistence_threshold);
+            s.persistence_threshold = Some(r.persistence.threshold);
             marks.push(MarkSet {
                 kind: MarkerKind::Minimum,
                 vertices: r.points.minima.clone(),

@@ -72,7 +72,7 @@ impl<'a> Figure<'a> {
             true => match simplified_critical_points(mesh, field) {
                 Ok(p) => {
                     let hidden = p.hidden_minima() + p.hidden_maxima() + p.hidden_saddles();
-                    summary.persistence_threshold = Some(p.threshold);
+                    summary.persistence_threshold = Some(p.thresholds.threshold);
                     (Some(p.shown), hidden)
                 }
                 Err(_) => (None, 0),
@@ -150,8 +150,8 @@ impl<'a> Figure<'a> {
         self.critical = Some(r.points.clone());
         self.critical_hidden = r.hidden.minima + r.hidden.maxima + r.hidden.saddles;
         self.summary.hidden = self.critical_hidden;
-        self.summary.flat = r.flat;
-        self.summary.persistence_threshold = Some(r.persistence_threshold);
+        self.summary.flat = r.left_out.flat;
+        self.summary.persistence_threshold = Some(r.persistence.threshold);
         self.mark();
     }
 

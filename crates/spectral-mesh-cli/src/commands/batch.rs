@@ -22,8 +22,9 @@ use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use spectral_mesh::analysis::request::DEFAULT_K;
 use spectral_mesh::batch::{
-    BatchError, BatchInput, BatchParams, BatchRecord, JobOptions, Schedule, Status, prepare_output,
-    process_one, remove_stale_temporaries, resolve_inputs, write_summary,
+    BatchError, BatchInput, BatchParams, BatchRecord, DescriptorParams, JobOptions, Schedule,
+    SolveParams, Status, prepare_output, process_one, remove_stale_temporaries, resolve_inputs,
+    write_summary,
 };
 use spectral_mesh::operators::Laplacian;
 use spectral_mesh::spectral::eigenbasis::EigenParams;
@@ -54,7 +55,7 @@ pub struct Args {
     pub k: usize,
     /// Discretization of meshes: cot, voronoi-cot, fem, mixed-voronoi, uniform (point
     /// clouds always use the robust point-cloud Laplacian).
-    #[arg(long, default_value_t = spectral_mesh::batch::BatchParams::default().laplacian)]
+    #[arg(long, default_value_t = spectral_mesh::batch::BatchParams::default().solve.laplacian)]
     pub laplacian: Laplacian,
     /// Target relative residual of every eigenpair.
     #[arg(long, default_value_t = EigenParams::default().tolerance)]
@@ -141,15 +142,19 @@ impl Args {
     fn params(&self) -> Result<BatchParams> {
         Ok(BatchParams {
             k: self.k,
-            laplacian: self.laplacian,
-            tolerance: self.tolerance,
-            normalize: !self.no_normalize,
+            solve: SolveParams {
+                laplacian: self.laplacian,
+                tolerance: self.tolerance,
+                normalize: !self.no_normalize,
+            },
             basis: !self.eigenvalues_only,
-            hks: self.descriptors.hks.clone(),
-            wks: self.descriptors.wks.clone(),
-            wks_sigma: self.descriptors.wks_sigma,
-            adf: self.descriptors.adf.clone(),
-            scaled: self.descriptors.scaled,
+            descriptors: DescriptorParams {
+                hks: self.descriptors.hks.clone(),
+                wks: self.descriptors.wks.clone(),
+                wks_sigma: self.descriptors.wks_sigma,
+                adf: self.descriptors.adf.clone(),
+                scaled: self.descriptors.scaled,
+            },
             thumbnail: self.thumbnail,
             point_cloud: self.cloud.params()?,
             geodesic: self.geodesic,

@@ -426,7 +426,7 @@ fn hidden_note(c: &spectral_mesh::analysis::CriticalReport) -> String {
     } else {
         format!(
             ", {n} hidden by persistence (below {:.3e})",
-            c.persistence_threshold
+            c.persistence.threshold
         )
     }
 }
@@ -485,10 +485,10 @@ pub fn run_harmonic(
             "map {}: {} constraints, m = {}, M = {}, s = {} (with multiplicity), m - s + M = {} (chi = {}){}",
             i + 1,
             map.constraints.len(),
-            c.minima,
-            c.maxima,
-            c.saddles,
-            c.minima as i64 - c.saddles as i64 + c.maxima as i64,
+            c.counts.minima,
+            c.counts.maxima,
+            c.counts.saddles,
+            c.counts.minima as i64 - c.counts.saddles as i64 + c.counts.maxima as i64,
             c.chi,
             hidden_note(c)
         );

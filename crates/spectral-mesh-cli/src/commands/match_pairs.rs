@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use spectral_mesh::batch::pairs::{DEFAULT_PAIR_GEODESIC_SOURCES, parse_pair_list};
 use spectral_mesh::batch::{
-    PairParams, Pairing, Status, plan_pairs, prepare_output, process_pair,
+    PairParams, Pairing, SolveParams, Status, plan_pairs, prepare_output, process_pair,
     remove_stale_temporaries, resolve_inputs, write_pairs_summary,
 };
 use spectral_mesh::cancel::CancelToken;
@@ -62,8 +62,11 @@ fn pairing(spec: Option<&str>) -> Result<Pairing> {
 pub fn run(args: Args) -> Result<()> {
     let params = PairParams {
         matching: args.flags.params()?,
-        laplacian: laplacian_for(args.flags.laplacian, false)?,
-        normalize: !args.flags.no_normalize,
+        solve: SolveParams {
+            laplacian: laplacian_for(args.flags.laplacian, false)?,
+            normalize: !args.flags.no_normalize,
+            ..SolveParams::default()
+        },
         max_geodesic_sources: Some(args.geodesic_sources),
         ..PairParams::default()
     };
@@ -78,8 +81,11 @@ pub fn run(args: Args) -> Result<()> {
         let rec = process_pair(job, &params, &args.out, &CancelToken::new());
         let what = match (&rec.error, rec.mean_geodesic_error) {
             (Some(e), _) => format!("failed: {e}"),
-            (None, Some(err)) => format!("{:.2} s, mean geodesic error {err:.3e}", rec.seconds),
-            (None, None) => format!("{:.2} s", rec.seconds),
+            (None, Some(err)) => format!(
+                "{:.2} s, mean geodesic error {err:.3e}",
+                rec.timings.seconds
+            ),
+            (None, None) => format!("{:.2} s", rec.timings.seconds),
         };
         eprintln!("[{}/{}] {}: {what}", i + 1, jobs.len(), job.name);
         records.push(rec);

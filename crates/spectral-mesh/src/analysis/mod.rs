@@ -49,7 +49,9 @@ use crate::fields::critical_points::{
     BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError, FLAT_RELATIVE_TOLERANCE,
 };
 use crate::fields::harmonic::{Constraint, FloatingComponent, HarmonicError, HarmonicSolver};
-use crate::fields::persistence::{Persistence, PersistencePair, persistence};
+use crate::fields::persistence::{
+    Persistence, PersistencePair, PersistenceThresholds, persistence,
+};
 use crate::fields::segmentation::SegmentationError;
 use crate::geodesic::{GeodesicError, GeodesicParams, GeodesicSolver};
 use crate::linalg::EigenProgress;
@@ -737,48 +739,31 @@ impl Analysis {
 pub struct CriticalReport {
     /// The critical points shown (those of left-out components removed).
     pub points: CriticalPoints,
-    /// Minima shown.
-    pub minima: usize,
-    /// Maxima shown.
-    pub maxima: usize,
-    /// Saddles shown, counted with multiplicity.
-    pub saddles: usize,
+    /// How many are shown.
+    #[serde(flatten)]
+    pub counts: CriticalCounts,
     /// Euler characteristic of the components counted.
     pub chi: i64,
     /// True when the check is doubled across the boundary (bordered surfaces).
     pub doubled: bool,
-    /// Left side of the check of the shown points (`m - s + M`, or its doubled form).
-    pub lhs: i64,
-    /// Right side (`chi` or `2 chi`).
-    pub rhs: i64,
-    /// `lhs == rhs`, and the check holds on every component counted.
-    pub holds: bool,
+    /// The check of the shown points (`m - s + M`, or its doubled form, against `chi` or
+    /// `2 chi`); it holds when it holds on every component counted as well.
+    #[serde(flatten)]
+    pub check: CheckSides,
     /// The check in words.
     pub formula: &'static str,
     /// The check on each component counted.
     pub components: Vec<ComponentCheck>,
-    /// Components left out of the counts because the caller excluded them (a harmonic
-    /// map's unconstrained components).
-    pub excluded_components: Vec<usize>,
-    /// Components left out because the field is constant on them within
-    /// `flat_tolerance` (plateaus, no critical points).
-    pub plateau_components: Vec<usize>,
-    /// The relative tolerance of plateaus: values within `flat_tolerance * max |f|` of
-    /// each other on a component are one plateau ([`FLAT_RELATIVE_TOLERANCE`]).
-    pub flat_tolerance: f64,
-    /// True when every component is a plateau or left out, and at least one is a
-    /// plateau: the field is constant (up to rounding), with no critical points.
-    pub flat: bool,
+    /// The components left out of the counts.
+    #[serde(flatten)]
+    pub left_out: LeftOut,
     /// The raw critical points' counts and their check (before simplification).
     pub raw: RawCritical,
     /// How many raw critical points are not shown.
-    pub hidden: HiddenCritical,
-    /// The persistence below which a pair is hidden (absolute, in the field's units).
-    pub persistence_threshold: f64,
-    /// [`crate::fields::persistence::PERSISTENCE_RELATIVE_THRESHOLD`].
-    pub persistence_relative_threshold: f64,
-    /// [`crate::fields::persistence::PERSISTENCE_NOISE_FLOOR`].
-    pub persistence_noise_floor: f64,
+    pub hidden: CriticalCounts,
+    /// The thresholds of the simplification.
+    #[serde(flatten)]
+    pub persistence: PersistenceThresholds,
     /// Components (as in `Topology::components`) whose range is below the threshold: no
     /// critical point shown.
     pub quiet_components: Vec<usize>,
@@ -787,32 +772,64 @@ pub struct CriticalReport {
     pub pairs: Vec<PersistencePair>,
 }
 
-/// The raw critical points' counts and Euler check.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct RawCritical {
+/// Counts of critical points: shown, raw, or hidden by the simplification.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct CriticalCounts {
     /// Minima.
     pub minima: usize,
     /// Maxima.
     pub maxima: usize,
-    /// Saddles counted with multiplicity.
+    /// Saddles, counted with multiplicity.
     pub saddles: usize,
-    /// Left side of the check.
+}
+
+impl CriticalCounts {
+    /// The counts of `cp`.
+    fn of(cp: &CriticalPoints) -> Self {
+        Self {
+            minima: cp.minima.len(),
+            maxima: cp.maxima.len(),
+            saddles: cp.saddle_count(),
+        }
+    }
+}
+
+/// Both sides of an Euler check and whether they agree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct CheckSides {
+    /// Left side: the critical points counted (`m - s + M`, or its doubled form).
     pub lhs: i64,
-    /// Right side.
+    /// Right side (`chi` or `2 chi`).
     pub rhs: i64,
-    /// `lhs == rhs` on every component counted.
+    /// `lhs == rhs` (and, for a sum over components, the check of each).
     pub holds: bool,
 }
 
-/// Raw critical points not shown (pairs below the persistence threshold, quiet components).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-pub struct HiddenCritical {
-    /// Minima hidden.
-    pub minima: usize,
-    /// Maxima hidden.
-    pub maxima: usize,
-    /// Saddles hidden, with multiplicity.
-    pub saddles: usize,
+/// The components a report leaves out of its counts and checks.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LeftOut {
+    /// Components the caller excluded (a harmonic map's unconstrained components).
+    pub excluded_components: Vec<usize>,
+    /// Components on which the field is constant within `flat_tolerance` (plateaus, no
+    /// critical points).
+    pub plateau_components: Vec<usize>,
+    /// The relative tolerance of plateaus: values within `flat_tolerance * max |f|` of
+    /// each other on a component are one plateau ([`FLAT_RELATIVE_TOLERANCE`]).
+    pub flat_tolerance: f64,
+    /// True when every component is a plateau or left out, and at least one is a
+    /// plateau: the field is constant (up to rounding), with no critical points.
+    pub flat: bool,
+}
+
+/// The raw critical points' counts and Euler check.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RawCritical {
+    /// The counts.
+    #[serde(flatten)]
+    pub counts: CriticalCounts,
+    /// Their check, on every component counted.
+    #[serde(flatten)]
+    pub check: CheckSides,
 }
 
 /// The Euler check on one connected component.
@@ -822,22 +839,17 @@ pub struct ComponentCheck {
     pub component: usize,
     /// Its Euler characteristic.
     pub chi: i64,
-    /// Left side of the check.
-    pub lhs: i64,
-    /// Right side.
-    pub rhs: i64,
-    /// `lhs == rhs`.
-    pub holds: bool,
+    /// The check.
+    #[serde(flatten)]
+    pub check: CheckSides,
 }
 
 /// The Euler check of `cp` over the components `included`.
 struct Check {
     components: Vec<ComponentCheck>,
     chi: i64,
-    lhs: i64,
-    rhs: i64,
     doubled: bool,
-    holds: bool,
+    sides: CheckSides,
 }
 
 impl Check {
@@ -867,21 +879,25 @@ impl Check {
                 ComponentCheck {
                     component: c,
                     chi,
-                    lhs: lhs_c[c],
-                    rhs: factor * chi,
-                    holds: lhs_c[c] == factor * chi,
+                    check: CheckSides {
+                        lhs: lhs_c[c],
+                        rhs: factor * chi,
+                        holds: lhs_c[c] == factor * chi,
+                    },
                 }
             })
             .collect();
         let chi: i64 = components.iter().map(|c| c.chi).sum();
-        let lhs: i64 = components.iter().map(|c| c.lhs).sum();
+        let lhs: i64 = components.iter().map(|c| c.check.lhs).sum();
         let rhs = factor * chi;
         Self {
-            holds: lhs == rhs && components.iter().all(|c| c.holds),
+            sides: CheckSides {
+                lhs,
+                rhs,
+                holds: lhs == rhs && components.iter().all(|c| c.check.holds),
+            },
             components,
             chi,
-            lhs,
-            rhs,
             doubled,
         }
     }
@@ -935,43 +951,35 @@ impl CriticalReport {
             .collect();
         let raw_check = Check::new(&raw, topo, &included);
         let check = Check::new(&shown, topo, &included_shown);
-        let hidden = HiddenCritical {
-            minima: raw.minima.len() - shown.minima.len(),
-            maxima: raw.maxima.len() - shown.maxima.len(),
-            saddles: raw.saddle_count() - shown.saddle_count(),
-        };
+        let (shown_counts, raw_counts) = (CriticalCounts::of(&shown), CriticalCounts::of(&raw));
         Self {
-            minima: shown.minima.len(),
-            maxima: shown.maxima.len(),
-            saddles: shown.saddle_count(),
+            counts: shown_counts,
             points: shown,
             chi: check.chi,
             doubled: check.doubled,
-            lhs: check.lhs,
-            rhs: check.rhs,
-            holds: check.holds,
+            check: check.sides,
             formula: if check.doubled {
                 "doubled across the boundary: 2(m_i - s_i + M_i) + (m_b - s_b + M_b) = 2 chi"
             } else {
                 "m - s + M = chi"
             },
-            flat: included.is_empty() && !plateau_components.is_empty(),
             components: check.components,
-            excluded_components: excluded.to_vec(),
-            plateau_components,
-            flat_tolerance: FLAT_RELATIVE_TOLERANCE,
-            raw: RawCritical {
-                minima: raw.minima.len(),
-                maxima: raw.maxima.len(),
-                saddles: raw.saddle_count(),
-                lhs: raw_check.lhs,
-                rhs: raw_check.rhs,
-                holds: raw_check.holds,
+            left_out: LeftOut {
+                flat: included.is_empty() && !plateau_components.is_empty(),
+                excluded_components: excluded.to_vec(),
+                plateau_components,
+                flat_tolerance: FLAT_RELATIVE_TOLERANCE,
             },
-            hidden,
-            persistence_threshold: p.threshold,
-            persistence_relative_threshold: p.relative_threshold,
-            persistence_noise_floor: p.noise_floor,
+            raw: RawCritical {
+                counts: raw_counts,
+                check: raw_check.sides,
+            },
+            hidden: CriticalCounts {
+                minima: raw_counts.minima - shown_counts.minima,
+                maxima: raw_counts.maxima - shown_counts.maxima,
+                saddles: raw_counts.saddles - shown_counts.saddles,
+            },
+            persistence: p.thresholds,
             quiet_components,
             pairs,
         }

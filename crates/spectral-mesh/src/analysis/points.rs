@@ -253,7 +253,7 @@ mod tests {
             .field(&FieldRequest::Eigenfunction { index: 2, k: 8 })
             .unwrap();
         let report = an.critical_points(&e.values).unwrap();
-        assert!(report.holds, "{report:?}");
+        assert!(report.check.holds, "{report:?}");
         let spacing = an.point_spacing().unwrap();
         assert!(spacing > 0.05 && spacing < 0.2, "{spacing}");
     }

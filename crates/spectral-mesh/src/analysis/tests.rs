@@ -258,20 +258,76 @@ fn a_component_without_constraints_floats_and_is_left_out_of_the_critical_points
     assert!(field.values[n0..].iter().all(|&v| v == 0.5));
     let all = an.critical_points(&field.values).unwrap();
     let rep = an.field_critical_points(&field).unwrap();
-    assert_eq!(rep.excluded_components, vec![field.floating[0].component]);
+    assert_eq!(
+        rep.left_out.excluded_components,
+        vec![field.floating[0].component]
+    );
     assert!(rep.points.minima.iter().all(|&v| v < n0));
     assert!(rep.points.maxima.iter().all(|&v| v < n0));
     assert!(rep.points.saddles.iter().all(|&(v, _)| v < n0));
     // The constrained torus alone: m - s + M = 0.
     assert_eq!(rep.components.len(), 1);
-    assert!(rep.holds && rep.chi == 0, "{rep:?}");
+    assert!(rep.check.holds && rep.chi == 0, "{rep:?}");
     // Without the exclusion, the constant torus is a plateau: left out all the same.
-    assert_eq!(all.plateau_components, vec![field.floating[0].component]);
-    assert!(rep.plateau_components.is_empty() && !rep.flat && !all.flat);
     assert_eq!(
-        (all.minima, all.maxima, all.saddles, all.holds),
-        (rep.minima, rep.maxima, rep.saddles, true)
+        all.left_out.plateau_components,
+        vec![field.floating[0].component]
     );
+    assert!(rep.left_out.plateau_components.is_empty() && !rep.left_out.flat && !all.left_out.flat);
+    assert_eq!((all.counts, all.check.holds), (rep.counts, true));
+}
+
+#[test]
+fn a_critical_report_keeps_its_json_keys_flat() {
+    // The faces read these keys: the groups of the report are flattened into them.
+    let an = analysis("torus:res=2", true);
+    let x: Vec<f64> = an.mesh().positions().iter().map(|p| p[0]).collect();
+    let rep = an.critical_points(&x).unwrap();
+    let keys = |v: &serde_json::Value| -> Vec<String> {
+        let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+        k.sort();
+        k
+    };
+    let sorted = |k: &[&str]| -> Vec<String> {
+        let mut k: Vec<String> = k.iter().map(|s| s.to_string()).collect();
+        k.sort();
+        k
+    };
+    let v = serde_json::to_value(&rep).unwrap();
+    assert_eq!(
+        keys(&v),
+        sorted(&[
+            "points",
+            "minima",
+            "maxima",
+            "saddles",
+            "chi",
+            "doubled",
+            "lhs",
+            "rhs",
+            "holds",
+            "formula",
+            "components",
+            "excluded_components",
+            "plateau_components",
+            "flat_tolerance",
+            "flat",
+            "raw",
+            "hidden",
+            "persistence_threshold",
+            "persistence_relative_threshold",
+            "persistence_noise_floor",
+            "quiet_components",
+            "pairs",
+        ])
+    );
+    let raw = ["minima", "maxima", "saddles", "lhs", "rhs", "holds"];
+    assert_eq!(keys(&v["raw"]), sorted(&raw));
+    assert_eq!(keys(&v["hidden"]), sorted(&raw[..3]));
+    let component = ["component", "chi", "lhs", "rhs", "holds"];
+    assert_eq!(keys(&v["components"][0]), sorted(&component));
+    assert_eq!(v["holds"], true);
+    assert_eq!(v["minima"], rep.counts.minima);
 }
 
 #[test]
@@ -289,15 +345,18 @@ fn a_heat_kernel_at_a_huge_time_is_flat_and_the_hint_follows_t() {
     };
     let flat = heat(1e12);
     let rep = an.field_critical_points(&flat).unwrap();
-    assert!(rep.flat, "{rep:?}");
-    assert_eq!((rep.minima, rep.maxima, rep.saddles), (0, 0, 0));
-    assert_eq!(rep.plateau_components, vec![0]);
-    assert_eq!(rep.flat_tolerance, FLAT_RELATIVE_TOLERANCE);
+    assert!(rep.left_out.flat, "{rep:?}");
+    assert_eq!(
+        (rep.counts.minima, rep.counts.maxima, rep.counts.saddles),
+        (0, 0, 0)
+    );
+    assert_eq!(rep.left_out.plateau_components, vec![0]);
+    assert_eq!(rep.left_out.flat_tolerance, FLAT_RELATIVE_TOLERANCE);
     // The same kernel at t = 0.05 is not flat: one maximum at the anchor.
     let peaked = heat(0.05);
     let rep = an.field_critical_points(&peaked).unwrap();
     assert!(
-        !rep.flat && rep.holds && rep.points.maxima == vec![0],
+        !rep.left_out.flat && rep.check.holds && rep.points.maxima == vec![0],
         "{rep:?}"
     );
     // The hint: the eigenvalues the analysis holds, the warning at a tiny t only.
@@ -406,11 +465,11 @@ fn a_geodesic_distance_says_which_components_it_cannot_reach() {
     assert!(lo == 0.0 && hi.is_finite() && hi > 0.0);
     // No critical point on the unreachable sphere; the reached one checks alone.
     let rep = an.field_critical_points(&f).unwrap();
-    assert_eq!(rep.excluded_components, vec![other]);
+    assert_eq!(rep.left_out.excluded_components, vec![other]);
     assert!(rep.points.minima.iter().all(|&v| v < n0));
     assert!(rep.points.maxima.iter().all(|&v| v < n0));
     assert!(rep.points.saddles.iter().all(|&(v, _)| v < n0));
-    assert!(rep.holds && rep.chi == 2, "{rep:?}");
+    assert!(rep.check.holds && rep.chi == 2, "{rep:?}");
     // The library's picture path leaves it out as well.
     let p = crate::fields::persistence::simplified_critical_points(an.mesh(), &f.values).unwrap();
     assert!(

@@ -7,22 +7,22 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use crate::analysis::{Analysis, AnalysisOptions};
+use crate::analysis::Analysis;
 use crate::cancel::CancelToken;
 use crate::geodesic::{GeodesicParams, farthest_point_sampling};
 use crate::io::{Input, read_input_from_bytes, write_atomic};
 use crate::linalg::{EigenProgress, connected_components};
 use crate::mesh::Mesh;
 use crate::operators::{Laplacian, Operators};
-use crate::spectral::Eigenbasis;
 use crate::spectral::eigenbasis::EigenSolver;
 use crate::spectral::filters::ZERO_EIGENVALUE_EPS;
 use crate::spectral::signatures::{auto_diffusion, hks, hks_auto_times, wks, wks_auto_energies};
 use crate::spectral::store::{BasisMeta, npy_f64, read_npz_meta, save_npz_with};
+use crate::spectral::{BasisView, Eigenbasis};
 
 use super::memory;
-use super::params::{BatchParams, RESULT_VERSION, Schedule};
-use super::record::{BatchRecord, InputKind, Status};
+use super::params::{BatchParams, DescriptorParams, RESULT_VERSION, Schedule};
+use super::record::{BasisSummary, BatchRecord, InputKind, ShapeCounts, Status};
 use super::{BatchInput, FAILURE_SUFFIX, THUMBNAIL_SUFFIX};
 
 /// Draws the thumbnail of a batch result. The library draws no pictures (it does not
@@ -74,10 +74,10 @@ pub struct ResultMeta {
     pub batch: BatchMeta,
 }
 
-/// The batch keys of a result (or of a failure marker): only what the input and the
-/// parameters determine, so that two runs write the same bytes.
+/// What a stored file of a shape (its result or its failure marker) was made from: it
+/// stands for the shape only while all of it agrees with the input and the parameters.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct BatchMeta {
+pub struct ResultKey {
     /// [`RESULT_VERSION`].
     pub result_version: u32,
     /// The shape's name.
@@ -86,6 +86,63 @@ pub struct BatchMeta {
     pub input_hash: String,
     /// [`BatchParams::hash`].
     pub params_hash: String,
+}
+
+impl ResultKey {
+    /// The key of a file written now.
+    pub fn new(name: &str, input_hash: &str, params_hash: &str) -> Self {
+        Self {
+            result_version: RESULT_VERSION,
+            name: name.to_string(),
+            input_hash: input_hash.to_string(),
+            params_hash: params_hash.to_string(),
+        }
+    }
+
+    /// True when a file with this key stands for the input and parameters with these
+    /// hashes (and was written by this result version).
+    pub fn matches(&self, input_hash: &str, params_hash: &str) -> bool {
+        self.result_version == RESULT_VERSION
+            && self.input_hash == input_hash
+            && self.params_hash == params_hash
+    }
+}
+
+/// Where the descriptors of a result were evaluated (each also an array of the result
+/// file, under its key's name): `None` for a descriptor not asked for.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DescriptorAxes {
+    /// HKS times used (the array `hks_times`).
+    pub hks_times: Option<Vec<f64>>,
+    /// WKS energies used (the array `wks_energies`).
+    pub wks_energies: Option<Vec<f64>>,
+    /// WKS bandwidth used.
+    pub wks_sigma: Option<f64>,
+    /// ADF times used (the array `adf_times`).
+    pub adf_times: Option<Vec<f64>>,
+}
+
+impl DescriptorAxes {
+    /// The arrays of the axes asked for: `(name, values)`.
+    fn arrays(&self) -> impl Iterator<Item = (&'static str, &Vec<f64>)> {
+        [
+            ("hks_times", &self.hks_times),
+            ("wks_energies", &self.wks_energies),
+            ("adf_times", &self.adf_times),
+        ]
+        .into_iter()
+        .filter_map(|(name, v)| v.as_ref().map(|v| (name, v)))
+    }
+}
+
+/// The batch keys of a result (or of a failure marker): only what the input and the
+/// parameters determine, so that two runs write the same bytes. In JSON the keys of
+/// [`ResultKey`] and [`DescriptorAxes`] stand beside the others.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BatchMeta {
+    /// What the result was made from.
+    #[serde(flatten)]
+    pub key: ResultKey,
     /// The parameters.
     pub params: BatchParams,
     /// Mesh or points.
@@ -98,14 +155,9 @@ pub struct BatchMeta {
     pub max_residual: Option<f64>,
     /// The files of the shape, relative to the output folder, the result last.
     pub outputs: Vec<String>,
-    /// HKS times used (also the array `hks_times`).
-    pub hks_times: Option<Vec<f64>>,
-    /// WKS energies used (also the array `wks_energies`).
-    pub wks_energies: Option<Vec<f64>>,
-    /// WKS bandwidth used.
-    pub wks_sigma: Option<f64>,
-    /// ADF times used (also the array `adf_times`).
-    pub adf_times: Option<Vec<f64>>,
+    /// Where the descriptors were evaluated.
+    #[serde(flatten)]
+    pub descriptors: DescriptorAxes,
     /// The farthest-point samples of the geodesic distances (also the array
     /// `geodesic_sources`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -118,10 +170,8 @@ pub struct BatchMeta {
 /// tried again unless asked ([`JobOptions::retry_failed`]).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 struct FailureMarker {
-    result_version: u32,
-    name: String,
-    input_hash: String,
-    params_hash: String,
+    #[serde(flatten)]
+    key: ResultKey,
     error: String,
     kind: Option<InputKind>,
     n: Option<usize>,
@@ -170,7 +220,7 @@ pub fn process_one(
     let t0 = Instant::now();
     let params_hash = params.hash();
     let mut rec = BatchRecord::new(&input.name, &input.path.display().to_string(), &params_hash);
-    rec.discretization = params.laplacian.name().to_string();
+    rec.basis.discretization = params.solve.laplacian.name().to_string();
     memory::reset_peak();
     let outcome = catch_unwind(AssertUnwindSafe(|| {
         run(input, params, &params_hash, out, options, &mut rec)
@@ -178,17 +228,10 @@ pub fn process_one(
     let error = match outcome {
         Ok(Ok(())) => None,
         Ok(Err(e)) => Some(e),
-        Err(panic) => {
-            let what = panic
-                .downcast_ref::<String>()
-                .map(String::as_str)
-                .or_else(|| panic.downcast_ref::<&str>().copied())
-                .unwrap_or("unknown panic");
-            Some(JobError {
-                message: format!("internal error (please report it): {what}"),
-                marker: true,
-            })
-        }
+        Err(panic) => Some(JobError {
+            message: super::panic_message(&*panic),
+            marker: true,
+        }),
     };
     if let Some(e) = error {
         rec.status = Status::Failed;
@@ -235,14 +278,11 @@ fn record_failure(input: &BatchInput, out: &Path, rec: &BatchRecord, keep: bool)
         return;
     };
     let m = FailureMarker {
-        result_version: RESULT_VERSION,
-        name: rec.name.clone(),
-        input_hash: input_hash.clone(),
-        params_hash: rec.params_hash.clone(),
+        key: ResultKey::new(&rec.name, input_hash, &rec.params_hash),
         error: error.clone(),
-        kind: rec.kind,
-        n: rec.n,
-        faces: rec.faces,
+        kind: rec.shape.kind,
+        n: rec.shape.n,
+        faces: rec.shape.faces,
     };
     if let Ok(json) = serde_json::to_vec_pretty(&m)
         && let Some(dir) = p.marker.parent()
@@ -260,20 +300,14 @@ fn stored_result(p: &Paths, out: &Path, input_hash: &str, params_hash: &str) -> 
     let bytes = read_npz_meta(&p.result).ok()?;
     let meta: ResultMeta = serde_json::from_slice(&bytes).ok()?;
     let b = &meta.batch;
-    (b.result_version == RESULT_VERSION
-        && b.input_hash == input_hash
-        && b.params_hash == params_hash
-        && b.outputs.iter().all(|o| out.join(o).is_file()))
-    .then_some(meta)
+    (b.key.matches(input_hash, params_hash) && b.outputs.iter().all(|o| out.join(o).is_file()))
+        .then_some(meta)
 }
 
 fn stored_failure(p: &Paths, input_hash: &str, params_hash: &str) -> Option<FailureMarker> {
     let bytes = std::fs::read(&p.marker).ok()?;
     let m: FailureMarker = serde_json::from_slice(&bytes).ok()?;
-    (m.result_version == RESULT_VERSION
-        && m.input_hash == input_hash
-        && m.params_hash == params_hash)
-        .then_some(m)
+    m.key.matches(input_hash, params_hash).then_some(m)
 }
 
 fn run(
@@ -294,13 +328,17 @@ fn run(
         let b = meta.batch;
         rec.status = Status::Skipped;
         rec.reused = true;
-        rec.kind = Some(b.kind);
-        rec.n = Some(meta.basis.n);
-        rec.faces = Some(b.faces);
-        rec.components = Some(b.components);
-        rec.k = Some(meta.basis.k);
-        rec.discretization = meta.basis.laplacian.name().to_string();
-        rec.max_residual = b.max_residual;
+        rec.shape = ShapeCounts {
+            kind: Some(b.kind),
+            n: Some(meta.basis.n),
+            faces: Some(b.faces),
+            components: Some(b.components),
+        };
+        rec.basis = BasisSummary {
+            k: Some(meta.basis.k),
+            discretization: meta.basis.laplacian.name().to_string(),
+            max_residual: b.max_residual,
+        };
         rec.outputs = b.outputs;
         rec.warnings = b.warnings;
         return Ok(());
@@ -309,9 +347,9 @@ fn run(
         && let Some(m) = stored_failure(&paths, &input_hash, params_hash)
     {
         rec.reused = true;
-        rec.kind = m.kind;
-        rec.n = m.n;
-        rec.faces = m.faces;
+        rec.shape.kind = m.kind;
+        rec.shape.n = m.n;
+        rec.shape.faces = m.faces;
         return Err(JobError {
             message: m.error,
             marker: true,
@@ -353,8 +391,10 @@ struct Solved {
     mesh_hash: String,
     kind: InputKind,
     laplacian: Laplacian,
-    columns: Vec<(String, Vec<f64>, Vec<Vec<f64>>)>,
-    wks_sigma: Option<f64>,
+    /// Where the descriptors were evaluated.
+    axes: DescriptorAxes,
+    /// The descriptor arrays: `(name, one column per time or energy)`.
+    columns: Vec<(&'static str, Vec<Vec<f64>>)>,
     /// Farthest-point samples and the distance from each (meshes with
     /// [`BatchParams::geodesic`]).
     geodesic: Option<(Vec<usize>, Vec<Vec<f64>>)>,
@@ -383,18 +423,11 @@ fn solve(
     let (basis, mesh, mesh_hash, kind, laplacian) = match parsed {
         Input::Mesh(loaded) => {
             let mesh = loaded.mesh;
-            rec.kind = Some(InputKind::Mesh);
-            rec.n = Some(mesh.n_vertices());
-            rec.faces = Some(mesh.n_triangles());
-            let an = Analysis::new(
-                mesh,
-                AnalysisOptions {
-                    laplacian: params.laplacian,
-                    normalize: params.normalize,
-                    eigen,
-                },
-            );
-            rec.components = Some(an.topology().n_components());
+            rec.shape.kind = Some(InputKind::Mesh);
+            rec.shape.n = Some(mesh.n_vertices());
+            rec.shape.faces = Some(mesh.n_triangles());
+            let an = Analysis::new(mesh, params.solve.analysis_options(k));
+            rec.shape.components = Some(an.topology().n_components());
             let basis = an.basis(k, &mut progress, &options.cancel).map_err(|e| {
                 if cancelled(&e) {
                     transient(e.to_string())
@@ -411,15 +444,15 @@ fn solve(
                 Some(an.mesh_arc().clone()),
                 hash,
                 InputKind::Mesh,
-                params.laplacian,
+                params.solve.laplacian,
             )
         }
         Input::Points(loaded) => {
             let cloud = loaded.cloud;
-            rec.kind = Some(InputKind::Points);
-            rec.n = Some(cloud.n_points());
-            rec.faces = Some(0);
-            rec.discretization = Laplacian::Robust.name().to_string();
+            rec.shape.kind = Some(InputKind::Points);
+            rec.shape.n = Some(cloud.n_points());
+            rec.shape.faces = Some(0);
+            rec.basis.discretization = Laplacian::Robust.name().to_string();
             if params.geodesic.is_some() {
                 rec.warnings
                     .push("no geodesic distances: the input is a point cloud".into());
@@ -432,9 +465,9 @@ fn solve(
                 .into());
             }
             let mut ops = Operators::from_points(&cloud, &params.point_cloud)?;
-            rec.components = Some(connected_components(&ops.stiffness, &ops.mass)?.len());
+            rec.shape.components = Some(connected_components(&ops.stiffness, &ops.mass)?.len());
             // The same scale normalisation as an analysis of a mesh.
-            ops.normalize_mass(params.normalize);
+            ops.normalize_mass(params.solve.normalize);
             let mut solver = EigenSolver::new(Arc::new(ops), eigen);
             let basis = solver
                 .solve(k, &mut progress, &options.cancel)
@@ -451,43 +484,61 @@ fn solve(
             )
         }
     };
-    rec.k = Some(basis.k());
-    rec.max_residual = basis.residuals.iter().copied().reduce(f64::max);
-    let view = basis.view(k);
+    rec.basis.k = Some(basis.k());
+    rec.basis.max_residual = basis.residuals.iter().copied().reduce(f64::max);
+    let (axes, columns) = descriptors(&params.descriptors, basis.view(k))?;
+    Ok(Solved {
+        basis,
+        mesh,
+        mesh_hash,
+        kind,
+        laplacian,
+        axes,
+        columns,
+        geodesic,
+    })
+}
+
+/// The descriptors of `d` on `view`: where they were evaluated, and their arrays
+/// (`(name, one column per time or energy)`), every value finite.
+#[allow(clippy::type_complexity)]
+fn descriptors(
+    d: &DescriptorParams,
+    view: BasisView<'_>,
+) -> Result<(DescriptorAxes, Vec<(&'static str, Vec<Vec<f64>>)>), JobError> {
+    let mut axes = DescriptorAxes::default();
     let mut columns = Vec::new();
-    let mut wks_sigma = None;
-    if let Some(s) = &params.hks {
-        let times = match s {
-            Schedule::Auto(n) => hks_auto_times(view, *n)?,
-            Schedule::Values(v) => v.clone(),
-        };
-        let values = hks(view, &times, params.scaled);
-        columns.push(("hks".to_string(), times, values));
+    let times = |s: &Schedule| match s {
+        Schedule::Auto(n) => hks_auto_times(view, *n),
+        Schedule::Values(v) => Ok(v.clone()),
+    };
+    if let Some(s) = &d.hks {
+        let t = times(s)?;
+        columns.push(("hks", hks(view, &t, d.scaled)));
+        axes.hks_times = Some(t);
     }
-    if let Some(s) = &params.wks {
+    if let Some(s) = &d.wks {
         let (energies, sigma) = match s {
             Schedule::Auto(n) => {
                 let (e, sigma) = wks_auto_energies(view, *n)?;
-                (e, params.wks_sigma.unwrap_or(sigma))
+                (e, d.wks_sigma.unwrap_or(sigma))
             }
-            Schedule::Values(v) => (v.clone(), params.wks_list_sigma()),
+            Schedule::Values(v) => (v.clone(), d.wks_list_sigma()),
         };
-        let values = wks(view, &energies, sigma, params.scaled)?;
-        wks_sigma = Some(sigma);
-        columns.push(("wks".to_string(), energies, values));
+        columns.push(("wks", wks(view, &energies, sigma, d.scaled)?));
+        axes.wks_energies = Some(energies);
+        axes.wks_sigma = Some(sigma);
     }
-    if let Some(s) = &params.adf {
-        let times = match s {
-            Schedule::Auto(n) => hks_auto_times(view, *n)?,
-            Schedule::Values(v) => v.clone(),
-        };
-        let values = times
+    if let Some(s) = &d.adf {
+        let t = times(s)?;
+        let values = t
             .iter()
             .map(|&t| auto_diffusion(view, t))
             .collect::<Result<Vec<_>, _>>()?;
-        columns.push(("adf".to_string(), times, values));
+        columns.push(("adf", values));
+        axes.adf_times = Some(t);
     }
-    for (name, _, values) in &columns {
+    for (name, values) in &columns {
         if let Some((c, i)) = values
             .iter()
             .enumerate()
@@ -499,16 +550,7 @@ fn solve(
             .into());
         }
     }
-    Ok(Solved {
-        basis,
-        mesh,
-        mesh_hash,
-        kind,
-        laplacian,
-        columns,
-        wks_sigma,
-        geodesic,
-    })
+    Ok((axes, columns))
 }
 
 /// `count` farthest-point samples of `an`'s mesh (from the vertex of largest x) and the
@@ -596,15 +638,8 @@ fn write_outputs(
         ));
         Ok(())
     };
-    let mut meta_times: [Option<Vec<f64>>; 3] = [None, None, None];
-    for (name, params_of, _) in &solved.columns {
-        let (key, slot) = match name.as_str() {
-            "hks" => ("hks_times", 0),
-            "wks" => ("wks_energies", 1),
-            _ => ("adf_times", 2),
-        };
-        times(key, params_of)?;
-        meta_times[slot] = Some(params_of.clone());
+    for (name, values) in solved.axes.arrays() {
+        times(name, values)?;
     }
     let mut geodesic_sources = None;
     if let Some((samples, _)) = &solved.geodesic {
@@ -619,7 +654,7 @@ fn write_outputs(
     for (name, values) in solved
         .columns
         .iter()
-        .map(|(name, _, values)| (name.clone(), values))
+        .map(|(name, values)| (name.to_string(), values))
         .chain(geodesic)
     {
         let flat: Vec<f64> = values.iter().flatten().copied().collect();
@@ -627,27 +662,20 @@ fn write_outputs(
             .map_err(|e| transient(e.to_string()))?;
         extra.push((name, npy));
     }
-    let [hks_times, wks_energies, adf_times] = meta_times;
     let mut basis_meta = BasisMeta::new(b, None, &params.eigen());
     basis_meta.mesh_hash = solved.mesh_hash.clone();
     basis_meta.laplacian = solved.laplacian;
     let meta = ResultMeta {
         basis: basis_meta,
         batch: BatchMeta {
-            result_version: RESULT_VERSION,
-            name: input.name.clone(),
-            input_hash: input_hash.to_string(),
-            params_hash: params_hash.to_string(),
+            key: ResultKey::new(&input.name, input_hash, params_hash),
             params: params.clone(),
             kind: solved.kind,
-            faces: rec.faces.unwrap_or(0),
-            components: rec.components.unwrap_or(0),
-            max_residual: rec.max_residual,
+            faces: rec.shape.faces.unwrap_or(0),
+            components: rec.shape.components.unwrap_or(0),
+            max_residual: rec.basis.max_residual,
             outputs: outputs.clone(),
-            hks_times,
-            wks_energies,
-            wks_sigma: solved.wks_sigma,
-            adf_times,
+            descriptors: solved.axes,
             geodesic_sources,
             warnings: warnings.clone(),
         },

@@ -54,13 +54,15 @@ pub mod summary;
 use std::path::Path;
 
 pub use inputs::{BatchInput, SCANNED_EXTENSIONS, resolve_inputs};
-pub use job::{BatchMeta, JobOptions, ResultMeta, Thumbnailer, process_one};
-pub use pairs::{
-    PairJob, PairParams, PairRecord, PairSpec, Pairing, pairs_csv, plan_pairs, process_pair,
-    write_pairs_summary,
+pub use job::{
+    BatchMeta, DescriptorAxes, JobOptions, ResultKey, ResultMeta, Thumbnailer, process_one,
 };
-pub use params::{BatchParams, RESULT_VERSION, Schedule};
-pub use record::{BatchRecord, InputKind, Status};
+pub use pairs::{
+    PairJob, PairParams, PairRecord, PairSizes, PairSpec, PairTimings, Pairing, pairs_csv,
+    plan_pairs, process_pair, write_pairs_summary,
+};
+pub use params::{BatchParams, DescriptorParams, RESULT_VERSION, Schedule, SolveParams};
+pub use record::{BasisSummary, BatchRecord, InputKind, ShapeCounts, Status};
 pub use summary::write_summary;
 
 /// Suffix of a thumbnail after the shape's name.
@@ -146,6 +148,17 @@ pub fn remove_stale_temporaries(out: &Path) -> usize {
     let mut removed = 0;
     walk(out, &mut removed);
     removed
+}
+
+/// The error of a job (a shape's or a pair's) that panicked: the panic's message, asking
+/// for a report.
+fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
+    let what = panic
+        .downcast_ref::<String>()
+        .map(String::as_str)
+        .or_else(|| panic.downcast_ref::<&str>().copied())
+        .unwrap_or("unknown panic");
+    format!("internal error (please report it): {what}")
 }
 
 #[cfg(test)]

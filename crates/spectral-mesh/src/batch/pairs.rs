@@ -24,9 +24,10 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::Instant;
 
+use super::params::SolveParams;
 use super::record::Status;
 use super::{BatchError, BatchInput};
-use crate::analysis::{Analysis, AnalysisOptions};
+use crate::analysis::Analysis;
 use crate::cancel::CancelToken;
 use crate::correspondence::{
     MatchParams, geodesic_errors, match_shapes, parse_point_map, point_map_text,
@@ -34,7 +35,6 @@ use crate::correspondence::{
 use crate::geodesic::{GeodesicParams, GeodesicSolver};
 use crate::io::{read_mesh, write_atomic};
 use crate::operators::Laplacian;
-use crate::spectral::eigenbasis::EigenParams;
 
 /// The summary file of a pair batch, in the output folder.
 pub const PAIRS_CSV: &str = "pairs.csv";
@@ -208,30 +208,25 @@ fn find(inputs: &[BatchInput], key: &str) -> Result<usize, BatchError> {
 
 /// Parameters of a pair batch. `Default`: the match defaults, the analysis defaults
 /// (fem, unit area, the eigensolver's tolerance), at most
-/// [`DEFAULT_PAIR_GEODESIC_SOURCES`] geodesic solves per evaluation.
+/// [`DEFAULT_PAIR_GEODESIC_SOURCES`] geodesic solves per evaluation. In JSON the keys of
+/// [`SolveParams`] stand beside the others.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct PairParams {
     /// The match pipeline's parameters.
     pub matching: MatchParams,
-    /// Discretization of both shapes.
-    pub laplacian: Laplacian,
-    /// Match the shapes scaled to unit area.
-    pub normalize: bool,
-    /// Relative residual of the eigenpairs.
-    pub tolerance: f64,
+    /// How both shapes are solved (for [`MatchParams::basis_size`] pairs).
+    #[serde(flatten)]
+    pub solve: SolveParams,
     /// Most geodesic solves of an evaluation (`None`: every wrongly mapped vertex).
     pub max_geodesic_sources: Option<usize>,
 }
 
 impl Default for PairParams {
     fn default() -> Self {
-        let a = AnalysisOptions::default();
         Self {
             matching: MatchParams::default(),
-            laplacian: a.laplacian,
-            normalize: a.normalize,
-            tolerance: a.eigen.tolerance,
+            solve: SolveParams::default(),
             max_geodesic_sources: Some(DEFAULT_PAIR_GEODESIC_SOURCES),
         }
     }
@@ -244,19 +239,13 @@ impl PairParams {
         self.matching
             .validate()
             .map_err(|e| param("matching", e.to_string()))?;
-        if self.laplacian == Laplacian::Robust {
+        if self.solve.laplacian == Laplacian::Robust {
             return Err(param(
                 "laplacian",
                 "the robust Laplacian is for point clouds; pairs are meshes".into(),
             ));
         }
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return Err(param(
-                "tolerance",
-                format!("must be finite and > 0, got {}", self.tolerance),
-            ));
-        }
-        Ok(())
+        self.solve.validate()
     }
 }
 
@@ -273,7 +262,37 @@ pub fn defaults_json() -> serde_json::Value {
     v
 }
 
+/// The sizes of a pair and of its maps.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PairSizes {
+    /// Source vertices.
+    pub n_source: Option<usize>,
+    /// Target vertices.
+    pub n_target: Option<usize>,
+    /// Size of the first functional map's bases.
+    pub k: usize,
+    /// Size of the refined maps (`k` without ZoomOut).
+    pub k_final: Option<usize>,
+}
+
+/// The seconds of each stage of a pair, and of the whole.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PairTimings {
+    /// Reading both meshes.
+    pub read_seconds: f64,
+    /// Computing both eigenbases.
+    pub basis_seconds: f64,
+    /// The match pipeline (descriptors, map, ZoomOut, point maps).
+    pub match_seconds: f64,
+    /// The evaluation against the truth.
+    pub eval_seconds: f64,
+    /// Wall seconds of the pair in all.
+    pub seconds: f64,
+}
+
 /// The row of one pair: what a worker returns (small); the maps are in the files named.
+/// In JSON the keys of [`PairSizes`] and [`PairTimings`] stand beside the others (the
+/// columns of `pairs.csv`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PairRecord {
     /// The pair's name (`SOURCE--TARGET`).
@@ -286,14 +305,9 @@ pub struct PairRecord {
     pub status: Status,
     /// Why it failed, naming the file (`None` unless failed).
     pub error: Option<String>,
-    /// Source vertices.
-    pub n_source: Option<usize>,
-    /// Target vertices.
-    pub n_target: Option<usize>,
-    /// Size of the first functional map's bases.
-    pub k: usize,
-    /// Size of the refined maps (`k` without ZoomOut).
-    pub k_final: Option<usize>,
+    /// The sizes of the meshes and of the maps.
+    #[serde(flatten)]
+    pub sizes: PairSizes,
     /// ZoomOut's direction (`forward`, `reverse`, `both`).
     pub direction: String,
     /// Energy of the first functional map.
@@ -303,16 +317,9 @@ pub struct PairRecord {
     pub mean_geodesic_error: Option<f64>,
     /// Share of the source vertices mapped to their true vertex (with a ground truth).
     pub exact_share: Option<f64>,
-    /// Seconds reading both meshes.
-    pub read_seconds: f64,
-    /// Seconds computing both eigenbases.
-    pub basis_seconds: f64,
-    /// Seconds of the match pipeline (descriptors, map, ZoomOut, point maps).
-    pub match_seconds: f64,
-    /// Seconds of the evaluation against the truth.
-    pub eval_seconds: f64,
-    /// Wall seconds of the pair in all.
-    pub seconds: f64,
+    /// Where the time went.
+    #[serde(flatten)]
+    pub timings: PairTimings,
     /// Files written, relative to the output folder.
     pub outputs: Vec<String>,
 }
@@ -326,19 +333,17 @@ impl PairRecord {
             target: job.target_name.clone(),
             status: Status::Failed,
             error: None,
-            n_source: None,
-            n_target: None,
-            k: params.matching.k,
-            k_final: None,
+            sizes: PairSizes {
+                n_source: None,
+                n_target: None,
+                k: params.matching.k,
+                k_final: None,
+            },
             direction: params.matching.zoomout_direction.to_string(),
             energy: None,
             mean_geodesic_error: None,
             exact_share: None,
-            read_seconds: 0.0,
-            basis_seconds: 0.0,
-            match_seconds: 0.0,
-            eval_seconds: 0.0,
-            seconds: 0.0,
+            timings: PairTimings::default(),
             outputs: Vec::new(),
         }
     }
@@ -369,16 +374,9 @@ pub fn process_pair(
     match outcome {
         Ok(Ok(())) => rec.status = Status::Ok,
         Ok(Err(message)) => rec.error = Some(message),
-        Err(panic) => {
-            let what = panic
-                .downcast_ref::<String>()
-                .map(String::as_str)
-                .or_else(|| panic.downcast_ref::<&str>().copied())
-                .unwrap_or("unknown panic");
-            rec.error = Some(format!("internal error (please report it): {what}"));
-        }
+        Err(panic) => rec.error = Some(super::panic_message(&*panic)),
     }
-    rec.seconds = t0.elapsed().as_secs_f64();
+    rec.timings.seconds = t0.elapsed().as_secs_f64();
     rec
 }
 
@@ -393,8 +391,8 @@ fn run_pair(
     let t = Instant::now();
     let read = |p: &Path| read_mesh(p).map(|l| l.mesh).map_err(|e| e.to_string());
     let (source, target) = (read(&job.source)?, read(&job.target)?);
-    rec.n_source = Some(source.n_vertices());
-    rec.n_target = Some(target.n_vertices());
+    rec.sizes.n_source = Some(source.n_vertices());
+    rec.sizes.n_target = Some(target.n_vertices());
     let truth = match &job.truth {
         None => None,
         Some(p) => {
@@ -407,18 +405,10 @@ fn run_pair(
             )
         }
     };
-    rec.read_seconds = t.elapsed().as_secs_f64();
+    rec.timings.read_seconds = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let kb = params.matching.basis_size();
-    let options = AnalysisOptions {
-        laplacian: params.laplacian,
-        normalize: params.normalize,
-        eigen: EigenParams {
-            k: kb,
-            tolerance: params.tolerance,
-            ..EigenParams::default()
-        },
-    };
+    let options = params.solve.analysis_options(kb);
     let solve = |mesh, path: &Path| {
         let an = Analysis::new(mesh, options.clone());
         let basis = an
@@ -428,7 +418,7 @@ fn run_pair(
     };
     let (an_target, b_target) = solve(target, &job.target)?;
     let (an_source, b_source) = solve(source, &job.source)?;
-    rec.basis_seconds = t.elapsed().as_secs_f64();
+    rec.timings.basis_seconds = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let res = match_shapes(
         an_target.mesh(),
@@ -439,9 +429,9 @@ fn run_pair(
         &params.matching,
     )
     .map_err(|e| format!("{} -> {}: {e}", job.source.display(), job.target.display()))?;
-    rec.match_seconds = t.elapsed().as_secs_f64();
+    rec.timings.match_seconds = t.elapsed().as_secs_f64();
     rec.energy = Some(res.energy);
-    rec.k_final = Some(
+    rec.sizes.k_final = Some(
         res.refined
             .k1
             .max(res.reverse.as_ref().map_or(0, |r| r.fmap.k1)),
@@ -462,7 +452,7 @@ fn run_pair(
     if let Some(gt) = truth {
         let t = Instant::now();
         let mesh = an_target.mesh();
-        let solver = GeodesicSolver::new(mesh, params.laplacian, &GeodesicParams::default())
+        let solver = GeodesicSolver::new(mesh, params.solve.laplacian, &GeodesicParams::default())
             .map_err(|e| format!("{}: geodesics: {e}", job.target.display()))?;
         let e = geodesic_errors(
             &solver,
@@ -475,7 +465,7 @@ fn run_pair(
         rec.mean_geodesic_error = Some(e.mean);
         let exact = res.p2p_21.iter().zip(&gt).filter(|(a, b)| a == b).count();
         rec.exact_share = Some(exact as f64 / gt.len().max(1) as f64);
-        rec.eval_seconds = t.elapsed().as_secs_f64();
+        rec.timings.eval_seconds = t.elapsed().as_secs_f64();
     }
     Ok(())
 }
@@ -526,19 +516,19 @@ pub fn pairs_csv(records: &[PairRecord]) -> String {
             text(&r.target),
             r.status.to_string(),
             text(r.error.as_deref().unwrap_or("")),
-            int(r.n_source),
-            int(r.n_target),
-            r.k.to_string(),
-            int(r.k_final),
+            int(r.sizes.n_source),
+            int(r.sizes.n_target),
+            r.sizes.k.to_string(),
+            int(r.sizes.k_final),
             text(&r.direction),
             num(r.energy),
             num(r.mean_geodesic_error),
             num(r.exact_share),
-            num(Some(r.read_seconds)),
-            num(Some(r.basis_seconds)),
-            num(Some(r.match_seconds)),
-            num(Some(r.eval_seconds)),
-            num(Some(r.seconds)),
+            num(Some(r.timings.read_seconds)),
+            num(Some(r.timings.basis_seconds)),
+            num(Some(r.timings.match_seconds)),
+            num(Some(r.timings.eval_seconds)),
+            num(Some(r.timings.seconds)),
             text(&r.outputs.join(";")),
         ];
         s.push_str(&cells.join(","));
@@ -635,7 +625,7 @@ mod tests {
         assert_eq!(ok.status, Status::Ok, "{:?}", ok.error);
         let n = base.n_vertices();
         assert_eq!(
-            (ok.n_source, ok.n_target, ok.k_final),
+            (ok.sizes.n_source, ok.sizes.n_target, ok.sizes.k_final),
             (Some(n), Some(n), Some(40))
         );
         assert!(ok.energy.is_some_and(|e| e.is_finite() && e >= 0.0));
@@ -740,12 +730,13 @@ mod tests {
     fn parameters_are_checked_and_default_to_the_library() {
         let p = PairParams::default();
         assert_eq!(p.matching, MatchParams::default());
-        assert_eq!(p.laplacian, AnalysisOptions::default().laplacian);
+        assert_eq!(
+            p.solve.laplacian,
+            crate::analysis::AnalysisOptions::default().laplacian
+        );
         assert!(p.validate().is_ok());
-        let bad = PairParams {
-            laplacian: Laplacian::Robust,
-            ..PairParams::default()
-        };
+        let mut bad = PairParams::default();
+        bad.solve.laplacian = Laplacian::Robust;
         assert!(
             bad.validate()
                 .unwrap_err()

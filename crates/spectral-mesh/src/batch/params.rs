@@ -3,6 +3,7 @@
 use std::fmt;
 use std::str::FromStr;
 
+use crate::analysis::AnalysisOptions;
 use crate::analysis::request::DEFAULT_K;
 use crate::operators::Laplacian;
 use crate::operators::point_cloud::PointCloudParams;
@@ -23,7 +24,7 @@ pub enum Schedule {
     /// [`crate::spectral::signatures::wks_auto_energies`]).
     Auto(usize),
     /// The same values for every shape (times on the shape as analysed: unit area unless
-    /// [`BatchParams::normalize`] is off).
+    /// [`SolveParams::normalize`] is off).
     Values(Vec<f64>),
 }
 
@@ -87,17 +88,14 @@ impl FromStr for Schedule {
     }
 }
 
-/// What is computed and saved for every shape of a batch. `Default`: 100 FEM pairs of the
-/// shape scaled to unit area at tolerance `1e-10`, the basis saved, no descriptor, no
-/// thumbnail.
-///
-/// Everything here enters [`BatchParams::hash`]; how the work is run (threads, workers,
-/// the output folder) does not.
+/// How the eigenbasis of each shape is computed: the discretization, the scale and the
+/// eigensolver's tolerance (the number of pairs is the caller's: [`BatchParams::k`] for the
+/// shapes of a batch, the match's basis size for a pair, see
+/// [`super::pairs::PairParams`]). `Default`: the analysis defaults (fem, unit area, the
+/// eigensolver's tolerance).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct BatchParams {
-    /// Eigenpairs per shape (the smallest eigenvalues).
-    pub k: usize,
+#[serde(default)]
+pub struct SolveParams {
     /// The discretization of meshes. Point clouds always use the point-cloud Laplacian
     /// (`robust`, with [`BatchParams::point_cloud`]).
     pub laplacian: Laplacian,
@@ -107,9 +105,55 @@ pub struct BatchParams {
     /// [`crate::analysis`]'s scale normalisation): eigenvalues and times comparable across
     /// shapes of different sizes. Off: the operators as assembled (what `eigs` saves).
     pub normalize: bool,
-    /// Save the eigenvectors (`n x k`) and the mass matrix; off, the result holds the
-    /// eigenvalues (and descriptors) only.
-    pub basis: bool,
+}
+
+impl Default for SolveParams {
+    fn default() -> Self {
+        let a = AnalysisOptions::default();
+        Self {
+            laplacian: a.laplacian,
+            tolerance: a.eigen.tolerance,
+            normalize: a.normalize,
+        }
+    }
+}
+
+impl SolveParams {
+    /// Checks the tolerance (the message names it).
+    pub fn validate(&self) -> Result<(), BatchError> {
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return Err(BatchError::Parameter {
+                key: "tolerance",
+                message: format!("{} is not a positive number", self.tolerance),
+            });
+        }
+        Ok(())
+    }
+
+    /// The eigensolver parameters of `k` pairs at this tolerance (the library's defaults
+    /// otherwise).
+    pub fn eigen(&self, k: usize) -> EigenParams {
+        EigenParams {
+            k,
+            tolerance: self.tolerance,
+            ..EigenParams::default()
+        }
+    }
+
+    /// The options of an [`crate::analysis::Analysis`] of a mesh solved for `k` pairs.
+    pub fn analysis_options(&self, k: usize) -> AnalysisOptions {
+        AnalysisOptions {
+            laplacian: self.laplacian,
+            normalize: self.normalize,
+            eigen: self.eigen(k),
+        }
+    }
+}
+
+/// The per-vertex descriptors saved for every shape (none by default).
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct DescriptorParams {
     /// Heat kernel signature at these times (`n x T` array `hks`).
     pub hks: Option<Schedule>,
     /// Wave kernel signature at these energies (`n x E` array `wks`).
@@ -120,62 +164,12 @@ pub struct BatchParams {
     pub adf: Option<Schedule>,
     /// Divide HKS by the heat trace and WKS by its normalisation sum.
     pub scaled: bool,
-    /// A PNG thumbnail of this width and height (pixels) showing the first eigenvector
-    /// with a non-zero eigenvalue (meshes only).
-    pub thumbnail: Option<u32>,
-    /// Parameters of the point-cloud Laplacian (point-cloud inputs only).
-    pub point_cloud: PointCloudParams,
-    /// Geodesic distances (the heat method with its defaults, in the mesh's units) from
-    /// this many farthest-point samples of each mesh, the first at the vertex of largest x:
-    /// the `n x N` array `geodesic` (column `j`: the distance from sample `j`, `inf` on
-    /// components it cannot reach) and the samples `geodesic_sources`. Meshes only (a
-    /// point cloud gets a warning). Left out of the hash when `None`, so that the results
-    /// of earlier batches stay valid.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub geodesic: Option<usize>,
 }
 
-impl Default for BatchParams {
-    fn default() -> Self {
-        Self {
-            k: DEFAULT_K,
-            laplacian: Laplacian::Fem,
-            tolerance: EigenParams::default().tolerance,
-            normalize: crate::defaults::values::NORMALIZE,
-            basis: true,
-            hks: None,
-            wks: None,
-            wks_sigma: None,
-            adf: None,
-            scaled: false,
-            thumbnail: None,
-            point_cloud: PointCloudParams::default(),
-            geodesic: None,
-        }
-    }
-}
-
-/// What the parameter hash is computed from.
-#[derive(serde::Serialize)]
-struct Canonical<'a> {
-    result_version: u32,
-    params: &'a BatchParams,
-    eigen: &'a EigenParams,
-}
-
-impl BatchParams {
-    /// Checks every value before any work (each message names the parameter).
+impl DescriptorParams {
+    /// Checks the schedules and the bandwidth (each message names the parameter).
     pub fn validate(&self) -> Result<(), BatchError> {
         let bad = |key: &'static str, message: String| BatchError::Parameter { key, message };
-        if self.k == 0 {
-            return Err(bad("k", "at least one eigenpair is needed".into()));
-        }
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return Err(bad(
-                "tolerance",
-                format!("{} is not a positive number", self.tolerance),
-            ));
-        }
         for (key, s) in [("hks", &self.hks), ("wks", &self.wks), ("adf", &self.adf)] {
             match s {
                 Some(s) if s.is_empty() => {
@@ -195,6 +189,120 @@ impl BatchParams {
         {
             return Err(bad("wks_sigma", format!("{s} is not a positive number")));
         }
+        Ok(())
+    }
+
+    /// The WKS bandwidth for a list of energies (the default when none is given).
+    pub fn wks_list_sigma(&self) -> f64 {
+        self.wks_sigma
+            .unwrap_or(crate::analysis::request::DEFAULT_WKS_SIGMA)
+    }
+}
+
+/// What is computed and saved for every shape of a batch. `Default`: 100 FEM pairs of the
+/// shape scaled to unit area at tolerance `1e-10`, the basis saved, no descriptor, no
+/// thumbnail.
+///
+/// Everything here enters [`BatchParams::hash`]; how the work is run (threads, workers,
+/// the output folder) does not. In JSON the keys of [`SolveParams`] and
+/// [`DescriptorParams`] stand beside the others (flat, as [`BatchParams::KEYS`]); an
+/// unknown key is refused.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(remote = "Self", default)]
+pub struct BatchParams {
+    /// Eigenpairs per shape (the smallest eigenvalues).
+    pub k: usize,
+    /// How each shape is solved.
+    #[serde(flatten)]
+    pub solve: SolveParams,
+    /// Save the eigenvectors (`n x k`) and the mass matrix; off, the result holds the
+    /// eigenvalues (and descriptors) only.
+    pub basis: bool,
+    /// The descriptors saved.
+    #[serde(flatten)]
+    pub descriptors: DescriptorParams,
+    /// A PNG thumbnail of this width and height (pixels) showing the first eigenvector
+    /// with a non-zero eigenvalue (meshes only).
+    pub thumbnail: Option<u32>,
+    /// Parameters of the point-cloud Laplacian (point-cloud inputs only).
+    pub point_cloud: PointCloudParams,
+    /// Geodesic distances (the heat method with its defaults, in the mesh's units) from
+    /// this many farthest-point samples of each mesh, the first at the vertex of largest x:
+    /// the `n x N` array `geodesic` (column `j`: the distance from sample `j`, `inf` on
+    /// components it cannot reach) and the samples `geodesic_sources`. Meshes only (a
+    /// point cloud gets a warning). Left out of the hash when `None`, so that the results
+    /// of earlier batches stay valid.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub geodesic: Option<usize>,
+}
+
+impl Default for BatchParams {
+    fn default() -> Self {
+        Self {
+            k: DEFAULT_K,
+            solve: SolveParams::default(),
+            basis: true,
+            descriptors: DescriptorParams::default(),
+            thumbnail: None,
+            point_cloud: PointCloudParams::default(),
+            geodesic: None,
+        }
+    }
+}
+
+impl serde::Serialize for BatchParams {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        BatchParams::serialize(self, s)
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for BatchParams {
+    /// The keys are checked against [`BatchParams::KEYS`] first (serde cannot refuse
+    /// unknown keys beside flattened ones); the error names the unknown key as serde does.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let map = serde_json::Map::<String, serde_json::Value>::deserialize(d)?;
+        if let Some(key) = map.keys().find(|k| !Self::KEYS.contains(&k.as_str())) {
+            return Err(D::Error::unknown_field(key, Self::KEYS));
+        }
+        BatchParams::deserialize(serde_json::Value::Object(map)).map_err(D::Error::custom)
+    }
+}
+
+/// What the parameter hash is computed from.
+#[derive(serde::Serialize)]
+struct Canonical<'a> {
+    result_version: u32,
+    params: &'a BatchParams,
+    eigen: &'a EigenParams,
+}
+
+impl BatchParams {
+    /// The keys of the JSON form, in order.
+    pub const KEYS: &'static [&'static str] = &[
+        "k",
+        "laplacian",
+        "tolerance",
+        "normalize",
+        "basis",
+        "hks",
+        "wks",
+        "wks_sigma",
+        "adf",
+        "scaled",
+        "thumbnail",
+        "point_cloud",
+        "geodesic",
+    ];
+
+    /// Checks every value before any work (each message names the parameter).
+    pub fn validate(&self) -> Result<(), BatchError> {
+        let bad = |key: &'static str, message: String| BatchError::Parameter { key, message };
+        if self.k == 0 {
+            return Err(bad("k", "at least one eigenpair is needed".into()));
+        }
+        self.solve.validate()?;
+        self.descriptors.validate()?;
         if let Some(t) = self.thumbnail {
             crate::defaults::values::check_picture_size(t).map_err(|e| bad("thumbnail", e))?;
         }
@@ -212,18 +320,14 @@ impl BatchParams {
 
     /// The eigensolver parameters every shape is solved with (`k` included).
     pub fn eigen(&self) -> EigenParams {
-        EigenParams {
-            k: self.k,
-            tolerance: self.tolerance,
-            ..EigenParams::default()
-        }
+        self.solve.eigen(self.k)
     }
 
     /// The canonical hash of the parameters: BLAKE3 (hex, 64 characters) of the JSON of
-    /// [`RESULT_VERSION`], these parameters (fields in declaration order, numbers in
-    /// shortest round-trip form) and the full eigensolver parameters they give (seed,
-    /// method and block size included, so that a change of the library's defaults
-    /// recomputes). Equal parameters give equal hashes on every machine.
+    /// [`RESULT_VERSION`], these parameters (fields in declaration order, the grouped ones
+    /// flat, numbers in shortest round-trip form) and the full eigensolver parameters they
+    /// give (seed, method and block size included, so that a change of the library's
+    /// defaults recomputes). Equal parameters give equal hashes on every machine.
     pub fn hash(&self) -> String {
         let eigen = self.eigen();
         let c = Canonical {
@@ -234,12 +338,6 @@ impl BatchParams {
         // Serializing plain data to a Vec cannot fail; an empty input would still hash.
         let bytes = serde_json::to_vec(&c).unwrap_or_default();
         blake3::hash(&bytes).to_hex().to_string()
-    }
-
-    /// The WKS bandwidth for a list of energies (the default when none is given).
-    pub fn wks_list_sigma(&self) -> f64 {
-        self.wks_sigma
-            .unwrap_or(crate::analysis::request::DEFAULT_WKS_SIGMA)
     }
 }
 
@@ -272,15 +370,24 @@ mod tests {
         let variants = [
             BatchParams { k: 99, ..p.clone() },
             BatchParams {
-                laplacian: Laplacian::VoronoiCot,
+                solve: SolveParams {
+                    laplacian: Laplacian::VoronoiCot,
+                    ..p.solve.clone()
+                },
                 ..p.clone()
             },
             BatchParams {
-                tolerance: 1e-9,
+                solve: SolveParams {
+                    tolerance: 1e-9,
+                    ..p.solve.clone()
+                },
                 ..p.clone()
             },
             BatchParams {
-                normalize: false,
+                solve: SolveParams {
+                    normalize: false,
+                    ..p.solve.clone()
+                },
                 ..p.clone()
             },
             BatchParams {
@@ -288,11 +395,17 @@ mod tests {
                 ..p.clone()
             },
             BatchParams {
-                hks: Some(Schedule::Auto(16)),
+                descriptors: DescriptorParams {
+                    hks: Some(Schedule::Auto(16)),
+                    ..Default::default()
+                },
                 ..p.clone()
             },
             BatchParams {
-                hks: Some(Schedule::Values(vec![0.1])),
+                descriptors: DescriptorParams {
+                    hks: Some(Schedule::Values(vec![0.1])),
+                    ..Default::default()
+                },
                 ..p.clone()
             },
             BatchParams {
@@ -309,6 +422,33 @@ mod tests {
     }
 
     #[test]
+    fn json_keys_stay_flat_and_unknown_ones_are_refused() {
+        let p = BatchParams {
+            geodesic: Some(4),
+            ..Default::default()
+        };
+        // The hash's input: every key at the top level, in the order of `KEYS`.
+        let text = serde_json::to_string(&p).unwrap();
+        let at: Vec<usize> = BatchParams::KEYS
+            .iter()
+            .map(|k| text.find(&format!("\"{k}\":")).unwrap())
+            .collect();
+        assert!(at.windows(2).all(|w| w[0] < w[1]), "{text}");
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v.as_object().unwrap().len(), BatchParams::KEYS.len());
+        let back: BatchParams = serde_json::from_value(v).unwrap();
+        assert_eq!(back, p);
+        let partial: BatchParams =
+            serde_json::from_str(r#"{"k": 7, "tolerance": 1e-6, "scaled": true}"#).unwrap();
+        assert_eq!(partial.k, 7);
+        assert_eq!(partial.solve.tolerance, 1e-6);
+        assert!(partial.descriptors.scaled);
+        assert_eq!(partial.solve.laplacian, Laplacian::Fem);
+        let e = serde_json::from_str::<BatchParams>(r#"{"k": 7, "tolernce": 1e-6}"#).unwrap_err();
+        assert!(e.to_string().contains("unknown field `tolernce`"), "{e}");
+    }
+
+    #[test]
     fn validation_names_the_parameter() {
         let e = BatchParams {
             k: 0,
@@ -317,18 +457,22 @@ mod tests {
         .validate()
         .unwrap_err();
         assert!(e.to_string().contains("k"), "{e}");
-        let e = BatchParams {
+        let descriptors = |d: DescriptorParams| BatchParams {
+            descriptors: d,
+            ..Default::default()
+        };
+        let e = descriptors(DescriptorParams {
             hks: Some(Schedule::Values(vec![-1.0])),
             ..Default::default()
-        }
+        })
         .validate()
         .unwrap_err();
         assert!(e.to_string().starts_with("hks"), "{e}");
         assert!(
-            BatchParams {
+            descriptors(DescriptorParams {
                 wks: Some(Schedule::Values(vec![-1.0])),
                 ..Default::default()
-            }
+            })
             .validate()
             .is_ok()
         );

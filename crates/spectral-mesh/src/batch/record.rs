@@ -43,8 +43,35 @@ impl fmt::Display for InputKind {
     }
 }
 
+/// What was read from a shape's file: every count `None` until known (the file could not
+/// be read, or the job failed first).
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ShapeCounts {
+    /// Mesh or point cloud.
+    pub kind: Option<InputKind>,
+    /// Vertices (points).
+    pub n: Option<usize>,
+    /// Triangles (0 for point clouds).
+    pub faces: Option<usize>,
+    /// Connected components (of the mesh, or of the point-cloud operator's graph).
+    pub components: Option<usize>,
+}
+
+/// The eigenbasis a shape was solved for: how many pairs, with which discretization, how
+/// accurate.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BasisSummary {
+    /// Eigenpairs computed.
+    pub k: Option<usize>,
+    /// The discretization used (`fem`, ..., `robust` for point clouds).
+    pub discretization: String,
+    /// Largest relative residual of the eigenpairs.
+    pub max_residual: Option<f64>,
+}
+
 /// One row of the summary: a small record (a few hundred bytes), what a worker returns
-/// for a shape; the heavy results are in the files it names.
+/// for a shape; the heavy results are in the files it names. In JSON the keys of
+/// [`ShapeCounts`] and [`BasisSummary`] stand beside the others (the summary's columns).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BatchRecord {
     /// The shape's name in the output folder (see [`super::BatchInput::name`]).
@@ -58,18 +85,12 @@ pub struct BatchRecord {
     pub reused: bool,
     /// Why it failed (`None` unless failed).
     pub error: Option<String>,
-    /// Mesh or point cloud (`None` when the file could not be read).
-    pub kind: Option<InputKind>,
-    /// Vertices (points).
-    pub n: Option<usize>,
-    /// Triangles (0 for point clouds).
-    pub faces: Option<usize>,
-    /// Connected components (of the mesh, or of the point-cloud operator's graph).
-    pub components: Option<usize>,
-    /// Eigenpairs computed.
-    pub k: Option<usize>,
-    /// The discretization used (`fem`, ..., `robust` for point clouds).
-    pub discretization: String,
+    /// What the file held.
+    #[serde(flatten)]
+    pub shape: ShapeCounts,
+    /// The eigenbasis computed.
+    #[serde(flatten)]
+    pub basis: BasisSummary,
     /// Wall seconds spent on this shape by this run (reading, solving, writing; for a
     /// skipped shape, the check).
     pub seconds: f64,
@@ -77,8 +98,6 @@ pub struct BatchRecord {
     /// only; exact when the process works on one shape at a time, as the command line's
     /// and Dask's single-task workers do). `None` when unknown or skipped.
     pub peak_memory_bytes: Option<u64>,
-    /// Largest relative residual of the eigenpairs.
-    pub max_residual: Option<f64>,
     /// Files written for the shape, relative to the output folder, the result last.
     pub outputs: Vec<String>,
     /// BLAKE3 (hex) of the input file's bytes (`None` when it could not be read).
@@ -98,15 +117,10 @@ impl BatchRecord {
             status: Status::Failed,
             reused: false,
             error: None,
-            kind: None,
-            n: None,
-            faces: None,
-            components: None,
-            k: None,
-            discretization: String::new(),
+            shape: ShapeCounts::default(),
+            basis: BasisSummary::default(),
             seconds: 0.0,
             peak_memory_bytes: None,
-            max_residual: None,
             outputs: Vec::new(),
             input_hash: None,
             params_hash: params_hash.to_string(),

@@ -78,15 +78,15 @@ fn cells(r: &BatchRecord) -> Vec<Cell> {
         Cell::Text(Some(r.status.to_string())),
         Cell::Bool(r.reused),
         Cell::Text(r.error.clone()),
-        Cell::Text(r.kind.map(|k| k.to_string())),
-        int(r.n),
-        int(r.faces),
-        int(r.components),
-        int(r.k),
-        Cell::Text(Some(r.discretization.clone())),
+        Cell::Text(r.shape.kind.map(|k| k.to_string())),
+        int(r.shape.n),
+        int(r.shape.faces),
+        int(r.shape.components),
+        int(r.basis.k),
+        Cell::Text(Some(r.basis.discretization.clone())),
         Cell::Float(Some(r.seconds)),
         Cell::Int(r.peak_memory_bytes.map(|b| b as i64)),
-        Cell::Float(r.max_residual),
+        Cell::Float(r.basis.max_residual),
         Cell::Text(Some(r.outputs.join(";"))),
         Cell::Text(r.input_hash.clone()),
         Cell::Text(Some(r.params_hash.clone())),
@@ -208,19 +208,23 @@ pub fn write_summary(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::batch::record::{InputKind, Status};
+    use crate::batch::record::{BasisSummary, InputKind, ShapeCounts, Status};
 
     fn rows() -> Vec<BatchRecord> {
         let mut a = BatchRecord::new("a.off", "/data/a.off", "p");
         a.status = Status::Ok;
-        a.kind = Some(InputKind::Mesh);
-        a.n = Some(10);
-        a.faces = Some(16);
-        a.components = Some(1);
-        a.k = Some(5);
-        a.discretization = "fem".into();
+        a.shape = ShapeCounts {
+            kind: Some(InputKind::Mesh),
+            n: Some(10),
+            faces: Some(16),
+            components: Some(1),
+        };
+        a.basis = BasisSummary {
+            k: Some(5),
+            discretization: "fem".into(),
+            max_residual: Some(1e-12),
+        };
         a.seconds = 0.25;
-        a.max_residual = Some(1e-12);
         a.outputs = vec!["a.off.png".into(), "a.off.npz".into()];
         a.input_hash = Some("h".into());
         let b = BatchRecord::failed("b,\"x\".off", "b.off", "p", "b.off:3: line\nbroken");

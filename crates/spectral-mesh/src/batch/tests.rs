@@ -35,12 +35,23 @@ fn write_shape(dir: &Path, name: &str, spec: &str) -> BatchInput {
     }
 }
 
+/// HKS at `n` times from the spectrum, no other descriptor.
+fn hks_auto(n: usize) -> DescriptorParams {
+    DescriptorParams {
+        hks: Some(Schedule::Auto(n)),
+        ..Default::default()
+    }
+}
+
 fn params() -> BatchParams {
     BatchParams {
         k: 12,
-        hks: Some(Schedule::Auto(4)),
-        adf: Some(Schedule::Values(vec![0.01, 0.1])),
-        wks: Some(Schedule::Auto(3)),
+        descriptors: DescriptorParams {
+            hks: Some(Schedule::Auto(4)),
+            adf: Some(Schedule::Values(vec![0.01, 0.1])),
+            wks: Some(Schedule::Auto(3)),
+            ..Default::default()
+        },
         ..Default::default()
     }
 }
@@ -76,11 +87,11 @@ fn a_shape_is_computed_then_skipped_then_recomputed_when_it_changes() {
     assert_eq!(r.status, Status::Ok, "{r:?}");
     assert!(!r.reused);
     assert_eq!(
-        (r.n, r.faces, r.components, r.k),
+        (r.shape.n, r.shape.faces, r.shape.components, r.basis.k),
         (Some(162), Some(320), Some(1), Some(12))
     );
     assert_eq!(r.outputs, ["s.off.npz"]);
-    assert!(r.max_residual.unwrap() < 1e-8);
+    assert!(r.basis.max_residual.unwrap() < 1e-8);
     assert_eq!(r.params_hash, p.hash());
     let hash = blake3::hash(&std::fs::read(&input.path).unwrap())
         .to_hex()
@@ -125,21 +136,21 @@ fn a_shape_is_computed_then_skipped_then_recomputed_when_it_changes() {
         &crate::spectral::store::read_npz_meta(&out.join("s.off.npz")).unwrap(),
     )
     .unwrap();
-    assert_eq!(m.batch.hks_times.as_deref(), Some(&times[..]));
-    assert_eq!(m.batch.input_hash, hash);
+    assert_eq!(m.batch.descriptors.hks_times.as_deref(), Some(&times[..]));
+    assert_eq!(m.batch.key.input_hash, hash);
     let first = read(out.join("s.off.npz"));
 
     // Again: skipped, nothing rewritten.
     let r2 = process_one(&input, &p, &out, &opts);
     assert_eq!((r2.status, r2.reused), (Status::Skipped, true), "{r2:?}");
-    assert_eq!((r2.n, r2.k, r2.max_residual), (r.n, r.k, r.max_residual));
+    assert_eq!((&r2.shape, &r2.basis), (&r.shape, &r.basis));
     assert_eq!(r2.outputs, r.outputs);
     assert_eq!(read(out.join("s.off.npz")), first);
 
     // Other parameters: recomputed.
     let p3 = BatchParams { k: 10, ..p.clone() };
     let r3 = process_one(&input, &p3, &out, &opts);
-    assert_eq!((r3.status, r3.k), (Status::Ok, Some(10)));
+    assert_eq!((r3.status, r3.basis.k), (Status::Ok, Some(10)));
     // Back to the first parameters: the same bytes as the first time.
     let r4 = process_one(&input, &p, &out, &opts);
     assert_eq!(r4.status, Status::Ok);
@@ -148,7 +159,7 @@ fn a_shape_is_computed_then_skipped_then_recomputed_when_it_changes() {
     // Another input under the same name: recomputed.
     write_shape(&src, "s.off", "sphere:res=1");
     let r5 = process_one(&input, &p, &out, &opts);
-    assert_eq!((r5.status, r5.n), (Status::Ok, Some(42)));
+    assert_eq!((r5.status, r5.shape.n), (Status::Ok, Some(42)));
     assert_ne!(r5.input_hash, r.input_hash);
 }
 
@@ -159,7 +170,7 @@ fn results_do_not_depend_on_the_thread_count() {
     let input = write_shape(d.path(), "t.off", "torus:res=2");
     let p = BatchParams {
         k: 30,
-        hks: Some(Schedule::Auto(5)),
+        descriptors: hks_auto(5),
         ..Default::default()
     };
     let mut files = Vec::new();
@@ -175,7 +186,7 @@ fn results_do_not_depend_on_the_thread_count() {
             },
         );
         assert_eq!(r.status, Status::Ok, "{r:?}");
-        assert!(r.n.unwrap() > 300, "{:?}", r.n);
+        assert!(r.shape.n.unwrap() > 300, "{:?}", r.shape);
         files.push(read(out.join("t.off.npz")));
     }
     assert_eq!(files[0], files[1]);
@@ -292,7 +303,7 @@ fn thumbnails_eigenvalues_only_panics_and_point_clouds() {
             name: "c.xyz".into(),
         },
         &BatchParams {
-            hks: Some(Schedule::Auto(2)),
+            descriptors: hks_auto(2),
             ..p.clone()
         },
         &out,
@@ -300,10 +311,10 @@ fn thumbnails_eigenvalues_only_panics_and_point_clouds() {
     );
     assert_eq!(r.status, Status::Ok, "{r:?}");
     assert_eq!(
-        (r.kind, r.faces, r.components),
+        (r.shape.kind, r.shape.faces, r.shape.components),
         (Some(InputKind::Points), Some(0), Some(1))
     );
-    assert_eq!(r.discretization, "robust");
+    assert_eq!(r.basis.discretization, "robust");
     assert!(
         r.warnings.iter().any(|w| w.contains("point cloud")),
         "{:?}",
@@ -392,7 +403,7 @@ fn the_summary_has_a_row_per_shape_and_a_rerun_redoes_exactly_what_changed() {
     );
     let p = BatchParams {
         k: 10,
-        hks: Some(Schedule::Auto(3)),
+        descriptors: hks_auto(3),
         ..Default::default()
     };
     let first = run_all(&inputs, &p, &out);
@@ -529,7 +540,7 @@ fn the_summary_has_a_row_per_shape_and_a_rerun_redoes_exactly_what_changed() {
         want([Done, Done, Failed, Done, Done, Failed])
     );
     assert!(sixth.iter().all(|r| r.params_hash == q.hash()));
-    assert_eq!(sixth[0].k, Some(9));
+    assert_eq!(sixth[0].basis.k, Some(9));
     let seventh = run_all(&inputs, &p, &out);
     assert_eq!(
         statuses(&seventh),

@@ -127,12 +127,9 @@ impl MeshSummary {
 pub struct EulerCheck {
     /// The check in words.
     pub formula: &'static str,
-    /// Its left side.
-    pub lhs: i64,
-    /// Its right side.
-    pub rhs: i64,
-    /// `lhs == rhs`.
-    pub holds: bool,
+    /// Its sides (`lhs`, `rhs`) and whether they agree (`holds`).
+    #[serde(flatten)]
+    pub sides: crate::analysis::CheckSides,
 }
 
 /// Critical points as a summary reports them.
@@ -172,7 +169,7 @@ pub struct CriticalSummary {
     pub flat: bool,
     /// The counts above are the points shown, simplified by persistence
     /// ([`crate::fields::persistence`]); these many raw points are hidden.
-    pub hidden: crate::analysis::HiddenCritical,
+    pub hidden: crate::analysis::CriticalCounts,
     /// The raw counts and their check.
     pub raw: crate::analysis::RawCritical,
     /// Pairs of persistence below this are hidden.
@@ -182,30 +179,28 @@ pub struct CriticalSummary {
 impl From<&CriticalReport> for CriticalSummary {
     fn from(r: &CriticalReport) -> Self {
         Self {
-            minima: r.minima,
-            maxima: r.maxima,
-            saddles_with_multiplicity: r.saddles,
+            minima: r.counts.minima,
+            maxima: r.counts.maxima,
+            saddles_with_multiplicity: r.counts.saddles,
             minima_vertices: r.points.minima.clone(),
             maxima_vertices: r.points.maxima.clone(),
             saddle_vertices: r.points.saddles.clone(),
             euler_check: EulerCheck {
                 formula: r.formula,
-                lhs: r.lhs,
-                rhs: r.rhs,
-                holds: r.holds,
+                sides: r.check,
             },
             per_component: if r.components.len() > 1 {
                 r.components.clone()
             } else {
                 Vec::new()
             },
-            excluded_components: r.excluded_components.clone(),
-            flat_relative_tolerance: r.flat_tolerance,
-            plateau_components: r.plateau_components.clone(),
-            flat: r.flat,
+            excluded_components: r.left_out.excluded_components.clone(),
+            flat_relative_tolerance: r.left_out.flat_tolerance,
+            plateau_components: r.left_out.plateau_components.clone(),
+            flat: r.left_out.flat,
             hidden: r.hidden,
             raw: r.raw.clone(),
-            persistence_threshold: r.persistence_threshold,
+            persistence_threshold: r.persistence.threshold,
         }
     }
 }
@@ -580,9 +575,9 @@ pub fn run_harmonic(
             map: maps.len() + 1,
             constraints: constraints.clone(),
             critical_points: CriticalSummary::from(&critical),
-            m: critical.minima,
-            big_m: critical.maxima,
-            s: critical.saddles,
+            m: critical.counts.minima,
+            big_m: critical.counts.maxima,
+            s: critical.counts.saddles,
             chi,
             genus: genus.clone(),
             constraint_count: count,
@@ -813,7 +808,7 @@ mod tests {
             "{msg}"
         );
         let cp = s.critical_points.as_ref().unwrap();
-        assert!(cp.euler_check.holds);
+        assert!(cp.euler_check.sides.holds);
         let json = serde_json::to_value(s).unwrap();
         assert!(json["max"].is_f64(), "{json}");
         assert_eq!(json["unreachable"], msg);
@@ -848,8 +843,8 @@ mod tests {
         assert_eq!(run.summary.value_at_source, Some(0.0));
         assert_eq!(run.summary.stats.min, 0.0);
         let cp = run.summary.critical_points.as_ref().unwrap();
-        assert!(cp.euler_check.holds);
-        assert_eq!(cp.euler_check.rhs, 2);
+        assert!(cp.euler_check.sides.holds);
+        assert_eq!(cp.euler_check.sides.rhs, 2);
         // The same field as the analysis gives for the request on the held basis.
         assert_eq!(an.field(&req).unwrap().values, run.field.values);
         let json = serde_json::to_value(&run.summary).unwrap();
@@ -906,7 +901,7 @@ mod tests {
         assert_eq!(run.maps.len(), 2);
         let first = &run.summary.maps[0];
         assert_eq!((first.m, first.big_m, first.s, first.chi), (1, 1, 2, 0));
-        assert!(first.critical_points.euler_check.holds);
+        assert!(first.critical_points.euler_check.sides.holds);
         assert!(
             run.summary.maps[1]
                 .locality

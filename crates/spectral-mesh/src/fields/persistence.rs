@@ -82,6 +82,22 @@ pub struct PersistencePair {
     pub hidden: bool,
 }
 
+/// The threshold below which a persistence pair is hidden, and the two rules it comes
+/// from. In JSON (as every report carries it): `persistence_threshold`,
+/// `persistence_relative_threshold`, `persistence_noise_floor`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct PersistenceThresholds {
+    /// The absolute threshold, in the field's units (see the module documentation).
+    #[serde(rename = "persistence_threshold")]
+    pub threshold: f64,
+    /// [`PERSISTENCE_RELATIVE_THRESHOLD`].
+    #[serde(rename = "persistence_relative_threshold")]
+    pub relative_threshold: f64,
+    /// [`PERSISTENCE_NOISE_FLOOR`].
+    #[serde(rename = "persistence_noise_floor")]
+    pub noise_floor: f64,
+}
+
 /// The critical points of a field with their persistence pairs, and the simplified set.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Persistence {
@@ -93,12 +109,9 @@ pub struct Persistence {
     /// The pairs whose extremum is a raw critical point, ascending by extremum kind and
     /// vertex.
     pub pairs: Vec<PersistencePair>,
-    /// The absolute threshold (see the module documentation).
-    pub threshold: f64,
-    /// [`PERSISTENCE_RELATIVE_THRESHOLD`].
-    pub relative_threshold: f64,
-    /// [`PERSISTENCE_NOISE_FLOOR`].
-    pub noise_floor: f64,
+    /// The thresholds the pairs were hidden by.
+    #[serde(flatten)]
+    pub thresholds: PersistenceThresholds,
     /// Components (identified by their lowest vertex) whose range is below the threshold:
     /// no critical point shown.
     pub quiet_components: Vec<usize>,
@@ -350,9 +363,11 @@ pub(super) fn assemble(
         raw,
         shown,
         pairs,
-        threshold,
-        relative_threshold: PERSISTENCE_RELATIVE_THRESHOLD,
-        noise_floor: PERSISTENCE_NOISE_FLOOR,
+        thresholds: PersistenceThresholds {
+            threshold,
+            relative_threshold: PERSISTENCE_RELATIVE_THRESHOLD,
+            noise_floor: PERSISTENCE_NOISE_FLOOR,
+        },
         quiet_components,
     }
 }

@@ -154,14 +154,22 @@ fn the_heat_kernel_at_small_t_on_the_3torus_shows_only_significant_markers() {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
             (a.min(x), b.max(x))
         });
-    assert!(rep.raw.minima + rep.raw.maxima > 10, "raw {:?}", rep.raw);
-    assert_eq!((rep.minima, rep.maxima, rep.saddles), (1, 1, 6), "{rep:?}");
+    assert!(
+        rep.raw.counts.minima + rep.raw.counts.maxima > 10,
+        "raw {:?}",
+        rep.raw
+    );
+    assert_eq!(
+        (rep.counts.minima, rep.counts.maxima, rep.counts.saddles),
+        (1, 1, 6),
+        "{rep:?}"
+    );
     assert_eq!(rep.points.maxima, field.marks);
-    assert!(rep.holds && rep.raw.holds);
-    assert_eq!(rep.lhs, -4);
+    assert!(rep.check.holds && rep.raw.check.holds);
+    assert_eq!(rep.check.lhs, -4);
     assert_eq!(
         rep.hidden.minima + rep.hidden.maxima,
-        rep.raw.minima + rep.raw.maxima - 2
+        rep.raw.counts.minima + rep.raw.counts.maxima - 2
     );
     for q in &rep.pairs {
         if q.hidden {
@@ -232,7 +240,7 @@ fn the_euler_check_holds_for_the_raw_and_the_simplified_sets() {
                 // Every hidden pair is below the threshold.
                 for q in &p.pairs {
                     if q.hidden {
-                        assert!(q.persistence < p.threshold);
+                        assert!(q.persistence < p.thresholds.threshold);
                     }
                 }
             }
