@@ -158,7 +158,7 @@ const fieldMaterial = new THREE.ShaderMaterial({
   // The shade (two-sided Lambert) per vertex, as the server's pictures shade; per fragment
   // only the colour lookup and the level lines. In software GL (no GPU) the fragments of
   // a 100k-vertex mesh are many times its vertices (tiny triangles are shaded in 2 x 2
-  // blocks): the normalisation and lighting per fragment cost a third of the frame.
+  // blocks): the normalisation and lighting per fragment cost about a tenth of the frame.
   vertexShader: `
     attribute float scalar;
     uniform float ambient, diffuse;
@@ -684,7 +684,7 @@ function buildMeshObject() {
 // BackSide when it is negative, null for any other mesh (both sides drawn). From outside
 // the bounding sphere of such a surface that does not cross itself, the other side's
 // triangles are always behind this side's: not drawing them changes no pixel and, in
-// software GL, saves about a third of the frame at 100k vertices.
+// software GL, saves a quarter to a third of the frame at 100k vertices.
 function closedSide(tris, pos, n) {
   const m = tris.length / 3;
   if (!m) return null;
