@@ -666,6 +666,7 @@ function buildMeshObject() {
     app.normals = nrm;
     if (!(app.spacing > 0)) app.spacing = 2 * radius / Math.sqrt(Math.max(app.n, 1)); // a guess
     splatMaterial.uniforms.radius.value = app.splatFactor * app.spacing;
+    app.outerSide = null;
     meshObj = new THREE.Points(g, splatMaterial);
   } else {
     g.setIndex(new THREE.BufferAttribute(app.triangles, 1));
@@ -700,6 +701,7 @@ function closedSide(tris, pos, n) {
   };
   for (let t = 0; t < m; t++) {
     const a = tris[3 * t], b = tris[3 * t + 1], c = tris[3 * t + 2];
+    if (a === b || b === c || c === a) return null; // a degenerate triangle: both sides
     if (!edge(a, b) || !edge(b, c) || !edge(c, a)) return null;
     const ax = pos[3 * a], ay = pos[3 * a + 1], az = pos[3 * a + 2];
     const bx = pos[3 * b], by = pos[3 * b + 1], bz = pos[3 * b + 2];
