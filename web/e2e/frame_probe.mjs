@@ -103,6 +103,7 @@ const CONFIGS = `(() => {
     half_triangles: [() => g.setDrawRange(0, Math.floor(g.index.count / 6) * 3), () => g.setDrawRange(0, Infinity)],
     simple_64: [() => { mesh.material = simple; renderer.setSize(64, 64, false); }, () => { mesh.material = mat; renderer.setSize(size.x, size.y, false); }],
     shuffled: [() => { window.__idx = g.index.array.slice(); const a = g.index.array; const m = a.length / 3; let s = 1; for (let t = m - 1; t > 0; t--) { s = (s * 1103515245 + 12345) % 2147483648; const j = s % (t + 1); for (let c = 0; c < 3; c++) { const x = a[3 * t + c]; a[3 * t + c] = a[3 * j + c]; a[3 * j + c] = x; } } g.index.needsUpdate = true; }, () => { g.index.array.set(window.__idx); g.index.needsUpdate = true; }],
+    no_polygon_offset: [() => { fieldMaterial.polygonOffset = false; }, () => { fieldMaterial.polygonOffset = true; }],
     far_camera: [() => { cam.position.sub(P.mesh().position).multiplyScalar(2); cam.updateMatrixWorld(); }, () => { cam.position.copy(pos); cam.updateMatrixWorld(); }],
   };
   const once = (pre) => { if (pre) pre(); P.render(); gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px); };
