@@ -263,6 +263,51 @@ test('the PNG download is the picture on screen: camera, colours, marker shapes,
   console.log(`PNG vs screen: ${summary}; markers ${total}`);
 });
 
+// ---------- what the faster frame leaves out must not change the picture ----------
+
+// Pixels of two RGBA readings that differ by more than `tol` in a channel.
+function differing(a, b, tol = 8) {
+  let n = 0;
+  for (let i = 0; i < a.data.length; i += 4) {
+    if ([0, 1, 2].some((c) => Math.abs(a.data[i + c] - b.data[i + c]) > tol)) n++;
+  }
+  return n;
+}
+
+test('a closed surface is drawn from its outer side only, with the same pixels as both sides; an open one from both', async () => {
+  let b = await fieldCount();
+  await setValue('experiment', 'heat');
+  await waitField(b);
+  const [one, both] = await page.evaluate(() => {
+    const plain = (r) => ({ w: r.w, h: r.h, side: r.side, data: Array.from(r.data) });
+    return [plain(window.__viewPixels()), plain(window.__viewPixels(true))];
+  });
+  assert.notEqual(one.side, 'double', '3torus: the inner side is still drawn');
+  assert.equal(both.side, 'double');
+  // The view is read in the same task as it is drawn (no drawing buffer is kept): it
+  // shows the field, not a cleared canvas.
+  let coloured = 0;
+  for (let i = 0; i < one.data.length; i += 4) {
+    const c = one.data.slice(i, i + 3);
+    if (Math.max(...c) - Math.min(...c) > 40) coloured++;
+  }
+  assert.ok(coloured > 0.05 * one.w * one.h, `${coloured} coloured pixels of ${one.w * one.h}`);
+  const d = differing(one, both);
+  assert.ok(d <= 0.001 * one.w * one.h, `${d} pixels differ between the outer side and both sides`);
+  // An open surface (a pyramid without its base): both sides.
+  const file = path.join(os.tmpdir(), 'open-pyramid-e2e.off');
+  fs.writeFileSync(file, 'OFF\n5 4 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 0.8\n3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n');
+  const loaded = await page.evaluate(() => window.__meshLoaded || 0);
+  await page.evaluate(() => { document.getElementById('k').value = '3'; });
+  await page.setInputFiles('#file-input', file);
+  await page.waitForFunction((l) => (window.__meshLoaded || 0) > l, loaded, { timeout: 30000 });
+  fs.rmSync(file);
+  assert.equal(await page.evaluate(() => window.__viewPixels().side), 'double');
+  b = await fieldCount();
+  await page.evaluate(() => { document.getElementById('k').value = '100'; document.getElementById('shape-spec').value = '3torus'; document.getElementById('shape-load').click(); });
+  await waitField(b);
+});
+
 // ---------- latency: from the input event to the frame that shows the new field ----------
 
 const median = (a) => { const s = [...a].sort((x, y) => x - y); return s[Math.floor(s.length / 2)]; };

@@ -57,19 +57,16 @@ const health = () => page.evaluate(async () => (await fetch('/api/health')).json
 const shapePoints = pickPoints;
 
 // Pixels of the 3D view that are neither the white background nor grey: the colour map.
+// (The page keeps no drawing buffer after a frame is shown: it draws and reads in one task.)
 const colouredPixels = () => page.evaluate(() => {
-  const src = document.querySelector('#view canvas');
-  const c = document.createElement('canvas');
-  c.width = 320; c.height = 200;
-  const g = c.getContext('2d');
-  g.drawImage(src, 0, 0, c.width, c.height);
-  const d = g.getImageData(0, 0, c.width, c.height).data;
+  const { w, h, data: d } = window.__viewPixels();
   let n = 0;
   for (let i = 0; i < d.length; i += 4) {
     const [r, gr, b] = [d[i], d[i + 1], d[i + 2]];
     if (Math.max(r, gr, b) - Math.min(r, gr, b) > 40) n++;
   }
-  return n;
+  return n * (320 * 200) / (w * h); // as counted on a 320 x 200 copy before
+
 });
 
 // `n` points on the unit sphere (Fibonacci lattice) as .xyz text.
