@@ -68,7 +68,6 @@ pub fn run(args: Args) -> Result<()> {
             ..SolveParams::default()
         },
         max_geodesic_sources: Some(args.geodesic_sources),
-        ..PairParams::default()
     };
     params.validate()?;
     let inputs = resolve_inputs(&args.inputs)?;
