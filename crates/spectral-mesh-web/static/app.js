@@ -699,8 +699,8 @@ function closedSide(tris, pos, n) {
     open.set(k, 1);
     return true;
   };
-  for (let t = 0; t < m; t++) {
-    const a = tris[3 * t], b = tris[3 * t + 1], c = tris[3 * t + 2];
+  for (let f = 0; f < m; f++) {
+    const a = tris[3 * f], b = tris[3 * f + 1], c = tris[3 * f + 2];
     if (a === b || b === c || c === a) return null; // a degenerate triangle: both sides
     if (!edge(a, b) || !edge(b, c) || !edge(c, a)) return null;
     const ax = pos[3 * a], ay = pos[3 * a + 1], az = pos[3 * a + 2];
