@@ -13,8 +13,7 @@ use spectral_mesh::io::read_input;
 use spectral_mesh::operators::{Laplacian, NormalSource, PointCloudParams};
 use spectral_mesh::spectral::BasisView;
 use spectral_mesh::spectral::distances::{
-    distances_from_many, distances_from_many_weights, green_row_weights, spectral_function_weights,
-    weighted_pairs, weights_of_pairs,
+    distances_from_many, green_row, spectral_function, weighted_pairs, weights_of_pairs,
 };
 use spectral_mesh::spectral::embedding::{
     embedding_component, spectral_embedding, spectral_embedding_weights,
@@ -589,7 +588,7 @@ impl PyAnalysis {
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let cols = sources.len();
         let data = self.with_weights(py, k, weights, move |b, w| {
-            Ok(distances_from_many_weights(b, &sources, w)
+            Ok(distances_from_many(b, &sources, w)
                 .map_err(value_error)?
                 .concat())
         });
@@ -605,7 +604,7 @@ impl PyAnalysis {
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let data = self.with_weights(py, k, weights, move |b, w| {
-            green_row_weights(b, source, w).map_err(value_error)
+            green_row(b, source, w).map_err(value_error)
         })?;
         Ok(to_vector(py, data))
     }
@@ -618,7 +617,7 @@ impl PyAnalysis {
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let data = self.with_weights(py, k, weights, move |b, w| {
-            spectral_function_weights(b, w).map_err(value_error)
+            spectral_function(b, w).map_err(value_error)
         })?;
         Ok(to_vector(py, data))
     }
