@@ -13,8 +13,7 @@ use spectral_mesh::io::read_input;
 use spectral_mesh::operators::{Laplacian, PointCloudParams};
 use spectral_mesh::spectral::BasisView;
 use spectral_mesh::spectral::distances::{
-    distances_from_many_weights, green_row_weights, spectral_function_weights, weighted_pairs,
-    weights_of_pairs,
+    distances_from_many, green_row, spectral_function, weighted_pairs, weights_of_pairs,
 };
 use spectral_mesh::spectral::embedding::{embedding_component, spectral_embedding_weights};
 use spectral_mesh::spectral::filters::{Filter, FilterError};
@@ -619,7 +618,7 @@ impl PyAnalysis {
         weights: Weights<'_>,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        self.vertex_values_weighted(py, k, weights, move |b, w| green_row_weights(b, source, w))
+        self.vertex_values_weighted(py, k, weights, move |b, w| green_row(b, source, w))
     }
 
     /// The generalized spectral function `G(p, p)` with the weights of a function: `(n,)`.
@@ -629,7 +628,7 @@ impl PyAnalysis {
         weights: Weights<'_>,
         k: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        self.vertex_values_weighted(py, k, weights, |b, w| spectral_function_weights(b, w))
+        self.vertex_values_weighted(py, k, weights, |b, w| spectral_function(b, w))
     }
 
     /// One coordinate `sqrt(w_c) x_c` of the embedding with the weights of a function
@@ -656,7 +655,7 @@ impl PyAnalysis {
         k: usize,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let data = self.with_weights(py, k, (weights, "distance"), move |b, w| {
-            distances_from_many_weights(b, &sources, w).map_err(value_error)
+            distances_from_many(b, &sources, w).map_err(value_error)
         });
         self.columns(py, data)
     }

@@ -108,14 +108,45 @@ pub(crate) fn jittered_grid(
     pts
 }
 
-/// A deterministic stream of numbers in `[0, 1)` from `seed` (Knuth's MMIX linear
-/// congruential generator, the high bits): reproducible test inputs, not statistics.
-pub(crate) fn lcg(seed: u64) -> impl FnMut() -> f64 {
+/// The states of Knuth's MMIX linear congruential generator after `seed`.
+fn mmix(seed: u64) -> impl FnMut() -> u64 {
     let mut state = seed;
     move || {
         state = state
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);
-        (state >> 33) as f64 / (1u64 << 31) as f64
+        state
     }
+}
+
+/// A deterministic stream of numbers in `[0, 1)` from `seed` (the high 31 bits of
+/// [`mmix`]): reproducible test inputs, not statistics.
+pub(crate) fn lcg(seed: u64) -> impl FnMut() -> f64 {
+    let mut next = mmix(seed);
+    move || (next() >> 33) as f64 / (1u64 << 31) as f64
+}
+
+/// [`lcg`] with the full precision of an `f64` (the high 53 bits): for tests whose inputs
+/// should use every bit of the mantissa.
+pub(crate) fn lcg53(seed: u64) -> impl FnMut() -> f64 {
+    let mut next = mmix(seed);
+    move || (next() >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// Two fans of five triangles sharing vertex 0 (at the origin), one at z = 1 and one at
+/// z = -1: vertex 0 is non-manifold (two link cycles). Positions and triangles, for tests
+/// that add to them.
+pub(crate) fn two_fans() -> (Vec<[f64; 3]>, Vec<[usize; 3]>) {
+    let mut p = vec![[0.0, 0.0, 0.0]];
+    let mut t = Vec::new();
+    for (side, z) in [(0usize, 1.0), (1, -1.0)] {
+        for i in 0..5 {
+            let a = i as f64 * std::f64::consts::TAU / 5.0;
+            p.push([a.cos(), a.sin(), z]);
+        }
+        for i in 0..5 {
+            t.push([0, 1 + 5 * side + i, 1 + 5 * side + (i + 1) % 5]);
+        }
+    }
+    (p, t)
 }

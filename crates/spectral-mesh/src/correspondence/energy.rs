@@ -104,7 +104,8 @@ pub struct MatchShape<'a> {
     pub descriptors: &'a Descriptors,
 }
 
-/// The value of each term at some `C` (weighted).
+/// One number per term of the energy: the value of each term at some `C` (weighted;
+/// [`FmapProblem::terms`]), or the weight of each ([`FmapProblem::weights`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct EnergyTerms {
     /// `w_d/2 ||C A - B||^2`.
@@ -143,14 +144,9 @@ pub struct FmapProblem {
     pub commutativity_ops: Vec<(Vec<f64>, Vec<f64>)>,
     /// `(P_d, Q_d)` (empty when `w_o = 0`).
     pub orientation_ops: Vec<(Vec<f64>, Vec<f64>)>,
-    /// `w_d`.
-    pub w_descriptors: f64,
-    /// `w_l`.
-    pub w_laplacian: f64,
-    /// `w_c`.
-    pub w_commutativity: f64,
-    /// `w_o'`, the rescaled orientation weight.
-    pub w_orientation: f64,
+    /// The weight of each term: `w_d`, `w_l`, `w_c` and `w_o'`, the rescaled orientation
+    /// weight.
+    pub weights: EnergyTerms,
     /// The held first column (`k2`), with `fix_constant`.
     pub first_column: Option<Vec<f64>>,
 }
@@ -305,10 +301,12 @@ impl FmapProblem {
             ev_sqdiff,
             commutativity_ops,
             orientation_ops,
-            w_descriptors: weights.descriptors,
-            w_laplacian: weights.laplacian,
-            w_commutativity: weights.commutativity,
-            w_orientation: 0.0,
+            weights: EnergyTerms {
+                descriptors: weights.descriptors,
+                laplacian: weights.laplacian,
+                commutativity: weights.commutativity,
+                orientation: 0.0,
+            },
             first_column,
         };
         if weights.orientation > 0.0 {
@@ -319,7 +317,7 @@ impl FmapProblem {
             // to 1, over the unweighted orientation energy at I.
             let others = weights.descriptors + weights.laplacian + weights.commutativity;
             let others = if others > 0.0 { others } else { 1.0 };
-            problem.w_orientation = if orient > 0.0 {
+            problem.weights.orientation = if orient > 0.0 {
                 weights.orientation * rest / (others * orient)
             } else {
                 0.0
@@ -332,17 +330,17 @@ impl FmapProblem {
     pub fn terms(&self, c: &FunctionalMap) -> EnergyTerms {
         let (k1, k2, p) = (self.k1, self.k2, self.p);
         let mut t = EnergyTerms::default();
-        if self.w_descriptors > 0.0 {
+        if self.weights.descriptors > 0.0 {
             let ca = product(&c.c, &self.a, k2, k1, p);
-            t.descriptors = self.w_descriptors
+            t.descriptors = self.weights.descriptors
                 * 0.5
                 * ca.iter()
                     .zip(&self.b)
                     .map(|(x, y)| (x - y).powi(2))
                     .sum::<f64>();
         }
-        if self.w_laplacian > 0.0 {
-            t.laplacian = self.w_laplacian
+        if self.weights.laplacian > 0.0 {
+            t.laplacian = self.weights.laplacian
                 * 0.5
                 * c.c
                     .iter()
@@ -350,13 +348,13 @@ impl FmapProblem {
                     .map(|(x, d)| x * x * d)
                     .sum::<f64>();
         }
-        if self.w_commutativity > 0.0 {
-            t.commutativity =
-                self.w_commutativity * operators_energy(&c.c, &self.commutativity_ops, k1, k2);
+        if self.weights.commutativity > 0.0 {
+            t.commutativity = self.weights.commutativity
+                * operators_energy(&c.c, &self.commutativity_ops, k1, k2);
         }
-        if self.w_orientation > 0.0 {
+        if self.weights.orientation > 0.0 {
             t.orientation =
-                self.w_orientation * operators_energy(&c.c, &self.orientation_ops, k1, k2);
+                self.weights.orientation * operators_energy(&c.c, &self.orientation_ops, k1, k2);
         }
         t
     }
@@ -368,8 +366,8 @@ impl FmapProblem {
 
     /// The weighted operator pairs of both commutator terms.
     fn weighted_ops(&self) -> impl Iterator<Item = (f64, &(Vec<f64>, Vec<f64>))> {
-        let wc = self.w_commutativity;
-        let wo = self.w_orientation;
+        let wc = self.weights.commutativity;
+        let wo = self.weights.orientation;
         self.commutativity_ops
             .iter()
             .map(move |op| (wc, op))
@@ -412,13 +410,13 @@ impl FmapProblem {
         // S1 = w_d A A^T + sum w X X^T (k1 x k1); S2 = sum w Y^T Y (k2 x k2).
         let mut s1 = vec![0.0; k1 * k1];
         let mut s2 = vec![0.0; k2 * k2];
-        if self.w_descriptors > 0.0 {
+        if self.weights.descriptors > 0.0 {
             // A A^T = (A^T)^T (A^T): gram of the p x k1 transpose.
             let at = transpose(&self.a, k1, p);
             let aat = gram(&at, &at, p, k1, k1);
             s1.iter_mut()
                 .zip(&aat)
-                .for_each(|(s, v)| *s += self.w_descriptors * v);
+                .for_each(|(s, v)| *s += self.weights.descriptors * v);
         }
         for (w, (x, y)) in self.weighted_ops() {
             let xt = transpose(x, k1, k1);
@@ -444,19 +442,19 @@ impl FmapProblem {
                 }
             }
         }
-        if self.w_laplacian > 0.0 {
+        if self.weights.laplacian > 0.0 {
             for (q, d) in self.ev_sqdiff.iter().enumerate() {
-                h[q * nn + q] += self.w_laplacian * d;
+                h[q * nn + q] += self.weights.laplacian * d;
             }
         }
         let mut r = vec![0.0; nn];
-        if self.w_descriptors > 0.0 {
+        if self.weights.descriptors > 0.0 {
             // B A^T (k2 x k1) = B (k2 x p) times A^T (p x k1).
             let at = transpose(&self.a, k1, p);
             let bat = product(&self.b, &at, k2, p, k1);
             r.iter_mut()
                 .zip(&bat)
-                .for_each(|(ri, v)| *ri = self.w_descriptors * v);
+                .for_each(|(ri, v)| *ri = self.weights.descriptors * v);
         }
         (h, r)
     }

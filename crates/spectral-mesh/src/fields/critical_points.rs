@@ -204,7 +204,7 @@ impl CriticalPoints {
 }
 
 /// Refuses a field whose length is not the `n` vertices.
-fn check_length(field: &[f64], n: usize) -> Result<(), CriticalPointsError> {
+pub(crate) fn check_length(field: &[f64], n: usize) -> Result<(), CriticalPointsError> {
     if field.len() != n {
         return Err(CriticalPointsError::LengthMismatch {
             expected: n,
@@ -977,18 +977,7 @@ mod tests {
     #[test]
     fn the_simple_cycle_shortcut_agrees_with_the_ordered_links() {
         let two_fans = {
-            // Two fans sharing vertex 0: a non-manifold vertex (two link cycles).
-            let mut p = vec![[0.0, 0.0, 0.0]];
-            let mut t = Vec::new();
-            for (side, z) in [(0usize, 1.0), (1, -1.0)] {
-                for i in 0..5 {
-                    let a = i as f64 * std::f64::consts::TAU / 5.0;
-                    p.push([a.cos(), a.sin(), z]);
-                }
-                for i in 0..5 {
-                    t.push([0, 1 + 5 * side + i, 1 + 5 * side + (i + 1) % 5]);
-                }
-            }
+            let (p, t) = crate::test_support::two_fans();
             Mesh::new(p, t).unwrap()
         };
         let meshes = [

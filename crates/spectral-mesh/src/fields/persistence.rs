@@ -40,7 +40,7 @@
 use rayon::prelude::*;
 
 use crate::fields::critical_points::{
-    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError, quantizer,
+    BoundaryRule, CriticalPointFinder, CriticalPoints, CriticalPointsError, check_length, quantizer,
 };
 
 /// A pair whose persistence is below this fraction of the field's range (`max - min`) is
@@ -150,13 +150,7 @@ pub fn persistence(
     field: &[f64],
     raw: CriticalPoints,
 ) -> Result<Persistence, CriticalPointsError> {
-    let n = finder.n_vertices();
-    if field.len() != n {
-        return Err(CriticalPointsError::LengthMismatch {
-            expected: n,
-            got: field.len(),
-        });
-    }
+    check_length(field, finder.n_vertices())?;
     // The classification's order: rounded values, ties by index. Both sweeps at once.
     let keys = sort_keys(field);
     let local = local_order(finder, &keys);

@@ -104,63 +104,80 @@ fn weighted_squares(x: &[f64], n: usize, w: &[f64], source: Option<usize>) -> Ve
     })
 }
 
-/// Filtered spectral distances from `source` to every vertex (`n` values), O(nk):
-/// `d(p,q) = sqrt(sum_{lambda_k > 0} w(lambda_k) (x_k(p) - x_k(q))^2)`.
-pub fn distances_from<'a>(
-    basis: impl Into<BasisView<'a>>,
-    source: usize,
-    filter: &Filter,
-) -> Result<Vec<f64>, DistanceError> {
-    let basis: BasisView<'a> = basis.into();
-    check_vertex(basis, source)?;
-    let w = filter.weights(basis.values)?;
-    distances_from_weights(basis, source, &w)
+/// The per-pair weights `w_k` of a distance or kernel: a [`Filter`]'s (evaluated at the
+/// eigenvalues of the basis it is used with), or given (`k` entries, 0 for the pairs left
+/// out; from [`Filter::weights`] or [`weights_of_pairs`], e.g. of a function given outside
+/// the filter language). Every function of this module that takes weights takes either:
+/// `&filter`, `&w` or `Weights::Given(&w)`.
+#[derive(Debug, Clone, Copy)]
+pub enum Weights<'w> {
+    /// The weights of a filter.
+    Filter(&'w Filter),
+    /// The weights given, one per pair of the basis.
+    Given(&'w [f64]),
 }
 
-/// [`distances_from`] with the per-pair weights given (`k` entries, 0 for the pairs left
-/// out; from [`Filter::weights`] or [`weights_of_pairs`]).
-pub fn distances_from_weights<'a>(
+impl<'w> From<&'w Filter> for Weights<'w> {
+    fn from(f: &'w Filter) -> Self {
+        Weights::Filter(f)
+    }
+}
+
+impl<'w> From<&'w [f64]> for Weights<'w> {
+    fn from(w: &'w [f64]) -> Self {
+        Weights::Given(w)
+    }
+}
+
+impl<'w> From<&'w Vec<f64>> for Weights<'w> {
+    fn from(w: &'w Vec<f64>) -> Self {
+        Weights::Given(w)
+    }
+}
+
+impl<'w> Weights<'w> {
+    /// The `k` weights for `basis` (a filter's computed, given ones checked).
+    fn of(self, basis: BasisView<'_>) -> Result<std::borrow::Cow<'w, [f64]>, DistanceError> {
+        Ok(match self {
+            Weights::Filter(f) => f.weights(basis.values)?.into(),
+            Weights::Given(w) => {
+                check_weights(basis, w)?;
+                w.into()
+            }
+        })
+    }
+}
+
+/// Filtered spectral distances from `source` to every vertex (`n` values), O(nk):
+/// `d(p,q) = sqrt(sum_{lambda_k > 0} w_k (x_k(p) - x_k(q))^2)`.
+pub fn distances_from<'a, 'w>(
     basis: impl Into<BasisView<'a>>,
     source: usize,
-    w: &[f64],
+    weights: impl Into<Weights<'w>>,
 ) -> Result<Vec<f64>, DistanceError> {
     let basis: BasisView<'a> = basis.into();
     check_vertex(basis, source)?;
-    check_weights(basis, w)?;
-    let mut d = weighted_sq_from(basis.vectors, basis.n, w, source);
+    let w = weights.into().of(basis)?;
+    let mut d = weighted_sq_from(basis.vectors, basis.n, &w, source);
     d.iter_mut().for_each(|v| *v = v.sqrt());
     Ok(d)
 }
 
 /// Distances from each of `sources` (one `n`-vector per source), parallel over sources.
-pub fn distances_from_many<'a>(
+pub fn distances_from_many<'a, 'w>(
     basis: impl Into<BasisView<'a>>,
     sources: &[usize],
-    filter: &Filter,
+    weights: impl Into<Weights<'w>>,
 ) -> Result<Vec<Vec<f64>>, DistanceError> {
     let basis: BasisView<'a> = basis.into();
     for &s in sources {
         check_vertex(basis, s)?;
     }
-    let w = filter.weights(basis.values)?;
-    distances_from_many_weights(basis, sources, &w)
-}
-
-/// [`distances_from_many`] with the per-pair weights given (see [`distances_from_weights`]).
-pub fn distances_from_many_weights<'a>(
-    basis: impl Into<BasisView<'a>>,
-    sources: &[usize],
-    w: &[f64],
-) -> Result<Vec<Vec<f64>>, DistanceError> {
-    let basis: BasisView<'a> = basis.into();
-    for &s in sources {
-        check_vertex(basis, s)?;
-    }
-    check_weights(basis, w)?;
+    let w = weights.into().of(basis)?;
     Ok(sources
         .par_iter()
         .map(|&s| {
-            let mut d = weighted_sq_from(basis.vectors, basis.n, w, s);
+            let mut d = weighted_sq_from(basis.vectors, basis.n, &w, s);
             d.iter_mut().for_each(|v| *v = v.sqrt());
             d
         })
@@ -218,26 +235,14 @@ pub fn all_pairs<'a>(
 }
 
 /// The row `G(p, .)` of the generalized Green kernel `G = X diag(w) X^T` (`n` values).
-pub fn green_row<'a>(
+pub fn green_row<'a, 'w>(
     basis: impl Into<BasisView<'a>>,
     p: usize,
-    filter: &Filter,
+    weights: impl Into<Weights<'w>>,
 ) -> Result<Vec<f64>, DistanceError> {
     let basis: BasisView<'a> = basis.into();
     check_vertex(basis, p)?;
-    let w = filter.weights(basis.values)?;
-    green_row_weights(basis, p, &w)
-}
-
-/// [`green_row`] with the per-pair weights given (see [`distances_from_weights`]).
-pub fn green_row_weights<'a>(
-    basis: impl Into<BasisView<'a>>,
-    p: usize,
-    w: &[f64],
-) -> Result<Vec<f64>, DistanceError> {
-    let basis: BasisView<'a> = basis.into();
-    check_vertex(basis, p)?;
-    check_weights(basis, w)?;
+    let w = weights.into().of(basis)?;
     let n = basis.n;
     let c: Vec<f64> = w
         .iter()
@@ -249,23 +254,13 @@ pub fn green_row_weights<'a>(
 
 /// The generalized spectral function `p -> G(p,p) = sum_k w_k x_k(p)^2` (`n` values). With
 /// the diffusion filter this is the auto-diffusion function.
-pub fn spectral_function<'a>(
+pub fn spectral_function<'a, 'w>(
     basis: impl Into<BasisView<'a>>,
-    filter: &Filter,
+    weights: impl Into<Weights<'w>>,
 ) -> Result<Vec<f64>, DistanceError> {
     let basis: BasisView<'a> = basis.into();
-    let w = filter.weights(basis.values)?;
-    spectral_function_weights(basis, &w)
-}
-
-/// [`spectral_function`] with the per-pair weights given (see [`distances_from_weights`]).
-pub fn spectral_function_weights<'a>(
-    basis: impl Into<BasisView<'a>>,
-    w: &[f64],
-) -> Result<Vec<f64>, DistanceError> {
-    let basis: BasisView<'a> = basis.into();
-    check_weights(basis, w)?;
-    Ok(weighted_squares(basis.vectors, basis.n, w, None))
+    let w = weights.into().of(basis)?;
+    Ok(weighted_squares(basis.vectors, basis.n, &w, None))
 }
 
 /// The eigenvalues a filter weighs, with their pair indices: every pair of `eigenvalues`
@@ -435,30 +430,25 @@ mod tests {
         let f = Filter::CommuteTime;
         assert_eq!(
             distances_from(basis, 2, &f).unwrap(),
-            distances_from_weights(basis, 2, &w).unwrap()
+            distances_from(basis, 2, &w).unwrap()
         );
         assert_eq!(
             green_row(basis, 1, &f).unwrap(),
-            green_row_weights(basis, 1, &w).unwrap()
+            green_row(basis, 1, &w).unwrap()
         );
         assert_eq!(
             spectral_function(basis, &f).unwrap(),
-            spectral_function_weights(basis, &w).unwrap()
+            spectral_function(basis, &w).unwrap()
         );
-        assert!(spectral_function_weights(basis, &w[..3]).is_err());
+        assert!(spectral_function(basis, &w[..3]).is_err());
     }
 
     /// The four-column kernel gives the bits of one column at a time (zero weights
     /// skipped), with and without a source, serial and parallel sizes.
     #[test]
     fn weighted_squares_are_one_column_at_a_time() {
-        let mut state = 3u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.4
-        };
+        let mut rnd = crate::test_support::lcg53(3);
+        let mut next = || rnd() - 0.4;
         for (n, k) in [
             (4, 2),
             (99, 11),

@@ -580,13 +580,8 @@ mod tests {
     /// skipped), for sizes around the block and group sizes, serial and parallel.
     #[test]
     fn combine_columns_is_one_column_at_a_time() {
-        let mut state = 7u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.3
-        };
+        let mut rnd = crate::test_support::lcg53(7);
+        let mut next = || rnd() - 0.3;
         for (n, k) in [(5, 3), (100, 9), (ROW_BLOCK + 17, 13), (3 * ROW_BLOCK, 70)] {
             let x: Vec<f64> = (0..n * k).map(|_| next()).collect();
             let mut c: Vec<f64> = (0..k).map(|_| next() * 1e3).collect();

@@ -6,17 +6,7 @@ use crate::experiments::harmonic::{HarmonicExperimentParams, harmonic_experiment
 use crate::mesh::Mesh;
 use crate::mesh::topology::Topology;
 use crate::shapes::build_str;
-
-/// A deterministic sequence in [0, 1).
-fn noise(seed: u64) -> impl FnMut() -> f64 {
-    let mut state = seed;
-    move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use crate::test_support::lcg53;
 
 /// `m - s + M` of `cp` (doubled across the boundary when the mesh has one).
 fn euler_lhs(cp: &CriticalPoints, mesh: &Mesh) -> (i64, i64) {
@@ -35,7 +25,7 @@ fn euler_lhs(cp: &CriticalPoints, mesh: &Mesh) -> (i64, i64) {
 fn a_constant_plus_rounding_noise_shows_no_critical_point() {
     let sphere = build_str("sphere:res=3").unwrap();
     let n = sphere.n_vertices();
-    let mut r = noise(7);
+    let mut r = lcg53(7);
     for amplitude in [1e-9, 1e-7] {
         let f: Vec<f64> = (0..n).map(|_| 1.0 + amplitude * r()).collect();
         let p = simplified_critical_points(&sphere, &f).unwrap();
@@ -205,7 +195,7 @@ fn the_euler_check_holds_for_the_raw_and_the_simplified_sets() {
         "disk:res=3",
         "irregular-sphere:res=3",
     ];
-    let mut r = noise(99);
+    let mut r = lcg53(99);
     let mut hidden_any = 0;
     for shape in meshes {
         let Ok(mesh) = build_str(shape) else {
@@ -263,17 +253,7 @@ fn comparison_meshes() -> Vec<Mesh> {
     .map(|s| build_str(s).unwrap())
     .collect();
     // Two fans sharing vertex 0, and vertex 11 unused.
-    let mut p = vec![[0.0, 0.0, 0.0]];
-    let mut t = Vec::new();
-    for (side, z) in [(0usize, 1.0), (1, -1.0)] {
-        for i in 0..5 {
-            let a = i as f64 * std::f64::consts::TAU / 5.0;
-            p.push([a.cos(), a.sin(), z]);
-        }
-        for i in 0..5 {
-            t.push([0, 1 + 5 * side + i, 1 + 5 * side + (i + 1) % 5]);
-        }
-    }
+    let (mut p, t) = crate::test_support::two_fans();
     p.push([5.0, 5.0, 5.0]);
     meshes.push(Mesh::new(p, t).unwrap());
     // Two components: a sphere and a disk side by side.

@@ -28,18 +28,11 @@ pub enum EigenError {
         /// Vertices.
         n: usize,
     },
-    /// The iterative solver stopped before every wanted pair converged.
-    #[error(
-        "the eigensolver did not converge: {converged} of {wanted} pairs after {iterations} iterations"
-    )]
-    NoConvergence {
-        /// Converged pairs.
-        converged: usize,
-        /// Wanted pairs.
-        wanted: usize,
-        /// Iterations used.
-        iterations: usize,
-    },
+    /// The iterative solver stopped before every wanted pair converged: the solver's
+    /// [`SparseEigenError::NoConvergence`], with the pairs converged and wanted and the
+    /// iterations used.
+    #[error(transparent)]
+    NoConvergence(SparseEigenError),
     /// The computation was cancelled through its [`CancelToken`].
     #[error("the eigenbasis computation was cancelled")]
     Cancelled,
@@ -48,15 +41,7 @@ pub enum EigenError {
 impl From<SparseEigenError> for EigenError {
     fn from(e: SparseEigenError) -> Self {
         match e {
-            SparseEigenError::NoConvergence {
-                converged,
-                wanted,
-                iterations,
-            } => EigenError::NoConvergence {
-                converged,
-                wanted,
-                iterations,
-            },
+            e @ SparseEigenError::NoConvergence { .. } => EigenError::NoConvergence(e),
             SparseEigenError::Cancelled => EigenError::Cancelled,
             other => EigenError::Numerical(other.to_string()),
         }

@@ -4,7 +4,7 @@
 //! link edges and all joined at once to the oldest piece.
 
 use crate::fields::critical_points::{
-    CriticalPointFinder, CriticalPoints, CriticalPointsError, quantized,
+    CriticalPointFinder, CriticalPoints, CriticalPointsError, check_length, quantized,
 };
 use crate::fields::persistence::{Persistence, assemble, component_ranges};
 use crate::mesh::topology::UnionFind;
@@ -29,12 +29,7 @@ pub(super) fn persistence(
     raw: CriticalPoints,
 ) -> Result<Persistence, CriticalPointsError> {
     let n = finder.n_vertices();
-    if field.len() != n {
-        return Err(CriticalPointsError::LengthMismatch {
-            expected: n,
-            got: field.len(),
-        });
-    }
+    check_length(field, n)?;
     let mut order = order(finder, field);
     let (up_pairs, up_essential) = sweep(finder, &order, n);
     order.reverse();
