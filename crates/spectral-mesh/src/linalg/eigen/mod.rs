@@ -38,6 +38,7 @@
 //! - this file: the driver (checks, shift, factorization, sizes, fallback).
 
 mod certify;
+mod coarse;
 mod davidson;
 mod deflation;
 mod dense;
@@ -155,6 +156,15 @@ pub fn sparse_generalized_eigen_with(
     // The random start of every iteration (and of a rerun) comes from the same seed.
     let start_rng = || Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
 
+    // The start vectors from a coarse space, when asked for.
+    let coarse = (krylov && opts.start_vectors.is_none() && opts.coarse_start)
+        .then(|| {
+            let t = std::time::Instant::now();
+            let x = coarse::coarse_start(s, b, k, opts, cancel);
+            super::timing::add(super::timing::Phase::Coarse, t.elapsed());
+            x
+        })
+        .flatten();
     if krylov {
         // The iteration finds the k - nz pairs after the deflated null space, in a space
         // of dimension n - nz (less the vectors deflated on request).
@@ -192,6 +202,9 @@ pub fn sparse_generalized_eigen_with(
             deflation: (nz > 0).then_some(&null),
             extra: extra.as_ref(),
             dim,
+            start: coarse
+                .as_deref()
+                .or(opts.start_vectors.as_deref().map(|v| v.as_slice())),
         };
         let mut sizes = krylov_schur::Sizes {
             block: bs,
