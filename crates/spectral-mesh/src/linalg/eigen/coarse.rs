@@ -27,8 +27,8 @@
 
 use rayon::prelude::*;
 
-use super::types::{EigenProgress, SparseEigenError, SparseEigenOptions};
-use crate::cancel::CancelToken;
+use super::result::PartialEigen;
+use super::types::{SparseEigenError, SparseEigenOptions};
 use crate::linalg::SparseMatrix;
 
 const FREE: usize = usize::MAX;
@@ -209,13 +209,18 @@ pub(super) fn galerkin(p: &SparseMatrix, pt: &SparseMatrix, a: &SparseMatrix) ->
 /// Start vectors for the `k` smallest pairs of `(s, b)` from the coarse space (see the
 /// module documentation): `n x kc` column-major, `kc` a little more than `k`. `None` when
 /// the problem is too small for a coarse space to pay, or the coarse solve fails (the
-/// fine iteration then starts from random vectors as before).
+/// fine iteration then starts from random vectors as before). `solve` is the sparse
+/// solver (the driver's, passed in so that this file does not import the driver).
 pub(super) fn coarse_start(
     s: &SparseMatrix,
     b: &SparseMatrix,
     k: usize,
     opts: &SparseEigenOptions,
-    cancel: &CancelToken,
+    solve: &dyn Fn(
+        &SparseMatrix,
+        &SparseMatrix,
+        &SparseEigenOptions,
+    ) -> Result<PartialEigen, SparseEigenError>,
 ) -> Option<Vec<f64>> {
     let n = s.ncols();
     let (agg, m) = aggregate(s);
@@ -238,14 +243,7 @@ pub(super) fn coarse_start(
         coarse_start: false,
         ..opts.clone()
     };
-    let r = super::sparse_generalized_eigen_with(
-        &sc,
-        &bc,
-        &copts,
-        None,
-        &mut |_: EigenProgress| {},
-        cancel,
-    );
+    let r = solve(&sc, &bc, &copts);
     if crate::linalg::timing::enabled() {
         eprintln!(
             "coarse start: n {n} -> m {m} (P nnz {}, Sc nnz {}), {kc} pairs: {}",
@@ -286,7 +284,8 @@ pub(super) fn coarse_start(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::linalg::eigen::sparse_generalized_eigen;
+    use crate::cancel::CancelToken;
+    use crate::linalg::eigen::{sparse_generalized_eigen, sparse_generalized_eigen_with};
     use crate::operators::{Laplacian, Operators};
 
     /// The prolongation reproduces the constants, the Galerkin pencil keeps `S`'s null
@@ -314,7 +313,11 @@ mod tests {
             k,
             ..Default::default()
         };
-        let x0 = coarse_start(s, b, k, &opts, &CancelToken::new()).expect("a coarse space");
+        let cancel = CancelToken::new();
+        let solve = |sc: &SparseMatrix, bc: &SparseMatrix, o: &SparseEigenOptions| {
+            sparse_generalized_eigen_with(sc, bc, o, None, &mut |_| {}, &cancel)
+        };
+        let x0 = coarse_start(s, b, k, &opts, &solve).expect("a coarse space");
         assert_eq!(x0.len() % n, 0);
         assert!(x0.len() / n > k);
         let plain = sparse_generalized_eigen(s, b, &opts, &mut |_| {}).unwrap();

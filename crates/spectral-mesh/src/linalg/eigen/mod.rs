@@ -33,6 +33,8 @@
 //!   deflated exactly (any number of components);
 //! - `davidson.rs` and `krylov_schur/` (the iteration in `mod.rs`, the block
 //!   orthonormalization in `orthonormalize.rs`): the two iterations;
+//! - `coarse.rs`: start vectors from a coarse space (smoothed aggregation, the Galerkin
+//!   pencil solved by the driver's solver, passed in), off by default ([`SparseEigenOptions::coarse_start`]);
 //! - `certify.rs`: the inertia certificate that no eigenvalue was skipped, and the search
 //!   for missing pairs;
 //! - this file: the driver (checks, shift, factorization, sizes, fallback).
@@ -160,7 +162,10 @@ pub fn sparse_generalized_eigen_with(
     let coarse = (krylov && opts.start_vectors.is_none() && opts.coarse_start)
         .then(|| {
             let t = std::time::Instant::now();
-            let x = coarse::coarse_start(s, b, k, opts, cancel);
+            let solve = |sc: &SparseMatrix, bc: &SparseMatrix, o: &SparseEigenOptions| {
+                sparse_generalized_eigen_with(sc, bc, o, None, &mut |_| {}, cancel)
+            };
+            let x = coarse::coarse_start(s, b, k, opts, &solve);
             super::timing::add(super::timing::Phase::Coarse, t.elapsed());
             x
         })
