@@ -1,9 +1,14 @@
 //! Benchmark of the eigenbasis engine.
 //!
-//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P] [--basis M] [--davidson] [--ks-plain] [--raw] [--no-deflate] [--solver K1,K2,...] [--cancel-after S] [--copies N [--copy-scale F]] [--per-component]`
+//! `cargo run --release -p spectral-mesh --example bench_eigs -- MESH K [LAPLACIAN] [--out BASIS.npz] [--method auto|dense|block] [--block P] [--basis M] [--davidson] [--ks-plain] [--raw] [--no-deflate] [--solver K1,K2,...] [--cancel-after S] [--copies N [--copy-scale F]] [--per-component] [--coarse] [--oracle M EPS]`
 //!
 //! Prints one line of `key=value` pairs: n, k, seconds (assembly excluded, factorization
 //! included), iterations, solves, max residual, orthogonality error, peak RSS.
+//!
+//! `--coarse` starts the sparse solver from a coarse space (`SparseEigenOptions::coarse_start`);
+//! `--oracle M EPS` from the first `M` exact eigenvectors (of a reference solve with `3M`
+//! pairs, not timed) each perturbed by `EPS` times random combinations of all `3M`: an
+//! upper bound of what any start subspace of that accuracy can save.
 //!
 //! `--per-component` compares the deflated solve of the whole mesh with a lower bound of
 //! solving each connected component alone (see `per_component_bound`).
@@ -169,6 +174,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut copies = 1usize;
     let mut copy_scale = 1.0f64;
     let mut cancel_after: Option<f64> = None;
+    let mut oracle: Option<(usize, f64)> = None;
+    let mut coarse = false;
     let mut i = 2;
     while i < args.len() {
         match args[i].as_str() {
@@ -199,10 +206,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--ks-plain" => raw_plain = true,
             "--no-deflate" => raw_no_deflate = true,
             "--raw" => raw = true,
+            "--coarse" => {
+                coarse = true;
+                raw = true;
+            }
             "--per-component" => per_component = true,
             "--basis" => {
                 raw_basis = args[i + 1].parse()?;
                 i += 1;
+            }
+            "--oracle" => {
+                oracle = Some((args[i + 1].parse()?, args[i + 2].parse()?));
+                raw = true;
+                i += 2;
             }
             "--cancel-after" => {
                 cancel_after = Some(args[i + 1].parse()?);
@@ -298,7 +314,44 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let davidson = raw_soft || raw_krylov || raw_davidson;
     if raw || davidson || raw_plain || raw_no_deflate || raw_basis > 0 {
         // Solver experiments: call the sparse solver directly.
+        let start_vectors = match oracle {
+            Some((m, eps)) => {
+                // Experiment: start from the first m exact eigenvectors (of a reference
+                // solve with 3m pairs), each perturbed by eps times random combinations
+                // of all 3m.
+                let r3 = 3 * m;
+                let o = SparseEigenOptions {
+                    k: r3,
+                    ..Default::default()
+                };
+                let refr = sparse_generalized_eigen(&ops.stiffness, &ops.mass, &o, &mut |_| {})?;
+                let n = ops.n();
+                let mut x0 = vec![0.0; n * m];
+                let mut seed = 12345u64;
+                let mut rnd = || {
+                    seed = seed
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+                };
+                for i in 0..m {
+                    let col = &mut x0[i * n..(i + 1) * n];
+                    col.copy_from_slice(&refr.vectors[i * n..(i + 1) * n]);
+                    for j in 0..r3 {
+                        let g = eps * rnd() * (3.0 / r3 as f64).sqrt();
+                        for (x, &u) in col.iter_mut().zip(&refr.vectors[j * n..(j + 1) * n]) {
+                            *x += g * u;
+                        }
+                    }
+                }
+                Some(std::sync::Arc::new(x0))
+            }
+            None => None,
+        };
+        let t1 = Instant::now();
         let opts = SparseEigenOptions {
+            start_vectors,
+            coarse_start: coarse,
             k,
             tolerance: params.tolerance,
             block_size: params.block_size,

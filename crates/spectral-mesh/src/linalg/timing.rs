@@ -43,14 +43,16 @@ pub(super) enum Phase {
     Deflate,
     /// The orthogonality report of the returned vectors (`max |X^T B X - I|`).
     Check,
+    /// The start vectors from a coarse space (aggregation, Galerkin pencil, its solve).
+    Coarse,
 }
 
-const NAMES: [&str; 15] = [
+const NAMES: [&str; 16] = [
     "ordering", "factor", "op", "local", "gram", "update", "svqb", "eig", "rotate", "estimate",
-    "residual", "start", "norms", "deflate", "check",
+    "residual", "start", "norms", "deflate", "check", "coarse",
 ];
 
-static TOTALS: [AtomicU64; 15] = [const { AtomicU64::new(0) }; 15];
+static TOTALS: [AtomicU64; 16] = [const { AtomicU64::new(0) }; 16];
 
 /// True when `SPECTRAL_MESH_EIG_TIMINGS` is set (not empty, not `0`): the solver then
 /// prints its phase timings, and the faces may print their own stages.

@@ -33,11 +33,14 @@
 //!   deflated exactly (any number of components);
 //! - `davidson.rs` and `krylov_schur/` (the iteration in `mod.rs`, the block
 //!   orthonormalization in `orthonormalize.rs`): the two iterations;
+//! - `coarse.rs`: start vectors from a coarse space (smoothed aggregation, the Galerkin
+//!   pencil solved by the driver's solver, passed in), off by default ([`SparseEigenOptions::coarse_start`]);
 //! - `certify.rs`: the inertia certificate that no eigenvalue was skipped, and the search
 //!   for missing pairs;
 //! - this file: the driver (checks, shift, factorization, sizes, fallback).
 
 mod certify;
+mod coarse;
 mod davidson;
 mod deflation;
 mod dense;
@@ -155,6 +158,18 @@ pub fn sparse_generalized_eigen_with(
     // The random start of every iteration (and of a rerun) comes from the same seed.
     let start_rng = || Rng(opts.seed ^ 0xA5A5_5A5A_DEAD_BEEF);
 
+    // The start vectors from a coarse space, when asked for.
+    let coarse = (krylov && opts.start_vectors.is_none() && opts.coarse_start)
+        .then(|| {
+            let t = std::time::Instant::now();
+            let solve = |sc: &SparseMatrix, bc: &SparseMatrix, o: &SparseEigenOptions| {
+                sparse_generalized_eigen_with(sc, bc, o, None, &mut |_| {}, cancel)
+            };
+            let x = coarse::coarse_start(s, b, k, opts, &solve);
+            super::timing::add(super::timing::Phase::Coarse, t.elapsed());
+            x
+        })
+        .flatten();
     if krylov {
         // The iteration finds the k - nz pairs after the deflated null space, in a space
         // of dimension n - nz (less the vectors deflated on request).
@@ -192,6 +207,9 @@ pub fn sparse_generalized_eigen_with(
             deflation: (nz > 0).then_some(&null),
             extra: extra.as_ref(),
             dim,
+            start: coarse
+                .as_deref()
+                .or(opts.start_vectors.as_deref().map(|v| v.as_slice())),
         };
         let mut sizes = krylov_schur::Sizes {
             block: bs,

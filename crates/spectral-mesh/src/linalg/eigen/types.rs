@@ -54,6 +54,15 @@ pub struct SparseEigenOptions {
     /// the pairs already found this way (see [`super::certify_and_complete`]); tests use
     /// it to make a solve miss an eigenvector. `None` (default): nothing.
     pub deflate_vectors: Option<std::sync::Arc<Vec<f64>>>,
+    /// Krylov-Schur only: approximations of the wanted eigenvectors (`n x m`,
+    /// column-major, any scaling) the iteration starts from: its start block is `Op`
+    /// applied to random combinations of them plus a random part, so that pairs missing
+    /// from them still enter the space. `None` (default): a random start block.
+    pub start_vectors: Option<std::sync::Arc<Vec<f64>>>,
+    /// Krylov-Schur only: start from the prolongated eigenvectors of a coarse space
+    /// (smoothed aggregation, see `coarse.rs`) when no `start_vectors` are given and the
+    /// problem is large enough for one.
+    pub coarse_start: bool,
 }
 
 impl SparseEigenOptions {
@@ -97,6 +106,8 @@ impl Default for SparseEigenOptions {
             ks_plain: false,
             deflate: true,
             deflate_vectors: None,
+            start_vectors: None,
+            coarse_start: false,
         }
     }
 }

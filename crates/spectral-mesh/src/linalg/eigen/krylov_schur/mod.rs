@@ -85,6 +85,9 @@ pub(super) struct Problem<'a> {
     pub extra: Option<&'a DenseDeflation>,
     /// Dimension of the space the iteration works in: `n` minus the deflated indicators.
     pub dim: usize,
+    /// Approximate eigenvectors to start from (`n x m`, column-major; see
+    /// [`super::SparseEigenOptions::start_vectors`]).
+    pub start: Option<&'a [f64]>,
 }
 
 impl Problem<'_> {
@@ -574,6 +577,44 @@ impl Converged {
     }
 }
 
+/// Weight of the random part of a start block built from start vectors (relative to
+/// their combination): what keeps eigenvectors missing from the start vectors within
+/// reach of the iteration (measured: the same solve counts as with `1e-8`, within a
+/// block, on 26k vertices at k = 50).
+const START_NOISE: f64 = 1e-2;
+
+/// Replaces the random block `w` (`n x bs`, entries uniform in `[-1, 1)`) by random
+/// combinations of the `m` columns of `x0`, each scaled to unit Euclidean norm, plus
+/// [`START_NOISE`] times `w` scaled to about unit Euclidean norm per column.
+fn start_from(w: &mut [f64], x0: &[f64], n: usize, bs: usize, rng: &mut Rng) {
+    let m = x0.len() / n;
+    let eta = START_NOISE;
+    let norms: Vec<f64> = x0
+        .chunks(n)
+        .map(|c| {
+            c.iter()
+                .map(|x| x * x)
+                .sum::<f64>()
+                .sqrt()
+                .max(f64::MIN_POSITIVE)
+        })
+        .collect();
+    // Noise: entries uniform in [-1, 1), Euclidean norm ~ sqrt(n / 3) per column.
+    let scale = eta / (n as f64 / 3.0).sqrt();
+    for col in 0..bs {
+        let g: Vec<f64> = (0..m).map(|i| rng.next_f64() / norms[i]).collect();
+        let wc = &mut w[col * n..(col + 1) * n];
+        for x in wc.iter_mut() {
+            *x *= scale;
+        }
+        for (i, &gi) in g.iter().enumerate() {
+            for (x, &y) in wc.iter_mut().zip(&x0[i * n..(i + 1) * n]) {
+                *x += gi * y;
+            }
+        }
+    }
+}
+
 /// The `k` smallest pairs by block Krylov-Schur (see the module documentation).
 pub(super) fn krylov_schur(
     pb: &Problem<'_>,
@@ -602,6 +643,9 @@ pub(super) fn krylov_schur(
     // the residual of S (weighted by lambda_max) sees but the residual of Op does not.
     let start = std::time::Instant::now();
     let mut w: Vec<f64> = (0..n * bs).map(|_| rng.next_f64()).collect();
+    if let Some(x0) = pb.start.filter(|x| n > 0 && x.len() >= n) {
+        start_from(&mut w, x0, n, bs, rng);
+    }
     let mut bw = sym_spmm(b, &w, bs);
     chol.solve_many_in_place(&mut bw, bs);
     w = bw;
@@ -940,6 +984,7 @@ mod tests {
             deflation: None,
             extra: None,
             dim: s.ncols(),
+            start: None,
         };
         let mut runs = Vec::new();
         for (lock, local) in [(false, false), (true, false), (false, true), (true, true)] {
