@@ -5,7 +5,8 @@
 // t-slider moves as the browser test does, with the animation-frame timeline after each.
 // Not a test: `node web/e2e/frame_probe.mjs [app.js ...]` with the page files to compare
 // (served instead of the server's app.js, taken in turn); default: the server's own.
-//   PROBE_SHAPE (default torus:res=5), PROBE_K (200), PROBE_MOVES (10), PROBE_ROUNDS (2)
+//   PROBE_SHAPE (default torus:res=5), PROBE_K (200), PROBE_MOVES (10), PROBE_ROUNDS (2),
+//   PROBE_MICRO=0 (moves only), PROBE_CONFIGS (the variations timed, comma-separated)
 import fs from 'node:fs';
 import { launch } from './common.mjs';
 
@@ -16,11 +17,15 @@ const K = Number(process.env.PROBE_K || 200);
 const MOVES = Number(process.env.PROBE_MOVES || 10);
 const ROUNDS = Number(process.env.PROBE_ROUNDS || 2);
 const MICRO = process.env.PROBE_MICRO !== '0';
+// PROBE_CONFIGS=base,direct,...: only these variations (default all).
+const ONLY = (process.env.PROBE_CONFIGS || '').split(',').filter(Boolean);
 const files = process.argv.slice(2);
 const variants = files.length ? files : [null];
 
 // Appended to the page's module: its scene, for the probe only.
-const EXPOSE = `\n;window.__probe = { THREE, renderer, scene, camera, fieldMaterial, mesh: () => meshObj, render, markerObjs };\n`;
+const EXPOSE = `\n;window.__probe = { THREE, renderer, scene, camera, fieldMaterial, mesh: () => meshObj, render, markerObjs,
+  deferred: typeof deferred === 'undefined' ? null : deferred,
+  resolve: typeof resolveMaterial === 'undefined' ? null : resolveMaterial };\n`;
 
 const median = (a) => { const s = [...a].sort((x, y) => x - y); return s[Math.floor(s.length / 2)]; };
 
@@ -104,9 +109,27 @@ const CONFIGS = `(() => {
     simple_64: [() => { mesh.material = simple; renderer.setSize(64, 64, false); }, () => { mesh.material = mat; renderer.setSize(size.x, size.y, false); }],
     shuffled: [() => { window.__idx = g.index.array.slice(); const a = g.index.array; const m = a.length / 3; let s = 1; for (let t = m - 1; t > 0; t--) { s = (s * 1103515245 + 12345) % 2147483648; const j = s % (t + 1); for (let c = 0; c < 3; c++) { const x = a[3 * t + c]; a[3 * t + c] = a[3 * j + c]; a[3 * j + c] = x; } } g.index.needsUpdate = true; }, () => { g.index.array.set(window.__idx); g.index.needsUpdate = true; }],
     no_polygon_offset: [() => { fieldMaterial.polygonOffset = false; }, () => { fieldMaterial.polygonOffset = true; }],
+    // The page with the full-screen pass (deferred shading): drawn directly instead, and
+    // with its per-pixel buffer drawn again before each draw (as after a camera move).
+    direct: [() => { if (P.deferred) P.deferred.wanted = false; }, () => { if (P.deferred) P.deferred.wanted = true; }],
+    buffer_again: [() => {}, () => {}, () => { if (P.deferred) P.deferred.key = ''; }],
+    resolve_min: [() => { const r = P.resolve; P.keepFs = r.fragmentShader; r.fragmentShader = 'uniform highp sampler2D g0; void main() { vec4 a = texelFetch(g0, ivec2(gl_FragCoord.xy), 0); if (a.x < 0.5) discard; gl_FragColor = vec4(a.www, 1.0); }'; r.needsUpdate = true; },
+      () => { P.resolve.fragmentShader = P.keepFs; P.resolve.needsUpdate = true; }],
+    resolve_no_depth: [() => { const r = P.resolve; P.keepFs = r.fragmentShader; r.fragmentShader = r.fragmentShader.replace(/gl_FragDepth[^;]*;/, ''); r.needsUpdate = true; },
+      () => { P.resolve.fragmentShader = P.keepFs; P.resolve.needsUpdate = true; }],
+    resolve_bits: [() => { const r = P.resolve; P.keepFs = r.fragmentShader; r.fragmentShader = r.fragmentShader.replace('ivec2(t % texWidth, t / texWidth)', 'ivec2(t & 2047, t >> 11)'); r.needsUpdate = true; },
+      () => { P.resolve.fragmentShader = P.keepFs; P.resolve.needsUpdate = true; }],
+    resolve_no_vals: [() => { const r = P.resolve; P.keepFs = r.fragmentShader; r.fragmentShader = r.fragmentShader.replace('texelFetch(vals, ivec2(t % texWidth, t / texWidth), 0).xyz', 'a.yzw'); r.needsUpdate = true; },
+      () => { P.resolve.fragmentShader = P.keepFs; P.resolve.needsUpdate = true; }],
+    resolve_no_cmap: [() => { const r = P.resolve; P.keepFs = r.fragmentShader; r.fragmentShader = r.fragmentShader.replace('texture(cmap, vec2(clamp(u, 0.0, 1.0) * (255.0 / 256.0) + 0.5 / 256.0, 0.5)).rgb', 'vec3(u)'); r.needsUpdate = true; },
+      () => { P.resolve.fragmentShader = P.keepFs; P.resolve.needsUpdate = true; }],
+    resolve_fetch_only: [() => { const r = P.resolve; P.keepFs = r.fragmentShader; r.fragmentShader = 'uniform highp sampler2D g0, g1, gDepth, vals; void main() { ivec2 p = ivec2(gl_FragCoord.xy); vec4 a = texelFetch(g0, p, 0); if (a.x < 0.5) discard; int t = int(a.x + 0.5) - 1; vec3 s = texelFetch(vals, ivec2(t & 2047, t >> 11), 0).xyz; vec4 d = texelFetch(g1, p, 0); gl_FragColor = vec4(s * a.w + d.xyz, 1.0); gl_FragDepth = texelFetch(gDepth, p, 0).r; }'; r.needsUpdate = true; },
+      () => { P.resolve.fragmentShader = P.keepFs; P.resolve.needsUpdate = true; }],
     far_camera: [() => { cam.position.sub(P.mesh().position).multiplyScalar(2); cam.updateMatrixWorld(); }, () => { cam.position.copy(pos); cam.updateMatrixWorld(); }],
   };
   const once = (pre) => { if (pre) pre(); P.render(); gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px); };
+  const only = ONLY;
+  for (const n of Object.keys(C)) if (only.length && !only.includes(n)) delete C[n];
   window.__cfg = {
     names: Object.keys(C),
     set: (n) => { C[n][0](); once(C[n][2]); },
@@ -119,7 +142,7 @@ const CONFIGS = `(() => {
 // Each variation in turn, `rounds` times, `reps` draws each: the median wall time of a
 // draw (with its 1-pixel read) and the CPU time the GPU process spent per draw.
 async function micro(page, gpuPid, rounds = 3, reps = 3) {
-  const names = await page.evaluate(CONFIGS);
+  const names = await page.evaluate(CONFIGS.replace('ONLY', JSON.stringify(ONLY)));
   const wall = {}, cpu = {};
   for (let r = 0; r < rounds; r++) {
     for (const n of names) {

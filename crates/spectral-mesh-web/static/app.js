@@ -87,27 +87,51 @@ function resize() {
   render();
 }
 window.addEventListener('resize', resize);
-function render() {
+// `turning`: drawn for a camera move (OrbitControls): while the camera turns, the surface
+// is drawn directly (the per-pixel buffer would be drawn and used once, dearer than one
+// direct draw), and the buffer is drawn once the camera has rested for SETTLE_MS.
+const SETTLE_MS = 120;
+let settleTimer = 0;
+function render(turning = false) {
   if (app.isCloud) updateSplatScale();
   else updateSide();
   updateMarkerBias();
+  if (turning === true && !app.isCloud && meshObj && deferred.wanted) {
+    clearTimeout(settleTimer);
+    settleTimer = setTimeout(() => render(), SETTLE_MS);
+    renderer.render(scene, camera);
+    window.__frameMode = 'direct';
+    return;
+  }
+  if (!app.isCloud && meshObj && deferred.wanted && deferredReady()) {
+    // The surface from the per-pixel buffer (one full-screen pass), then the markers.
+    meshObj.visible = false; deferred.quad.visible = true;
+    renderer.render(scene, camera);
+    meshObj.visible = true; deferred.quad.visible = false;
+    window.__frameMode = 'deferred';
+    return;
+  }
   renderer.render(scene, camera);
+  window.__frameMode = 'direct';
 }
 // The 3D view's pixels (RGBA rows, bottom row first), drawn and read in the same task;
 // `bothSides` draws every triangle from both sides, as before a closed surface's inner
 // side was left out (the tests compare the two).
-window.__viewPixels = (bothSides = false) => {
-  const keep = app.outerSide;
+window.__viewPixels = (bothSides = false, direct = false) => {
+  const keep = app.outerSide, keepWanted = deferred.wanted;
   if (bothSides) app.outerSide = null;
+  if (direct) deferred.wanted = false;
   render();
+  const mode = window.__frameMode;
   const side = fieldMaterial.side;
   const gl = renderer.getContext();
   const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
   const px = new Uint8Array(4 * w * h);
   gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
   app.outerSide = keep;
+  deferred.wanted = keepWanted;
   render();
-  return { w, h, side: side === THREE.DoubleSide ? 'double' : side === THREE.BackSide ? 'back' : 'front', data: px };
+  return { w, h, mode, side: side === THREE.DoubleSide ? 'double' : side === THREE.BackSide ? 'back' : 'front', data: px };
 };
 // Markers come towards the viewer by the description's depth bias (f R + s u: R the
 // bounding radius, u world units per screen pixel at the target), as the pictures test
@@ -120,7 +144,7 @@ function updateMarkerBias() {
   const ppu = (0.5 * h / Math.tan(THREE.MathUtils.degToRad(camera.fov / 2))) / camera.position.distanceTo(controls.target);
   markerBias.value = b[0] * radius + b[1] / ppu;
 }
-controls.addEventListener('change', render);
+controls.addEventListener('change', () => render(true));
 const nextFrame = () => new Promise((r) => requestAnimationFrame(() => r()));
 // The frame that shows what was just rendered: the second animation frame after it (the
 // first one's callbacks run before that frame is composited).
@@ -203,6 +227,239 @@ const fieldMaterial = new THREE.ShaderMaterial({
   side: THREE.DoubleSide,
   polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
 });
+
+// ---------- deferred shading: a new field without drawing the triangles again ----------
+// In software GL (no GPU) most of a frame at 100k vertices is the geometry: running the
+// vertices and setting up the triangles, paid again for every new field although only the
+// values change. So when the camera, the mesh, the side drawn or the lighting change, the
+// surface is drawn once into an offscreen buffer that keeps, per pixel, its triangle, two
+// barycentric coordinates, the shade (interpolated from the vertices', as above) and their
+// screen derivatives (for the level lines' width), with the depth. A new field (or colour
+// map, range, levels) is then one full-screen pass: it fetches the triangle's three vertex
+// values from a data texture (one texel per triangle, filled from the vertex values on
+// the CPU for each field: one fetch per pixel instead of four dependent ones), interpolates them and colours the pixel as fieldMaterial's
+// fragment shader does; it writes the stored depth, so that the markers drawn after it
+// are hidden by the surface as before. Without float render targets (or when the mesh is too
+// large for the textures) the surface is drawn directly, as before.
+const deferred = {
+  wanted: true, failed: false, key: '', target: null, gScene: new THREE.Scene(), gMesh: null,
+  vals: null, quad: null, meshId: null, valuesAt: -1, width: 2048,
+};
+window.__deferred = deferred;
+const gMaterial = new THREE.ShaderMaterial({
+  glslVersion: THREE.GLSL3,
+  uniforms: { ambient: fieldMaterial.uniforms.ambient, diffuse: fieldMaterial.uniforms.diffuse, lightDir: fieldMaterial.uniforms.lightDir },
+  // One vertex per triangle corner (no index): the corner is gl_VertexID % 3, the triangle
+  // gl_VertexID / 3 (stored + 1: 0 is the background).
+  vertexShader: `
+    uniform float ambient, diffuse;
+    uniform vec3 lightDir;
+    out vec2 vB;
+    out float vL;
+    flat out float vT;
+    void main() {
+      int c = gl_VertexID % 3;
+      vB = vec2(c == 1 ? 1.0 : 0.0, c == 2 ? 1.0 : 0.0);
+      vT = float(gl_VertexID / 3 + 1);
+      vL = ambient + diffuse * abs(dot(normalize(normalMatrix * normal), lightDir));
+      gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+    }`,
+  fragmentShader: `
+    in vec2 vB;
+    in float vL;
+    flat in float vT;
+    layout(location = 0) out highp vec4 g0;
+    layout(location = 1) out highp vec4 g1;
+    void main() {
+      g0 = vec4(vT, vB, vL);
+      g1 = vec4(dFdx(vB), dFdy(vB));
+    }`,
+  side: THREE.DoubleSide,
+  polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
+});
+const resolveMaterial = new THREE.ShaderMaterial({
+  uniforms: {
+    g0: { value: null }, g1: { value: null }, gDepth: { value: null }, vals: { value: null },
+    texWidth: { value: deferred.width },
+    cmap: fieldMaterial.uniforms.cmap, lo: fieldMaterial.uniforms.lo, hi: fieldMaterial.uniforms.hi,
+    nLevels: fieldMaterial.uniforms.nLevels, showLevels: fieldMaterial.uniforms.showLevels,
+    hasField: fieldMaterial.uniforms.hasField, lineWidth: fieldMaterial.uniforms.lineWidth,
+    lineColor: fieldMaterial.uniforms.lineColor,
+  },
+  vertexShader: `
+    void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }`,
+  fragmentShader: `
+    uniform highp sampler2D g0, g1, gDepth, vals;
+    uniform sampler2D cmap;
+    uniform int texWidth;
+    uniform float lo, hi, nLevels, showLevels, hasField, lineWidth;
+    uniform vec3 lineColor;
+    void main() {
+      ivec2 p = ivec2(gl_FragCoord.xy);
+      vec4 a = texelFetch(g0, p, 0);
+      if (a.x < 0.5) discard;
+      int t = int(a.x + 0.5) - 1;
+      vec3 s = texelFetch(vals, ivec2(t % texWidth, t / texWidth), 0).xyz;
+      float s0 = s.x, s1 = s.y, s2 = s.z;
+      float vS = (1.0 - a.y - a.z) * s0 + a.y * s1 + a.z * s2;
+      float vL = a.w;
+      vec3 c = vec3(0.8);
+      if (hasField > 0.5) {
+        float u = hi > lo ? (vS - lo) / (hi - lo) : 0.5;
+        c = texture(cmap, vec2(clamp(u, 0.0, 1.0) * (255.0 / 256.0) + 0.5 / 256.0, 0.5)).rgb;
+        if (vS > 1e38) c = vec3(0.55);
+        c *= vL;
+        if (showLevels > 0.5 && nLevels > 0.5 && hi > lo) {
+          // fwidth of x = u nLevels - 1/2 as the surface's own pass would take it: the
+          // stored screen derivatives of the barycentric coordinates times the values.
+          vec4 d = texelFetch(g1, p, 0);
+          float k = nLevels / (hi - lo);
+          float dx = k * ((s1 - s0) * d.x + (s2 - s0) * d.y);
+          float dy = k * ((s1 - s0) * d.z + (s2 - s0) * d.w);
+          float x = u * nLevels - 0.5;
+          float r = floor(x + 0.5);
+          float w = max(abs(dx) + abs(dy), 1e-6);
+          float px = abs(x - r) / w;
+          float hw = 0.5 * lineWidth;
+          float line = (r >= 0.0 && r <= nLevels - 1.0) ? 1.0 - smoothstep(hw - 0.5, hw + 0.5, px) : 0.0;
+          c = mix(c, lineColor, line);
+        }
+      } else {
+        c *= vL;
+      }
+      gl_FragColor = vec4(c, 1.0);
+      gl_FragDepth = texelFetch(gDepth, p, 0).r;
+    }`,
+  depthTest: true, depthWrite: true, depthFunc: THREE.AlwaysDepth,
+});
+deferred.quad = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), resolveMaterial);
+deferred.quad.frustumCulled = false;
+deferred.quad.visible = false;
+deferred.quad.renderOrder = -1;
+scene.add(deferred.quad);
+
+// A float texture of `data.length / channels` texels, `deferred.width` wide.
+function dataTexture(data, channels) {
+  const w = deferred.width, h = Math.max(1, Math.ceil(data.length / channels / w));
+  const full = new Float32Array(w * h * channels);
+  full.set(data);
+  const tex = new THREE.DataTexture(full, w, h, channels === 1 ? THREE.RedFormat : THREE.RGBAFormat, THREE.FloatType);
+  tex.magFilter = THREE.NearestFilter; tex.minFilter = THREE.NearestFilter;
+  tex.needsUpdate = true;
+  return tex;
+}
+
+// The mesh's per-corner geometry and its per-triangle values texture (once per mesh).
+function deferredMesh() {
+  if (deferred.meshId === meshObj.id) return;
+  const m = app.triangles.length / 3;
+  const pos = new Float32Array(9 * m), nrm = new Float32Array(9 * m);
+  for (let t = 0; t < m; t++) {
+    for (let c = 0; c < 3; c++) {
+      const v = app.triangles[3 * t + c];
+      for (let j = 0; j < 3; j++) {
+        pos[9 * t + 3 * c + j] = app.positions[3 * v + j];
+        nrm[9 * t + 3 * c + j] = app.normals[3 * v + j];
+      }
+    }
+  }
+  if (deferred.gMesh) { deferred.gScene.remove(deferred.gMesh); deferred.gMesh.geometry.dispose(); }
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+  g.setAttribute('normal', new THREE.BufferAttribute(nrm, 3));
+  deferred.gMesh = new THREE.Mesh(g, gMaterial);
+  deferred.gMesh.frustumCulled = false;
+  deferred.gScene.add(deferred.gMesh);
+  deferred.vals?.dispose();
+  deferred.vals = dataTexture(new Float32Array(4 * m), 4);
+  deferred.valuesAt = -1;
+  deferred.meshId = meshObj.id;
+  deferred.key = '';
+}
+
+// The full-screen pass covers only the screen rectangle of the mesh's bounding box (with a
+// pixel of margin): the pixels outside it are background.
+const corner = new THREE.Vector3();
+function fitQuad() {
+  const box = meshObj.geometry.boundingBox || (meshObj.geometry.computeBoundingBox(), meshObj.geometry.boundingBox);
+  let x0 = 1, y0 = 1, x1 = -1, y1 = -1, whole = false;
+  for (let i = 0; i < 8; i++) {
+    corner.set(i & 1 ? box.max.x : box.min.x, i & 2 ? box.max.y : box.min.y, i & 4 ? box.max.z : box.min.z);
+    corner.applyMatrix4(camera.matrixWorldInverse);
+    if (corner.z > -camera.near) { whole = true; break; } // a corner beside or behind the eye
+    corner.applyMatrix4(camera.projectionMatrix);
+    x0 = Math.min(x0, corner.x); x1 = Math.max(x1, corner.x); y0 = Math.min(y0, corner.y); y1 = Math.max(y1, corner.y);
+  }
+  const mx = 2 / Math.max(bufferSize.x, 1), my = 2 / Math.max(bufferSize.y, 1);
+  if (whole) { x0 = -1; y0 = -1; x1 = 1; y1 = 1; }
+  x0 = Math.max(-1, x0 - mx); x1 = Math.min(1, x1 + mx); y0 = Math.max(-1, y0 - my); y1 = Math.min(1, y1 + my);
+  const pos = deferred.quad.geometry.getAttribute('position');
+  // PlaneGeometry's corners: top left, top right, bottom left, bottom right.
+  pos.setXY(0, x0, y1); pos.setXY(1, x1, y1); pos.setXY(2, x0, y0); pos.setXY(3, x1, y0);
+  pos.needsUpdate = true;
+}
+
+// Whether the full-screen pass can draw the surface now: builds what it needs, draws the
+// per-pixel buffer again when the view changed, and uploads the values when they changed.
+function deferredReady() {
+  if (deferred.failed) return false;
+  const caps = renderer.capabilities;
+  const w0 = deferred.width;
+  const fits = app.triangles.length / 3 < (1 << 24) && Math.ceil(app.triangles.length / 3 / w0) <= caps.maxTextureSize;
+  if (!caps.isWebGL2 || !renderer.extensions.has('EXT_color_buffer_float') || !fits) {
+    deferred.failed = true;
+    return false;
+  }
+  try {
+    deferredMesh();
+    renderer.getDrawingBufferSize(bufferSize);
+    const w = bufferSize.x, h = bufferSize.y;
+    if (!deferred.target) {
+      deferred.target = new THREE.WebGLRenderTarget(w, h, {
+        count: 2, type: THREE.FloatType, format: THREE.RGBAFormat,
+        minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter, depthBuffer: true,
+        depthTexture: new THREE.DepthTexture(w, h, THREE.FloatType),
+      });
+    } else if (deferred.target.width !== w || deferred.target.height !== h) {
+      deferred.target.setSize(w, h);
+    }
+    const attr = meshObj.geometry.getAttribute('scalar');
+    if (deferred.valuesAt !== attr.version) {
+      const tv = deferred.vals.image.data, a = attr.array, tri = app.triangles, m = tri.length / 3;
+      for (let t = 0; t < m; t++) {
+        tv[4 * t] = a[tri[3 * t]]; tv[4 * t + 1] = a[tri[3 * t + 1]]; tv[4 * t + 2] = a[tri[3 * t + 2]];
+      }
+      deferred.vals.needsUpdate = true;
+      deferred.valuesAt = attr.version;
+    }
+    camera.updateMatrixWorld();
+    const u = fieldMaterial.uniforms;
+    const key = [...camera.matrixWorldInverse.elements, ...camera.projectionMatrix.elements, w, h, fieldMaterial.side,
+      meshObj.id, u.ambient.value, u.diffuse.value, u.lightDir.value.x, u.lightDir.value.y, u.lightDir.value.z].join(',');
+    if (key !== deferred.key) {
+      if (gMaterial.side !== fieldMaterial.side) { gMaterial.side = fieldMaterial.side; gMaterial.needsUpdate = true; }
+      const keepColor = new THREE.Color(); renderer.getClearColor(keepColor);
+      const keepAlpha = renderer.getClearAlpha();
+      renderer.setClearColor(0x000000, 0);
+      renderer.setRenderTarget(deferred.target);
+      renderer.render(deferred.gScene, camera);
+      renderer.setRenderTarget(null);
+      renderer.setClearColor(keepColor, keepAlpha);
+      deferred.key = key;
+      fitQuad();
+      window.__gbufferDraws = (window.__gbufferDraws || 0) + 1;
+    }
+    const r = resolveMaterial.uniforms;
+    r.g0.value = deferred.target.textures[0]; r.g1.value = deferred.target.textures[1];
+    r.gDepth.value = deferred.target.depthTexture;
+    r.vals.value = deferred.vals;
+    return true;
+  } catch (e) {
+    console.warn('deferred shading off:', e);
+    deferred.failed = true;
+    return false;
+  }
+}
 
 // A point cloud: one round splat per point, coloured by the same colour map texture and
 // range (the uniforms are shared with the surface's material), a disc of radius
