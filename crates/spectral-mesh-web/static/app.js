@@ -354,12 +354,12 @@ function deferredMesh() {
   if (deferred.meshId === meshObj.id) return;
   const m = app.triangles.length / 3;
   const pos = new Float32Array(9 * m), nrm = new Float32Array(9 * m);
-  for (let t = 0; t < m; t++) {
+  for (let f = 0; f < m; f++) {
     for (let c = 0; c < 3; c++) {
-      const v = app.triangles[3 * t + c];
+      const v = app.triangles[3 * f + c];
       for (let j = 0; j < 3; j++) {
-        pos[9 * t + 3 * c + j] = app.positions[3 * v + j];
-        nrm[9 * t + 3 * c + j] = app.normals[3 * v + j];
+        pos[9 * f + 3 * c + j] = app.positions[3 * v + j];
+        nrm[9 * f + 3 * c + j] = app.normals[3 * v + j];
       }
     }
   }
@@ -426,8 +426,8 @@ function deferredReady() {
     const attr = meshObj.geometry.getAttribute('scalar');
     if (deferred.valuesAt !== attr.version) {
       const tv = deferred.vals.image.data, a = attr.array, tri = app.triangles, m = tri.length / 3;
-      for (let t = 0; t < m; t++) {
-        tv[4 * t] = a[tri[3 * t]]; tv[4 * t + 1] = a[tri[3 * t + 1]]; tv[4 * t + 2] = a[tri[3 * t + 2]];
+      for (let f = 0; f < m; f++) {
+        tv[4 * f] = a[tri[3 * f]]; tv[4 * f + 1] = a[tri[3 * f + 1]]; tv[4 * f + 2] = a[tri[3 * f + 2]];
       }
       deferred.vals.needsUpdate = true;
       deferred.valuesAt = attr.version;
