@@ -1,5 +1,6 @@
-//! Linear algebra: the sparse matrix type, sparse Cholesky, and the generalized
-//! symmetric eigensolvers (dense for small problems, block shift-invert for large ones).
+//! Linear algebra: the sparse matrix type, sparse Cholesky (with its fill-reducing
+//! ordering), and the generalized symmetric eigensolvers (dense for small problems, block
+//! shift-invert for large ones).
 //! This is the only module that names `faer`.
 
 pub mod cholesky;
