@@ -172,6 +172,35 @@ const cmapTexture = new THREE.DataTexture(lut(null), 256, 1, THREE.RGBAFormat);
 cmapTexture.magFilter = THREE.LinearFilter; cmapTexture.minFilter = THREE.LinearFilter;
 cmapTexture.needsUpdate = true;
 
+// The colour of the field at a pixel: the one rule of the direct pass (fieldMaterial) and
+// the deferred one (resolveMaterial). The colour map at the value's place in [lo, hi],
+// grey for a geodesic distance's unreachable parts (+inf), the shade `vL`, and the
+// description's level values lo + (i + 1/2) (hi - lo) / nLevels, i < nLevels, drawn as
+// lines lineWidth pixels wide (unshaded, as the pictures draw them); `fw` is the value's
+// rate of change per pixel (its fwidth).
+const FIELD_COLOUR_GLSL = `
+    uniform sampler2D cmap;
+    uniform float lo, hi, nLevels, showLevels, hasField, lineWidth;
+    uniform vec3 lineColor;
+    vec3 fieldColour(float vS, float vL, float fw) {
+      if (hasField < 0.5) return vec3(0.8) * vL;
+      float u = hi > lo ? (vS - lo) / (hi - lo) : 0.5;
+      vec3 c = texture2D(cmap, vec2(clamp(u, 0.0, 1.0) * (255.0 / 256.0) + 0.5 / 256.0, 0.5)).rgb;
+      if (vS > 1e38) c = vec3(0.55);
+      c *= vL;
+      if (showLevels > 0.5 && nLevels > 0.5 && hi > lo) {
+        float x = u * nLevels - 0.5;
+        float r = floor(x + 0.5);
+        float w = max(fw * nLevels / (hi - lo), 1e-6);
+        float px = abs(x - r) / w;
+        float hw = 0.5 * lineWidth;
+        float line = (r >= 0.0 && r <= nLevels - 1.0) ? 1.0 - smoothstep(hw - 0.5, hw + 0.5, px) : 0.0;
+        c = mix(c, lineColor, line);
+      }
+      return c;
+    }
+`;
+
 const fieldMaterial = new THREE.ShaderMaterial({
   uniforms: {
     cmap: { value: cmapTexture }, lo: { value: 0 }, hi: { value: 1 },
@@ -194,35 +223,11 @@ const fieldMaterial = new THREE.ShaderMaterial({
       vL = ambient + diffuse * abs(dot(normalize(normalMatrix * normal), lightDir));
       gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
     }`,
-  fragmentShader: `
-    uniform sampler2D cmap;
-    uniform float lo, hi, nLevels, showLevels, hasField, lineWidth;
-    uniform vec3 lineColor;
+  fragmentShader: FIELD_COLOUR_GLSL + `
     varying float vS;
     varying float vL;
     void main() {
-      vec3 c = vec3(0.8);
-      if (hasField > 0.5) {
-        float u = hi > lo ? (vS - lo) / (hi - lo) : 0.5;
-        c = texture2D(cmap, vec2(clamp(u, 0.0, 1.0) * (255.0 / 256.0) + 0.5 / 256.0, 0.5)).rgb;
-        // A geodesic distance's unreachable parts (+inf): grey.
-        if (vS > 1e38) c = vec3(0.55);
-        c *= vL;
-        if (showLevels > 0.5 && nLevels > 0.5 && hi > lo) {
-          // The description's level values: lo + (i + 1/2) (hi - lo) / nLevels, i < nLevels,
-          // lines lineWidth pixels wide (unshaded, as the pictures draw them).
-          float x = u * nLevels - 0.5;
-          float r = floor(x + 0.5);
-          float w = max(fwidth(x), 1e-6);
-          float px = abs(x - r) / w;
-          float hw = 0.5 * lineWidth;
-          float line = (r >= 0.0 && r <= nLevels - 1.0) ? 1.0 - smoothstep(hw - 0.5, hw + 0.5, px) : 0.0;
-          c = mix(c, lineColor, line);
-        }
-      } else {
-        c *= vL;
-      }
-      gl_FragColor = vec4(c, 1.0);
+      gl_FragColor = vec4(fieldColour(vS, vL, fwidth(vS)), 1.0);
     }`,
   side: THREE.DoubleSide,
   polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
@@ -288,12 +293,9 @@ const resolveMaterial = new THREE.ShaderMaterial({
   },
   vertexShader: `
     void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }`,
-  fragmentShader: `
+  fragmentShader: FIELD_COLOUR_GLSL + `
     uniform highp sampler2D g0, g1, gDepth, vals;
-    uniform sampler2D cmap;
     uniform int texWidth;
-    uniform float lo, hi, nLevels, showLevels, hasField, lineWidth;
-    uniform vec3 lineColor;
     void main() {
       ivec2 p = ivec2(gl_FragCoord.xy);
       vec4 a = texelFetch(g0, p, 0);
@@ -303,30 +305,11 @@ const resolveMaterial = new THREE.ShaderMaterial({
       float s0 = s.x, s1 = s.y, s2 = s.z;
       float vS = (1.0 - a.y - a.z) * s0 + a.y * s1 + a.z * s2;
       float vL = a.w;
-      vec3 c = vec3(0.8);
-      if (hasField > 0.5) {
-        float u = hi > lo ? (vS - lo) / (hi - lo) : 0.5;
-        c = texture(cmap, vec2(clamp(u, 0.0, 1.0) * (255.0 / 256.0) + 0.5 / 256.0, 0.5)).rgb;
-        if (vS > 1e38) c = vec3(0.55);
-        c *= vL;
-        if (showLevels > 0.5 && nLevels > 0.5 && hi > lo) {
-          // fwidth of x = u nLevels - 1/2 as the surface's own pass would take it: the
-          // stored screen derivatives of the barycentric coordinates times the values.
-          vec4 d = texelFetch(g1, p, 0);
-          float k = nLevels / (hi - lo);
-          float dx = k * ((s1 - s0) * d.x + (s2 - s0) * d.y);
-          float dy = k * ((s1 - s0) * d.z + (s2 - s0) * d.w);
-          float x = u * nLevels - 0.5;
-          float r = floor(x + 0.5);
-          float w = max(abs(dx) + abs(dy), 1e-6);
-          float px = abs(x - r) / w;
-          float hw = 0.5 * lineWidth;
-          float line = (r >= 0.0 && r <= nLevels - 1.0) ? 1.0 - smoothstep(hw - 0.5, hw + 0.5, px) : 0.0;
-          c = mix(c, lineColor, line);
-        }
-      } else {
-        c *= vL;
-      }
+      // The value's change per pixel, as fwidth would take it on the surface: the stored
+      // screen derivatives of the barycentric coordinates times the values' differences.
+      vec4 d = texelFetch(g1, p, 0);
+      float fw = abs((s1 - s0) * d.x + (s2 - s0) * d.y) + abs((s1 - s0) * d.z + (s2 - s0) * d.w);
+      vec3 c = fieldColour(vS, vL, fw);
       gl_FragColor = vec4(c, 1.0);
       gl_FragDepth = texelFetch(gDepth, p, 0).r;
     }`,
