@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use spectral_mesh::analysis::{Analysis, Field};
 use spectral_mesh_render::Colormap;
-use spectral_mesh_render::figure::{Canvas, Figure, FigureOptions, field_text};
+use spectral_mesh_render::figure::{Canvas, Figure, FigureOptions, field_text, labels_text};
 use spectral_mesh_render::raster::View;
 
 use crate::output::{extension, write};
@@ -73,16 +73,6 @@ impl FigureArgs {
             colorbar: !self.no_colorbar,
         }
     }
-}
-
-/// A segmentation's labels as text, one integer per line.
-pub fn labels_text(labels: &[usize]) -> String {
-    let mut s = String::with_capacity(labels.len() * 3);
-    for l in labels {
-        s.push_str(&l.to_string());
-        s.push('\n');
-    }
-    s
 }
 
 /// Writes a field of `an` to each of `outs` by extension (.png, .wrl/.vrml, .ply, .txt)

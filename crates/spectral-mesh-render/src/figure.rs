@@ -37,6 +37,9 @@ pub struct Figure<'a> {
     /// Explicit per-vertex colours (RGB in `[0, 1]`) replacing the colour map, e.g. for
     /// categorical labels; level sets and the colour bar are then not drawn.
     pub colors: Option<Vec<[f32; 3]>>,
+    /// A segmentation's labels (one per vertex): its `.txt` holds them as integers, as
+    /// every face writes a segmentation.
+    pub labels: Option<&'a [usize]>,
     /// How to draw.
     pub options: FigureOptions,
     /// What the description says of the field (range, marks, words of the colour bar).
@@ -87,6 +90,7 @@ impl<'a> Figure<'a> {
             critical,
             critical_hidden,
             colors: None,
+            labels: None,
             options,
             point_radius: None,
             summary,
@@ -204,6 +208,7 @@ impl<'a> Figure<'a> {
                 };
                 let mut fig = Self::new(mesh, &field.values, source, options)?;
                 fig.colors = Some(crate::colormap::label_colors(labels));
+                fig.labels = Some(labels);
                 fig.summary.segments = Some(labels.iter().max().map_or(0, |m| m + 1));
                 fig
             }
@@ -330,9 +335,12 @@ impl<'a> Figure<'a> {
     }
 
     /// The field, one value per line at full precision (NumPy's `loadtxt` reads it back
-    /// bit for bit).
+    /// bit for bit); a segmentation's labels, one integer per line.
     pub fn txt(&self) -> Vec<u8> {
-        field_text(self.field).into_bytes()
+        match self.labels {
+            Some(labels) => labels_text(labels).into_bytes(),
+            None => field_text(self.field).into_bytes(),
+        }
     }
 
     /// The output of `format` (`png`, `wrl`/`vrml`, `ply`, `txt`).
@@ -378,6 +386,16 @@ fn point_ply(points: &[[f64; 3]], colors: &[[u8; 3]], values: &[f64]) -> Vec<u8>
         );
     }
     s.into_bytes()
+}
+
+/// A segmentation's labels as text, one integer per line.
+pub fn labels_text(labels: &[usize]) -> String {
+    let mut s = String::with_capacity(labels.len() * 3);
+    for l in labels {
+        s.push_str(&l.to_string());
+        s.push('\n');
+    }
+    s
 }
 
 /// A per-vertex field as text: one value per line, shortest round-trip form.
@@ -497,5 +515,10 @@ mod tests {
         let s = an.field(&seg).unwrap();
         let fig = Figure::of_field(an.mesh(), &s, small).unwrap();
         assert!(fig.critical.is_none() && fig.colors.is_some() && fig.options.levels == 0);
+        // A segmentation's .txt is its labels as integers, as the CLI writes them.
+        let labels = s.labels.as_deref().unwrap();
+        let txt = String::from_utf8(fig.bytes("txt").unwrap()).unwrap();
+        let back: Vec<usize> = txt.lines().map(|l| l.parse().unwrap()).collect();
+        assert_eq!(back, labels);
     }
 }
