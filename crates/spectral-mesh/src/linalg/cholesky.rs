@@ -676,22 +676,7 @@ mod tests {
         let m = 260;
         let n = m * m;
         assert!(n >= ordering::MIN_ROWS);
-        let mut t = Vec::new();
-        for i in 0..m {
-            for j in 0..m {
-                let v = i * m + j;
-                t.push((v, v, 4.5));
-                if i + 1 < m {
-                    t.push((v + m, v, -1.0));
-                    t.push((v, v + m, -1.0));
-                }
-                if j + 1 < m {
-                    t.push((v + 1, v, -1.0));
-                    t.push((v, v + 1, -1.0));
-                }
-            }
-        }
-        let a = SparseMatrix::from_triplets(n, n, &t);
+        let a = ordering::tests::grid_matrix(m, 4.5);
         let x_true: Vec<f64> = (0..n).map(|i| (0.001 * i as f64).sin()).collect();
         let b = a.mul_vec(&x_true);
         let c = SparseCholesky::new(&a).unwrap();

@@ -402,16 +402,22 @@ pub(crate) fn nested_dissection(a: &SparseMatrix) -> Vec<usize> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// The 5-point Laplacian of an `m x m` grid plus the identity.
     fn grid(m: usize) -> SparseMatrix {
+        grid_matrix(m, 5.0)
+    }
+
+    /// The `m x m` grid matrix with `diagonal` on the diagonal and -1 between grid
+    /// neighbours (vertex `i m + j` at row `i`, column `j`).
+    pub(crate) fn grid_matrix(m: usize, diagonal: f64) -> SparseMatrix {
         let id = |i: usize, j: usize| i * m + j;
         let mut t = Vec::new();
         for i in 0..m {
             for j in 0..m {
-                t.push((id(i, j), id(i, j), 5.0));
+                t.push((id(i, j), id(i, j), diagonal));
                 if i + 1 < m {
                     t.push((id(i + 1, j), id(i, j), -1.0));
                     t.push((id(i, j), id(i + 1, j), -1.0));
