@@ -4,8 +4,6 @@
 //! energies (times), every `subsample_step`-th column kept, each column divided by its
 //! `L2(M)` norm `sqrt(d^T M d)`.
 
-use std::str::FromStr;
-
 use super::CorrespondenceError;
 use crate::linalg::dense_ops::gram;
 use crate::linalg::sym_spmm;
@@ -30,6 +28,9 @@ pub enum DescriptorKind {
 }
 
 impl DescriptorKind {
+    /// Every kind, in the order of the names.
+    pub const ALL: [Self; 2] = [Self::Wks, Self::Hks];
+
     /// The name users type (`wks`, `hks`).
     pub fn name(self) -> &'static str {
         match self {
@@ -39,22 +40,11 @@ impl DescriptorKind {
     }
 }
 
-impl std::fmt::Display for DescriptorKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for DescriptorKind {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "wks" => Ok(DescriptorKind::Wks),
-            "hks" => Ok(DescriptorKind::Hks),
-            _ => Err(format!("unknown descriptor '{s}': expected wks or hks")),
-        }
-    }
-}
+crate::io::names::names_as_text!(
+    DescriptorKind,
+    aliases: &[],
+    unknown: |s| format!("unknown descriptor '{s}': expected wks or hks")
+);
 
 /// Parameters of the descriptors. `Default`: WKS, 100 energies, every 5th kept.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -8,9 +8,6 @@
 //! orthogonal map): its functional map carries functions on shape 2 to shape 1 and its
 //! point map is `p2p_12`. [`ZoomoutDirection`] chooses one direction or both.
 
-use std::fmt;
-use std::str::FromStr;
-
 use super::pointwise::{fmap_to_p2p_hinted, p2p_to_fmap};
 use super::{CorrespondenceError, FunctionalMap, truncate};
 use crate::spectral::BasisView;
@@ -54,22 +51,14 @@ impl ZoomoutDirection {
     }
 }
 
-impl fmt::Display for ZoomoutDirection {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for ZoomoutDirection {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let s = s.trim().to_ascii_lowercase();
-        Self::ALL
-            .into_iter()
-            .find(|d| d.name() == s)
-            .ok_or_else(|| format!("unknown ZoomOut direction '{s}': use forward, reverse or both"))
-    }
-}
+crate::io::names::names_as_text!(
+    ZoomoutDirection,
+    aliases: &[],
+    unknown: |s| format!(
+        "unknown ZoomOut direction '{}': use forward, reverse or both",
+        s.trim().to_ascii_lowercase()
+    )
+);
 
 /// One refined direction: the functional map and its point map.
 #[derive(Debug, Clone, PartialEq)]

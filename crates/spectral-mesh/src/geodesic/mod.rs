@@ -36,7 +36,7 @@ use crate::linalg::cholesky::CholeskyAnalysis;
 use crate::linalg::{CholeskyError, SparseCholesky, SparseMatrix};
 use crate::mesh::topology::UnionFind;
 use crate::mesh::{Mesh, PointCloud};
-use crate::operators::robust::{Gluing, MollifyMean, RobustError, RobustParams, robust_with_faces};
+use crate::operators::robust::{MollifyMean, RobustError, RobustParams, Soup, robust_with_faces};
 use crate::operators::{Laplacian, Operators, PointCloudParams, point_cloud_laplacian};
 use cloud::TangentGradient;
 use triangles::FaceFrames;
@@ -73,6 +73,9 @@ pub enum Convention {
 }
 
 impl Convention {
+    /// Every convention, in the order of the names.
+    pub const ALL: [Self; 2] = [Self::Crane, Self::Potpourri3d];
+
     /// The name users type (`crane`, `potpourri3d`).
     pub fn name(self) -> &'static str {
         match self {
@@ -82,24 +85,15 @@ impl Convention {
     }
 }
 
-impl std::fmt::Display for Convention {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for Convention {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "crane" | "average" => Ok(Convention::Crane),
-            "potpourri3d" | "geometry-central" | "neumann" => Ok(Convention::Potpourri3d),
-            _ => Err(format!(
-                "unknown heat-method convention '{s}': expected crane or potpourri3d"
-            )),
-        }
-    }
-}
+crate::io::names::names_as_text!(
+    Convention,
+    aliases: &[
+        ("average", Convention::Crane),
+        ("geometry-central", Convention::Potpourri3d),
+        ("neumann", Convention::Potpourri3d),
+    ],
+    unknown: |s| format!("unknown heat-method convention '{s}': expected crane or potpourri3d")
+);
 
 /// Parameters of the heat method. `Default`: `m = 1`, [`Convention::Crane`], the robust
 /// Laplacian's default parameters.
@@ -468,15 +462,7 @@ impl GeodesicSolver {
             } else {
                 MollifyMean::Distinct
             };
-            let (r, faces) = robust_with_faces(
-                mesh.positions(),
-                mesh.triangles(),
-                &params.robust,
-                1.0,
-                Gluing::Angular,
-                mean,
-                true,
-            );
+            let (r, faces) = robust_with_faces(Soup::of_mesh(mesh, &params.robust), mean, true);
             let faces = faces.unwrap_or_default();
             let h = if pp3d {
                 faces.mean_edge_length

@@ -53,6 +53,7 @@
 mod atomic;
 mod field;
 mod lexer;
+pub(crate) mod names;
 mod obj;
 mod off;
 mod ply;

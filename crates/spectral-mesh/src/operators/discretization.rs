@@ -1,11 +1,8 @@
 //! The user's choice of discretization: which stiffness and which mass.
 
-use std::fmt;
-use std::str::FromStr;
-
 use super::mass::{MassKind, mass_matrix};
 use super::point_cloud::{PointCloudParams, point_cloud_laplacian};
-use super::robust::{Gluing, RobustError, RobustParams, robust_from_soup};
+use super::robust::{RobustError, RobustParams, Soup, robust_from_soup, robust_laplacian};
 use super::stiffness::{cotan_stiffness, uniform_laplacian};
 use crate::linalg::SparseMatrix;
 use crate::mesh::{Mesh, PointCloud};
@@ -88,34 +85,26 @@ impl Laplacian {
     }
 }
 
-impl fmt::Display for Laplacian {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Laplacian {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let k = s.trim().to_ascii_lowercase().replace('_', "-");
-        Laplacian::ALL
-            .into_iter()
-            .find(|l| l.name() == k)
-            .or(match k.as_str() {
-                "voronoi" | "barycentric" | "lumped" => Some(Laplacian::VoronoiCot),
-                "linear-fem" | "wfem" => Some(Laplacian::Fem),
-                "mixed" | "meyer" => Some(Laplacian::MixedVoronoi),
-                "graph" | "combinatorial" => Some(Laplacian::Uniform),
-                "tufted" | "intrinsic-delaunay" | "nonmanifold" => Some(Laplacian::Robust),
-                _ => None,
-            })
-            .ok_or_else(|| {
-                format!(
-                    "unknown Laplacian '{s}': expected one of cot, voronoi-cot, fem, mixed-voronoi, uniform, robust"
-                )
-            })
-    }
-}
+crate::io::names::names_as_text!(
+    Laplacian,
+    aliases: &[
+        ("voronoi", Laplacian::VoronoiCot),
+        ("barycentric", Laplacian::VoronoiCot),
+        ("lumped", Laplacian::VoronoiCot),
+        ("linear-fem", Laplacian::Fem),
+        ("wfem", Laplacian::Fem),
+        ("mixed", Laplacian::MixedVoronoi),
+        ("meyer", Laplacian::MixedVoronoi),
+        ("graph", Laplacian::Uniform),
+        ("combinatorial", Laplacian::Uniform),
+        ("tufted", Laplacian::Robust),
+        ("intrinsic-delaunay", Laplacian::Robust),
+        ("nonmanifold", Laplacian::Robust),
+    ],
+    unknown: |s| format!(
+        "unknown Laplacian '{s}': expected one of cot, voronoi-cot, fem, mixed-voronoi, uniform, robust"
+    )
+);
 
 /// The operator pair of one mesh under one discretization.
 #[derive(Debug, Clone)]
@@ -133,13 +122,7 @@ impl Operators {
     /// [`RobustParams`] (see [`Operators::robust`] for others).
     pub fn new(mesh: &Mesh, laplacian: Laplacian) -> Self {
         if laplacian == Laplacian::Robust {
-            let r = robust_from_soup(
-                mesh.positions(),
-                mesh.triangles(),
-                &RobustParams::default(),
-                1.0,
-                Gluing::Angular,
-            );
+            let r = robust_from_soup(Soup::of_mesh(mesh, &RobustParams::default()));
             return Self {
                 laplacian,
                 stiffness: r.stiffness,
@@ -162,14 +145,7 @@ impl Operators {
     /// The robust pair (S, B) of `mesh` with the given parameters
     /// ([`super::robust::robust_laplacian`]); `laplacian` is [`Laplacian::Robust`].
     pub fn robust(mesh: &Mesh, params: &RobustParams) -> Result<Self, RobustError> {
-        params.validate()?;
-        let r = robust_from_soup(
-            mesh.positions(),
-            mesh.triangles(),
-            params,
-            1.0,
-            Gluing::Angular,
-        );
+        let r = robust_laplacian(mesh, params)?;
         Ok(Self {
             laplacian: Laplacian::Robust,
             stiffness: r.stiffness,

@@ -60,7 +60,7 @@ use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 
 use super::robust::{
     DEFAULT_DELAUNAY_TOLERANCE, DEFAULT_MOLLIFY_FACTOR, Gluing, RobustError, RobustParams,
-    RobustStats, robust_from_soup,
+    RobustStats, Soup, robust_from_soup,
 };
 use super::stiffness::assemble_laplacian;
 use crate::linalg::SparseMatrix;
@@ -765,7 +765,13 @@ pub fn point_cloud_laplacian(
         factor = 1.0;
     }
     stats.triangles = soup.len();
-    let r = robust_from_soup(pts, &soup, &params.robust(), factor, gluing);
+    let r = robust_from_soup(Soup {
+        positions: pts,
+        triangles: &soup,
+        params: &params.robust(),
+        factor,
+        gluing,
+    });
     stats.robust = r.stats;
     let tris = soup;
     let mut stiffness = r.stiffness;

@@ -158,13 +158,7 @@ pub fn robust_laplacian(
     params: &RobustParams,
 ) -> Result<RobustLaplacian, RobustError> {
     params.validate()?;
-    Ok(robust_from_soup(
-        mesh.positions(),
-        mesh.triangles(),
-        params,
-        1.0,
-        Gluing::Angular,
-    ))
+    Ok(robust_from_soup(Soup::of_mesh(mesh, params)))
 }
 
 /// How the triangles around an edge are ordered before consecutive ones are glued.
@@ -179,26 +173,38 @@ pub(crate) enum Gluing {
     InterleaveCopies,
 }
 
-/// The robust pipeline on raw arrays, scaled by `factor` (1 for a mesh, 1/3 for the union
-/// of local triangulations of a point cloud). `triangles` must index `positions` and have
-/// three distinct vertices each; `params` must be valid.
-pub(crate) fn robust_from_soup(
-    positions: &[[f64; 3]],
-    triangles: &[[usize; 3]],
-    params: &RobustParams,
-    factor: f64,
-    gluing: Gluing,
-) -> RobustLaplacian {
-    robust_with_faces(
-        positions,
-        triangles,
-        params,
-        factor,
-        gluing,
-        MollifyMean::Distinct,
-        false,
-    )
-    .0
+/// A triangle soup on raw arrays and how the robust pipeline treats it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Soup<'a> {
+    /// Vertex positions.
+    pub positions: &'a [[f64; 3]],
+    /// Triangles indexing `positions`, three distinct vertices each.
+    pub triangles: &'a [[usize; 3]],
+    /// The parameters (valid ones).
+    pub params: &'a RobustParams,
+    /// Scale of the operators: 1 for a mesh, 1/3 for the union of local triangulations of
+    /// a point cloud.
+    pub factor: f64,
+    /// How the triangles around an edge are glued.
+    pub gluing: Gluing,
+}
+
+impl<'a> Soup<'a> {
+    /// The triangles of `mesh`, unscaled, glued by angle.
+    pub fn of_mesh(mesh: &'a Mesh, params: &'a RobustParams) -> Self {
+        Soup {
+            positions: mesh.positions(),
+            triangles: mesh.triangles(),
+            params,
+            factor: 1.0,
+            gluing: Gluing::Angular,
+        }
+    }
+}
+
+/// The robust pipeline on a soup.
+pub(crate) fn robust_from_soup(soup: Soup<'_>) -> RobustLaplacian {
+    robust_with_faces(soup, MollifyMean::Distinct, false).0
 }
 
 /// Which mean edge length sets the mollification margin `delta`.
@@ -228,24 +234,17 @@ pub(crate) struct IntrinsicFaces {
 /// [`robust_from_soup`] with the mollification mean chosen, and the cover's intrinsic
 /// triangulation when `want_faces`.
 pub(crate) fn robust_with_faces(
-    positions: &[[f64; 3]],
-    triangles: &[[usize; 3]],
-    params: &RobustParams,
-    factor: f64,
-    gluing: Gluing,
+    soup: Soup<'_>,
     mean: MollifyMean,
     want_faces: bool,
 ) -> (RobustLaplacian, Option<IntrinsicFaces>) {
     // 6 halfedges per triangle in the cover: 32-bit indices whenever they fit.
-    if triangles.len().saturating_mul(6) < u32::MAX as usize && positions.len() < u32::MAX as usize
+    if soup.triangles.len().saturating_mul(6) < u32::MAX as usize
+        && soup.positions.len() < u32::MAX as usize
     {
-        run::<u32>(
-            positions, triangles, params, factor, gluing, mean, want_faces,
-        )
+        run::<u32>(soup, mean, want_faces)
     } else {
-        run::<usize>(
-            positions, triangles, params, factor, gluing, mean, want_faces,
-        )
+        run::<usize>(soup, mean, want_faces)
     }
 }
 
@@ -298,14 +297,17 @@ struct Cover<I> {
 }
 
 fn run<I: Ix>(
-    positions: &[[f64; 3]],
-    tris: &[[usize; 3]],
-    params: &RobustParams,
-    factor: f64,
-    gluing: Gluing,
+    soup: Soup<'_>,
     mollify_mean: MollifyMean,
     want_faces: bool,
 ) -> (RobustLaplacian, Option<IntrinsicFaces>) {
+    let Soup {
+        positions,
+        triangles: tris,
+        params,
+        factor,
+        gluing,
+    } = soup;
     let n = positions.len();
     let m = tris.len();
     let mut stats = RobustStats {
