@@ -128,6 +128,23 @@ impl Supernodes {
         })
     }
 
+    /// Supernode `s` of the factor values `vals`: its first column, its number of
+    /// columns, its off-diagonal rows, its number of rows and its column-major block.
+    #[inline(always)]
+    fn block<'v>(&self, vals: &'v [f64], s: usize) -> (usize, usize, &[usize], usize, &'v [f64]) {
+        let f = self.begin[s];
+        let size = self.begin[s + 1] - f;
+        let pat = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
+        let nr = size + pat.len();
+        (
+            f,
+            size,
+            pat,
+            nr,
+            &vals[self.val_ptr[s]..self.val_ptr[s] + nr * size],
+        )
+    }
+
     /// Solves `L L^T y = x` in place for a row-major block `x` of `C` columns (permuted).
     /// Off-diagonal rows of small supernodes are visited once per supernode (not once per
     /// column), which matters because those accesses are scattered over `x`. Always
@@ -142,11 +159,7 @@ impl Supernodes {
         let mut top = vec![[0.0; C]; max_size];
         // Forward: L y = x.
         for s in 0..ns {
-            let f = self.begin[s];
-            let size = self.begin[s + 1] - f;
-            let pat = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
-            let nr = size + pat.len();
-            let l = &vals[self.val_ptr[s]..self.val_ptr[s] + nr * size];
+            let (f, size, pat, nr, l) = self.block(vals, s);
             let top = &mut top[..size];
             top.copy_from_slice(&x[f..f + size]);
             for jj in 0..size {
@@ -203,11 +216,7 @@ impl Supernodes {
         }
         // Backward: L^T z = y.
         for s in (0..ns).rev() {
-            let f = self.begin[s];
-            let size = self.begin[s + 1] - f;
-            let pat = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
-            let nr = size + pat.len();
-            let l = &vals[self.val_ptr[s]..self.val_ptr[s] + nr * size];
+            let (f, size, pat, nr, l) = self.block(vals, s);
             let top = &mut top[..size];
             top.copy_from_slice(&x[f..f + size]);
             if size == 1 {
@@ -316,27 +325,42 @@ fn view(a: &SparseMatrix) -> Result<SparseColMatRef<'_, usize, f64>, CholeskyErr
     Ok(SparseColMatRef::new(sym, a.values()))
 }
 
+/// The numeric factor values of `a` on the analysis `symbolic`, by one of faer's numeric
+/// factorizations (`llt` or `ldlt`: the name of its scratch query and of its factorization,
+/// sequential, lower triangle, no regularization), its failure mapped by `$error`.
+macro_rules! factor_values {
+    ($symbolic:expr, $a:expr, $scratch:ident, $factorize:ident, $error:expr) => {{
+        let m = view($a)?;
+        let mut values = vec![0.0; $symbolic.len_val()];
+        let par = Par::Seq;
+        let mut mem = MemBuffer::try_new($symbolic.$scratch::<f64>(par, Default::default()))
+            .map_err(|e| CholeskyError::Internal(format!("{e:?}")))?;
+        $symbolic
+            .$factorize::<f64>(
+                &mut values,
+                m,
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .map_err(|e| $error(format!("{e:?}")))?;
+        values
+    }};
+}
+
 fn numeric(
     symbolic: &SymbolicCholesky<usize>,
     a: &SparseMatrix,
 ) -> Result<Vec<f64>, CholeskyError> {
-    let m = view(a)?;
-    let mut values = vec![0.0; symbolic.len_val()];
-    let par = Par::Seq;
-    let mut mem =
-        MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
-            .map_err(|e| CholeskyError::Internal(format!("{e:?}")))?;
-    symbolic
-        .factorize_numeric_llt::<f64>(
-            &mut values,
-            m,
-            Side::Lower,
-            Default::default(),
-            par,
-            MemStack::new(&mut mem),
-            Default::default(),
-        )
-        .map_err(|e| CholeskyError::NotPositiveDefinite(format!("{e:?}")))?;
+    let values = factor_values!(
+        symbolic,
+        a,
+        factorize_numeric_llt_scratch,
+        factorize_numeric_llt,
+        CholeskyError::NotPositiveDefinite
+    );
     if values.iter().any(|v| !v.is_finite()) {
         return Err(CholeskyError::NotPositiveDefinite(
             "non-finite factor".to_string(),
@@ -546,28 +570,18 @@ fn ldlt_inertia(
     symbolic: &SymbolicCholesky<usize>,
     a: &SparseMatrix,
 ) -> Result<Inertia, CholeskyError> {
-    let m = view(a)?;
     let SymbolicCholeskyRaw::Supernodal(sn) = symbolic.raw() else {
         return Err(CholeskyError::Internal(
             "the analysis is not supernodal".to_string(),
         ));
     };
-    let mut values = vec![0.0; symbolic.len_val()];
-    let par = Par::Seq;
-    let mut mem =
-        MemBuffer::try_new(symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()))
-            .map_err(|e| CholeskyError::Internal(format!("{e:?}")))?;
-    symbolic
-        .factorize_numeric_ldlt::<f64>(
-            &mut values,
-            m,
-            Side::Lower,
-            Default::default(),
-            par,
-            MemStack::new(&mut mem),
-            Default::default(),
-        )
-        .map_err(|e| CholeskyError::ZeroPivot(format!("{e:?}")))?;
+    let values = factor_values!(
+        symbolic,
+        a,
+        factorize_numeric_ldlt_scratch,
+        factorize_numeric_ldlt,
+        CholeskyError::ZeroPivot
+    );
     let (mut negative, mut positive) = (0usize, 0usize);
     let begin = sn.supernode_begin();
     let end = sn.supernode_end();
@@ -600,19 +614,33 @@ fn ldlt_inertia(
 mod tests {
     use super::*;
 
-    #[test]
-    fn solves_a_small_spd_system() {
-        // 1D Laplacian + identity: tridiagonal SPD.
-        let n = 50;
+    /// The triplets of the `n x n` tridiagonal matrix with `diagonal` on the diagonal and
+    /// -1 beside it.
+    fn tridiagonal(n: usize, diagonal: f64) -> Vec<(usize, usize, f64)> {
         let mut t = Vec::new();
         for i in 0..n {
-            t.push((i, i, 3.0));
+            t.push((i, i, diagonal));
             if i + 1 < n {
                 t.push((i, i + 1, -1.0));
                 t.push((i + 1, i, -1.0));
             }
         }
-        let a = SparseMatrix::from_triplets(n, n, &t);
+        t
+    }
+
+    /// The largest difference between the entries of `x` and `y`.
+    fn max_difference(x: &[f64], y: &[f64]) -> f64 {
+        x.iter()
+            .zip(y)
+            .map(|(u, v)| (u - v).abs())
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn solves_a_small_spd_system() {
+        // 1D Laplacian + identity: tridiagonal SPD.
+        let n = 50;
+        let a = SparseMatrix::from_triplets(n, n, &tridiagonal(n, 3.0));
         let x_true: Vec<f64> = (0..n).map(|i| (i as f64).sin()).collect();
         let b = a.mul_vec(&x_true);
         let c = SparseCholesky::new(&a).unwrap();
@@ -627,22 +655,12 @@ mod tests {
         // A 2D grid Laplacian plus a diagonal: supernodes of several sizes after AMD.
         let side = 23;
         let n = side * side;
-        let mut t = Vec::new();
-        for i in 0..side {
-            for j in 0..side {
-                let p = i * side + j;
-                t.push((p, p, 4.1 + (p % 7) as f64 * 0.01));
-                if i + 1 < side {
-                    t.push((p, p + side, -1.0));
-                    t.push((p + side, p, -1.0));
-                }
-                if j + 1 < side {
-                    t.push((p, p + 1, -1.0));
-                    t.push((p + 1, p, -1.0));
-                }
-            }
-        }
-        let a = SparseMatrix::from_triplets(n, n, &t);
+        let varied: Vec<f64> = (0..n).map(|p| (p % 7) as f64 * 0.01).collect();
+        let a = ordering::tests::grid_matrix(side, 4.1).add_scaled(
+            1.0,
+            &SparseMatrix::diagonal(&varied),
+            1.0,
+        );
         let c = SparseCholesky::new(&a).unwrap();
         assert!(c.layout.is_some(), "the factor should be supernodal");
         // 15 columns: one block of 8, 4, 2 and 1.
@@ -655,11 +673,7 @@ mod tests {
             b.extend(a.mul_vec(&x_true[j * n..(j + 1) * n]));
         }
         c.solve_many_in_place(&mut b, k);
-        let err = b
-            .iter()
-            .zip(&x_true)
-            .map(|(u, v)| (u - v).abs())
-            .fold(0.0, f64::max);
+        let err = max_difference(&b, &x_true);
         assert!(err < 1e-12, "max error {err}");
         // Column by column gives the same bits as the block.
         for j in 0..k {
@@ -681,11 +695,7 @@ mod tests {
         let b = a.mul_vec(&x_true);
         let c = SparseCholesky::new(&a).unwrap();
         let x = c.solve(&b);
-        let err = x
-            .iter()
-            .zip(&x_true)
-            .map(|(p, q)| (p - q).abs())
-            .fold(0.0, f64::max);
+        let err = max_difference(&x, &x_true);
         assert!(err < 1e-10, "max error {err}");
         // Shifted by `shift` the matrix keeps its pattern and has negative eigenvalues
         // (the grid Laplacian's lie in (0, 8); a shift with no round value, so that no
@@ -707,14 +717,7 @@ mod tests {
     fn refactor_reuses_the_analysis_only_for_the_same_pattern() {
         let n = 40;
         let tri = |d: f64, with_far: bool| {
-            let mut t = Vec::new();
-            for i in 0..n {
-                t.push((i, i, d));
-                if i + 1 < n {
-                    t.push((i, i + 1, -1.0));
-                    t.push((i + 1, i, -1.0));
-                }
-            }
+            let mut t = tridiagonal(n, d);
             if with_far {
                 t.push((0, n - 1, -0.5));
                 t.push((n - 1, 0, -0.5));
@@ -730,13 +733,13 @@ mod tests {
         c.refactor(&a2).unwrap();
         assert_eq!(c.pattern, same);
         let x = c.solve(&a2.mul_vec(&x_true));
-        assert!(x.iter().zip(&x_true).all(|(u, v)| (u - v).abs() < 1e-12));
+        assert!(max_difference(&x, &x_true) < 1e-12);
         // A new entry: a fresh analysis, and still the right solution.
         let a3 = tri(3.0, true);
         c.refactor(&a3).unwrap();
         assert_ne!(c.pattern, same);
         let x = c.solve(&a3.mul_vec(&x_true));
-        assert!(x.iter().zip(&x_true).all(|(u, v)| (u - v).abs() < 1e-12));
+        assert!(max_difference(&x, &x_true) < 1e-12);
     }
 
     #[test]
