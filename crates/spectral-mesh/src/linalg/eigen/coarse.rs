@@ -285,17 +285,15 @@ pub(super) fn coarse_start(
 mod tests {
     use super::*;
     use crate::cancel::CancelToken;
+    use crate::linalg::eigen::tests::fem;
     use crate::linalg::eigen::{sparse_generalized_eigen, sparse_generalized_eigen_with};
-    use crate::operators::{Laplacian, Operators};
 
     /// The prolongation reproduces the constants, the Galerkin pencil keeps `S`'s null
     /// space and `B`'s symmetry, and a solve started from the coarse space returns the
     /// pairs of a random start.
     #[test]
     fn the_coarse_start_keeps_constants_and_gives_the_same_pairs() {
-        let mesh = crate::shapes::build_str("sphere:res=4").unwrap(); // 2562 vertices
-        let ops = Operators::new(&mesh, Laplacian::Fem);
-        let (s, b) = (&ops.stiffness, &ops.mass);
+        let (s, b) = &fem("sphere:res=4"); // 2562 vertices
         let n = s.ncols();
         let (agg, m) = aggregate(s);
         assert!(m > 50 && m < n / 4, "{m} aggregates of {n} vertices");
@@ -343,9 +341,7 @@ mod tests {
     /// included: the random part of the start block brings the missing one in.
     #[test]
     fn a_start_that_misses_an_eigenvector_still_finds_it() {
-        let mesh = crate::shapes::build_str("sphere:res=3").unwrap(); // 642 vertices
-        let ops = Operators::new(&mesh, Laplacian::Fem);
-        let (s, b) = (&ops.stiffness, &ops.mass);
+        let (s, b) = &fem("sphere:res=3"); // 642 vertices
         let n = s.ncols();
         let k = 16; // 1 + 3 + 5 + 7 = 16: the l = 3 cluster is the last
         let reference = sparse_generalized_eigen(

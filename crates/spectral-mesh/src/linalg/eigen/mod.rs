@@ -325,6 +325,14 @@ pub(crate) mod tests {
     use super::*;
     use crate::linalg::dense_generalized_eigen;
 
+    /// The linear FEM stiffness and mass of the built-in shape `spec` (e.g.
+    /// `sphere:res=3`).
+    pub(crate) fn fem(spec: &str) -> (SparseMatrix, SparseMatrix) {
+        let mesh = crate::shapes::build_str(spec).unwrap();
+        let ops = crate::operators::Operators::new(&mesh, crate::operators::Laplacian::Fem);
+        (ops.stiffness, ops.mass)
+    }
+
     /// A path graph's Laplacian with a diagonal mass of three different values.
     pub(crate) fn path_laplacian(n: usize) -> (SparseMatrix, SparseMatrix) {
         let mut t = Vec::new();
@@ -344,38 +352,28 @@ pub(crate) mod tests {
         )
     }
 
+    /// The sparse solver's pairs are the dense solver's: a few of a long path, and the
+    /// whole spectrum of a short one (`k = n`).
     #[test]
-    fn matches_dense_on_a_path_graph() {
-        let (s, b) = path_laplacian(300);
-        let (vals, _) = dense_generalized_eigen(&s, &b).unwrap();
-        let opts = SparseEigenOptions {
-            k: 20,
-            ..Default::default()
-        };
-        let r = sparse_generalized_eigen(&s, &b, &opts, &mut |_| {}).unwrap();
-        for j in 0..20 {
-            assert!(
-                (r.values[j] - vals[j]).abs() <= 1e-9 * vals[19],
-                "{j}: {} vs {}",
-                r.values[j],
-                vals[j]
-            );
-        }
-        assert!(r.residuals.iter().all(|&x| x <= 1e-10));
-        assert!(r.orthogonality_error < 1e-10);
-    }
-
-    #[test]
-    fn whole_spectrum_when_k_equals_n() {
-        let (s, b) = path_laplacian(40);
-        let (vals, _) = dense_generalized_eigen(&s, &b).unwrap();
-        let opts = SparseEigenOptions {
-            k: 40,
-            ..Default::default()
-        };
-        let r = sparse_generalized_eigen(&s, &b, &opts, &mut |_| {}).unwrap();
-        for j in 0..40 {
-            assert!((r.values[j] - vals[j]).abs() <= 1e-9 * vals[39]);
+    fn matches_dense_on_path_graphs() {
+        for (n, k) in [(300, 20), (40, 40)] {
+            let (s, b) = path_laplacian(n);
+            let (vals, _) = dense_generalized_eigen(&s, &b).unwrap();
+            let opts = SparseEigenOptions {
+                k,
+                ..Default::default()
+            };
+            let r = sparse_generalized_eigen(&s, &b, &opts, &mut |_| {}).unwrap();
+            for j in 0..k {
+                assert!(
+                    (r.values[j] - vals[j]).abs() <= 1e-9 * vals[k - 1],
+                    "n = {n}, {j}: {} vs {}",
+                    r.values[j],
+                    vals[j]
+                );
+            }
+            assert!(r.residuals.iter().all(|&x| x <= 1e-10), "n = {n}");
+            assert!(r.orthogonality_error < 1e-10, "n = {n}");
         }
     }
 
@@ -503,10 +501,7 @@ pub(crate) mod tests {
     /// `1e-6` the eigenvalues stay within `1e-6 lambda_k` of the tight ones.
     #[test]
     fn a_looser_tolerance_takes_fewer_solves_and_reports_true_residuals() {
-        use crate::operators::{Laplacian, Operators};
-        let mesh = crate::shapes::build_str("irregular-double-torus:res=3").unwrap(); // 6564
-        let ops = Operators::new(&mesh, Laplacian::Fem);
-        let (s, b) = (&ops.stiffness, &ops.mass);
+        let (s, b) = &fem("irregular-double-torus:res=3"); // 6564 vertices
         let k = 50;
         let mut runs = Vec::new();
         for tol in [1e-10, 1e-6, 1e-3] {
@@ -561,11 +556,7 @@ pub(crate) mod tests {
     /// bounded generously; no assertion on speed).
     #[test]
     fn a_solve_is_cancelled() {
-        use crate::operators::{Laplacian, Operators};
-        let ops = Operators::new(
-            &crate::shapes::build_str("sphere:res=5").unwrap(), // 10242 vertices
-            Laplacian::Fem,
-        );
+        let (s, b) = fem("sphere:res=5"); // 10242 vertices
         let opts = SparseEigenOptions {
             k: 300,
             ..Default::default()
@@ -573,14 +564,7 @@ pub(crate) mod tests {
         let early = CancelToken::new();
         early.cancel();
         let mut events = 0;
-        let r = sparse_generalized_eigen_with(
-            &ops.stiffness,
-            &ops.mass,
-            &opts,
-            None,
-            &mut |_| events += 1,
-            &early,
-        );
+        let r = sparse_generalized_eigen_with(&s, &b, &opts, None, &mut |_| events += 1, &early);
         assert!(matches!(r, Err(SparseEigenError::Cancelled)));
         assert_eq!(events, 0, "nothing was factored");
 
@@ -588,14 +572,7 @@ pub(crate) mod tests {
         let remote = token.clone();
         let (tx, rx) = std::sync::mpsc::channel();
         let worker = std::thread::spawn(move || {
-            let r = sparse_generalized_eigen_with(
-                &ops.stiffness,
-                &ops.mass,
-                &opts,
-                None,
-                &mut |_| {},
-                &token,
-            );
+            let r = sparse_generalized_eigen_with(&s, &b, &opts, None, &mut |_| {}, &token);
             let _ = tx.send(r.map(|p| p.values.len()));
         });
         std::thread::sleep(std::time::Duration::from_millis(50));

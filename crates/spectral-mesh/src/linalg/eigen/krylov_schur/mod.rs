@@ -958,7 +958,7 @@ pub(super) fn krylov_schur(
 mod tests {
     use super::*;
     use crate::linalg::eigen::norm1;
-    use crate::operators::{Laplacian, Operators};
+    use crate::linalg::eigen::tests::fem;
 
     /// Locking and the Lanczos step change the work, not the answer: every combination
     /// finds the same pairs on a sphere, with blocks (4) smaller than the multiplicities
@@ -966,9 +966,7 @@ mod tests {
     /// that there are many restarts.
     #[test]
     fn locking_and_lanczos_step_agree_with_the_plain_iteration() {
-        let mesh = crate::shapes::build_str("sphere:res=3").unwrap(); // 642 vertices
-        let ops = Operators::new(&mesh, Laplacian::Fem);
-        let (s, b) = (&ops.stiffness, &ops.mass);
+        let (s, b) = &fem("sphere:res=3"); // 642 vertices
         let shift = -0.01;
         let chol = SparseCholesky::new(&s.add_scaled(1.0, b, -shift)).unwrap();
         let pb = Problem {
