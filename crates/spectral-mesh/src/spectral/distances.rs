@@ -69,15 +69,43 @@ pub enum DistanceError {
 /// the limit).
 pub const ALL_PAIRS_LIMIT: usize = 10_000;
 
-fn check_vertex(basis: BasisView<'_>, v: usize) -> Result<(), DistanceError> {
-    if v >= basis.n {
-        Err(DistanceError::VertexOutOfRange {
-            vertex: v,
-            n: basis.n,
-        })
-    } else {
-        Ok(())
+/// `basis` as a view, once each of `vertices` is checked to be one of its vertices.
+fn view_at<'a>(
+    basis: impl Into<BasisView<'a>>,
+    vertices: &[usize],
+) -> Result<BasisView<'a>, DistanceError> {
+    let basis: BasisView<'a> = basis.into();
+    match vertices.iter().find(|&&v| v >= basis.n) {
+        Some(&vertex) => Err(DistanceError::VertexOutOfRange { vertex, n: basis.n }),
+        None => Ok(basis),
     }
+}
+
+/// [`view_at`], with the `k` weights of `weights` for the basis.
+fn weighed_view_at<'a, 'w>(
+    basis: impl Into<BasisView<'a>>,
+    vertices: &[usize],
+    weights: impl Into<Weights<'w>>,
+) -> Result<(BasisView<'a>, std::borrow::Cow<'w, [f64]>), DistanceError> {
+    let basis = view_at(basis, vertices)?;
+    let w = weights.into().of(basis)?;
+    Ok((basis, w))
+}
+
+/// Refuses a diffusion time that is not finite and `>= 0`.
+fn check_time(t: f64) -> Result<(), DistanceError> {
+    if t.is_finite() && t >= 0.0 {
+        Ok(())
+    } else {
+        Err(DistanceError::InvalidTime(t))
+    }
+}
+
+/// The distances of weights `w` from `source` to every vertex.
+fn weighted_from(basis: BasisView<'_>, w: &[f64], source: usize) -> Vec<f64> {
+    let mut d = weighted_sq_from(basis.vectors, basis.n, w, source);
+    d.iter_mut().for_each(|v| *v = v.sqrt());
+    d
 }
 
 /// Squared distances from `source` with per-pair weights `w` on the vectors `x` (column-major
@@ -155,12 +183,8 @@ pub fn distances_from<'a, 'w>(
     source: usize,
     weights: impl Into<Weights<'w>>,
 ) -> Result<Vec<f64>, DistanceError> {
-    let basis: BasisView<'a> = basis.into();
-    check_vertex(basis, source)?;
-    let w = weights.into().of(basis)?;
-    let mut d = weighted_sq_from(basis.vectors, basis.n, &w, source);
-    d.iter_mut().for_each(|v| *v = v.sqrt());
-    Ok(d)
+    let (basis, w) = weighed_view_at(basis, &[source], weights)?;
+    Ok(weighted_from(basis, &w, source))
 }
 
 /// Distances from each of `sources` (one `n`-vector per source), parallel over sources.
@@ -169,18 +193,10 @@ pub fn distances_from_many<'a, 'w>(
     sources: &[usize],
     weights: impl Into<Weights<'w>>,
 ) -> Result<Vec<Vec<f64>>, DistanceError> {
-    let basis: BasisView<'a> = basis.into();
-    for &s in sources {
-        check_vertex(basis, s)?;
-    }
-    let w = weights.into().of(basis)?;
+    let (basis, w) = weighed_view_at(basis, sources, weights)?;
     Ok(sources
         .par_iter()
-        .map(|&s| {
-            let mut d = weighted_sq_from(basis.vectors, basis.n, &w, s);
-            d.iter_mut().for_each(|v| *v = v.sqrt());
-            d
-        })
+        .map(|&s| weighted_from(basis, &w, s))
         .collect())
 }
 
@@ -240,9 +256,7 @@ pub fn green_row<'a, 'w>(
     p: usize,
     weights: impl Into<Weights<'w>>,
 ) -> Result<Vec<f64>, DistanceError> {
-    let basis: BasisView<'a> = basis.into();
-    check_vertex(basis, p)?;
-    let w = weights.into().of(basis)?;
+    let (basis, w) = weighed_view_at(basis, &[p], weights)?;
     let n = basis.n;
     let c: Vec<f64> = w
         .iter()
@@ -258,8 +272,7 @@ pub fn spectral_function<'a, 'w>(
     basis: impl Into<BasisView<'a>>,
     weights: impl Into<Weights<'w>>,
 ) -> Result<Vec<f64>, DistanceError> {
-    let basis: BasisView<'a> = basis.into();
-    let w = weights.into().of(basis)?;
+    let (basis, w) = weighed_view_at(basis, &[], weights)?;
     Ok(weighted_squares(basis.vectors, basis.n, &w, None))
 }
 
@@ -335,8 +348,7 @@ pub fn wfem_diffusion_distances_from<'a>(
     source: usize,
     t: f64,
 ) -> Result<Vec<f64>, DistanceError> {
-    let basis: BasisView<'a> = basis.into();
-    check_vertex(basis, source)?;
+    let basis = view_at(basis, &[source])?;
     wfem_diffusion_distances_with(basis, &mass_times_vectors(basis), source, t)
 }
 
@@ -348,11 +360,8 @@ pub fn wfem_diffusion_distances_with<'a>(
     source: usize,
     t: f64,
 ) -> Result<Vec<f64>, DistanceError> {
-    let basis: BasisView<'a> = basis.into();
-    check_vertex(basis, source)?;
-    if !(t.is_finite() && t >= 0.0) {
-        return Err(DistanceError::InvalidTime(t));
-    }
+    let basis = view_at(basis, &[source])?;
+    check_time(t)?;
     let (n, k) = (basis.n, basis.k());
     assert!(bx.len() >= n * k, "B X holds fewer than k columns");
     let w: Vec<f64> = basis.values.iter().map(|l| (-l * t).exp()).collect();
@@ -367,11 +376,8 @@ pub fn wfem_diffusion_kernel_row<'a>(
     source: usize,
     t: f64,
 ) -> Result<Vec<f64>, DistanceError> {
-    let basis: BasisView<'a> = basis.into();
-    check_vertex(basis, source)?;
-    if !(t.is_finite() && t >= 0.0) {
-        return Err(DistanceError::InvalidTime(t));
-    }
+    let basis = view_at(basis, &[source])?;
+    check_time(t)?;
     let n = basis.n;
     // S_t e_s = B X D_t (X^T B e_s).
     let bs: Vec<f64> = {
