@@ -34,23 +34,29 @@ fn row<const K: usize>(x: &[f64], n: usize, d: usize, i: usize) -> [f64; K] {
     r
 }
 
-fn nearest_kd<const K: usize>(
-    points: &[f64],
+/// One nearest-row search, checked: `m` queries (`m x d`, column-major) among `n` points
+/// (`n x d`), with a guessed point for each query or none.
+#[derive(Clone, Copy)]
+struct Search<'a> {
+    points: &'a [f64],
     n: usize,
-    queries: &[f64],
+    queries: &'a [f64],
     m: usize,
     d: usize,
-    hint: Option<&[usize]>,
-) -> Vec<usize> {
-    let rows: Vec<[f64; K]> = (0..n).map(|i| row::<K>(points, n, d, i)).collect();
+    hint: Option<&'a [usize]>,
+}
+
+fn nearest_kd<const K: usize>(search: Search<'_>) -> Vec<usize> {
+    let (n, m, d) = (search.n, search.m, search.d);
+    let rows: Vec<[f64; K]> = (0..n).map(|i| row::<K>(search.points, n, d, i)).collect();
     let tree: ImmutableKdTree<f64, K> = ImmutableKdTree::new_from_slice(&rows);
     let one = std::num::NonZero::<usize>::MIN;
     (0..m)
         .into_par_iter()
         .with_min_len(256)
         .map(|i| {
-            let q = row::<K>(queries, m, d, i);
-            match hint {
+            let q = row::<K>(search.queries, m, d, i);
+            match search.hint {
                 // The nearest point is no farther than the hinted one: searching within
                 // that distance is exact and prunes far more in many dimensions.
                 Some(h) => {
@@ -69,39 +75,33 @@ fn nearest_kd<const K: usize>(
 /// Leaves of a projection tree hold at most this many rows (at least half as many).
 const LEAF_SIZE: usize = 16;
 
-/// Squared Euclidean distance, summed in eight lanes (the same order on every SIMD
-/// level: no fused operations, so every caller gets the same bits).
+/// The sum of `term(a_i, b_i)`, in eight lanes (the same order on every SIMD level: no
+/// fused operations, so every caller gets the same bits).
 #[inline(always)]
-fn dist2(a: &[f64], b: &[f64]) -> f64 {
+fn lane_sum(a: &[f64], b: &[f64], term: impl Fn(f64, f64) -> f64) -> f64 {
     let mut acc = [0.0f64; 8];
     let (ra, rb) = (a.chunks_exact(8).remainder(), b.chunks_exact(8).remainder());
     for (x, y) in a.chunks_exact(8).zip(b.chunks_exact(8)) {
         for l in 0..8 {
-            let t = x[l] - y[l];
-            acc[l] += t * t;
+            acc[l] += term(x[l], y[l]);
         }
     }
     for (l, (x, y)) in ra.iter().zip(rb).enumerate() {
-        let t = x - y;
-        acc[l] += t * t;
+        acc[l] += term(*x, *y);
     }
     ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
 }
 
-/// Dot product in eight lanes (see [`dist2`]).
+/// Squared Euclidean distance (see [`lane_sum`]).
+#[inline(always)]
+fn dist2(a: &[f64], b: &[f64]) -> f64 {
+    lane_sum(a, b, |x, y| (x - y) * (x - y))
+}
+
+/// Dot product (see [`lane_sum`]).
 #[inline(always)]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0f64; 8];
-    let (ra, rb) = (a.chunks_exact(8).remainder(), b.chunks_exact(8).remainder());
-    for (x, y) in a.chunks_exact(8).zip(b.chunks_exact(8)) {
-        for l in 0..8 {
-            acc[l] += x[l] * y[l];
-        }
-    }
-    for (l, (x, y)) in ra.iter().zip(rb).enumerate() {
-        acc[l] += x * y;
-    }
-    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
+    lane_sum(a, b, |x, y| x * y)
 }
 
 /// A node of a [`ProjectionTree`].
@@ -109,15 +109,19 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 enum Node {
     /// Gathered rows `start..end`.
     Leaf { start: usize, end: usize },
-    /// Rows split by their projection on the unit direction `dirs[dir * d..]`: those of
-    /// `left` project to at most `lo`, those of `right` to at least `hi`.
-    Split {
-        dir: usize,
-        lo: f64,
-        hi: f64,
-        left: usize,
-        right: usize,
-    },
+    /// Rows split by a hyperplane.
+    Split(Split),
+}
+
+/// Rows split by their projection on the unit direction `dirs[dir * d..]`: those of the
+/// node `left` project to at most `lo`, those of `right` to at least `hi`.
+#[derive(Clone, Copy, Debug)]
+struct Split {
+    dir: usize,
+    lo: f64,
+    hi: f64,
+    left: usize,
+    right: usize,
 }
 
 /// A binary space partition of the rows of an `n x d` matrix by hyperplanes through the
@@ -157,19 +161,12 @@ impl Subtree {
                     start: start + row0,
                     end: end + row0,
                 },
-                Node::Split {
-                    dir,
-                    lo,
-                    hi,
-                    left,
-                    right,
-                } => Node::Split {
-                    dir: dir + dir0,
-                    lo,
-                    hi,
-                    left: left + node0,
-                    right: right + node0,
-                },
+                Node::Split(sp) => Node::Split(Split {
+                    dir: sp.dir + dir0,
+                    left: sp.left + node0,
+                    right: sp.right + node0,
+                    ..sp
+                }),
             }));
         self.dirs.extend(other.dirs);
         self.index.extend(other.index);
@@ -234,13 +231,13 @@ fn build(rows: &[f64], d: usize, idx: &mut [usize]) -> Subtree {
     };
     let left = t.append(left, d);
     let right = t.append(right, d);
-    t.nodes[0] = Node::Split {
+    t.nodes[0] = Node::Split(Split {
         dir: 0,
         lo,
         hi,
         left,
         right,
-    };
+    });
     t
 }
 
@@ -336,22 +333,16 @@ impl TreeSearch<'_> {
                         }
                         radius = best.0.sqrt() + self.slack;
                     }
-                    Node::Split {
-                        dir,
-                        lo,
-                        hi,
-                        left,
-                        right,
-                    } => {
-                        let s = dot(q, &t.dirs[dir * d..(dir + 1) * d]);
-                        let (l_lb, r_lb) = (lb.max(s - lo), lb.max(hi - s));
+                    Node::Split(sp) => {
+                        let s = dot(q, &t.dirs[sp.dir * d..(sp.dir + 1) * d]);
+                        let (l_lb, r_lb) = (lb.max(s - sp.lo), lb.max(sp.hi - s));
                         // The nearer side last, to be searched first.
                         if l_lb <= r_lb {
-                            stack.push((right, r_lb));
-                            stack.push((left, l_lb));
+                            stack.push((sp.right, r_lb));
+                            stack.push((sp.left, l_lb));
                         } else {
-                            stack.push((left, l_lb));
-                            stack.push((right, r_lb));
+                            stack.push((sp.left, l_lb));
+                            stack.push((sp.right, r_lb));
                         }
                     }
                 }
@@ -369,20 +360,14 @@ impl TreeSearch<'_> {
 /// largest row norm), so pruning never drops a row the exhaustive search would choose.
 /// Both cores: runs of queries in parallel, in the order of their hints when given (rows
 /// near each other in the tree, for the caches).
-fn nearest_tree(
-    points: &[f64],
-    n: usize,
-    queries: &[f64],
-    m: usize,
-    d: usize,
-    hint: Option<&[usize]>,
-) -> Vec<usize> {
+fn nearest_tree(search: Search<'_>) -> Vec<usize> {
+    let (n, m, d) = (search.n, search.m, search.d);
     if m == 0 {
         return Vec::new();
     }
     let (tree, qrows) = rayon::join(
-        || ProjectionTree::new(points, n, d),
-        || row_major(queries, m, d),
+        || ProjectionTree::new(search.points, n, d),
+        || row_major(search.queries, m, d),
     );
     let max_norm = |x: &[f64]| {
         x.chunks_exact(d)
@@ -391,7 +376,7 @@ fn nearest_tree(
             .sqrt()
     };
     let slack = 1e-12 * (max_norm(&tree.rows) + max_norm(&qrows)) + f64::MIN_POSITIVE;
-    let mut jobs: Vec<(usize, usize)> = match hint {
+    let mut jobs: Vec<(usize, usize)> = match search.hint {
         Some(h) => {
             let mut rank = vec![0; n];
             for (p, &i) in tree.index.iter().enumerate() {
@@ -463,10 +448,18 @@ pub fn nearest_rows_hinted(
             "the embedding holds a value that is not finite".into(),
         ));
     }
+    let search = Search {
+        points,
+        n,
+        queries,
+        m,
+        d,
+        hint,
+    };
     Ok(match d {
-        0..=8 => nearest_kd::<8>(points, n, queries, m, d, hint),
-        9..=KD_TREE_MAX_DIM => nearest_kd::<KD_TREE_MAX_DIM>(points, n, queries, m, d, hint),
-        _ => nearest_tree(points, n, queries, m, d, hint),
+        0..=8 => nearest_kd::<8>(search),
+        9..=KD_TREE_MAX_DIM => nearest_kd::<KD_TREE_MAX_DIM>(search),
+        _ => nearest_tree(search),
     })
 }
 
