@@ -27,23 +27,11 @@ pub enum DescriptorKind {
     Hks,
 }
 
-impl DescriptorKind {
-    /// Every kind, in the order of the names.
-    pub const ALL: [Self; 2] = [Self::Wks, Self::Hks];
-
-    /// The name users type (`wks`, `hks`).
-    pub fn name(self) -> &'static str {
-        match self {
-            DescriptorKind::Wks => "wks",
-            DescriptorKind::Hks => "hks",
-        }
-    }
-}
-
 crate::io::names::names_as_text!(
     DescriptorKind,
-    aliases: &[],
-    unknown: |s| format!("unknown descriptor '{s}': expected wks or hks")
+    names: [Wks => "wks", Hks => "hks"],
+    aliases: [],
+    unknown: |s| format!("unknown descriptor '{s}': expected wks or hks"),
 );
 
 /// Parameters of the descriptors. `Default`: WKS, 100 energies, every 5th kept.

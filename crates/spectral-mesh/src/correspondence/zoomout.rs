@@ -28,18 +28,6 @@ pub enum ZoomoutDirection {
 }
 
 impl ZoomoutDirection {
-    /// Every direction, in the order of the names.
-    pub const ALL: [Self; 3] = [Self::Forward, Self::Reverse, Self::Both];
-
-    /// The name users type (`forward`, `reverse`, `both`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Forward => "forward",
-            Self::Reverse => "reverse",
-            Self::Both => "both",
-        }
-    }
-
     /// True when the forward map `p2p_21` is refined.
     pub fn forward(self) -> bool {
         matches!(self, Self::Forward | Self::Both)
@@ -53,11 +41,12 @@ impl ZoomoutDirection {
 
 crate::io::names::names_as_text!(
     ZoomoutDirection,
-    aliases: &[],
+    names: [Forward => "forward", Reverse => "reverse", Both => "both"],
+    aliases: [],
     unknown: |s| format!(
         "unknown ZoomOut direction '{}': use forward, reverse or both",
         s.trim().to_ascii_lowercase()
-    )
+    ),
 );
 
 /// One refined direction: the functional map and its point map.

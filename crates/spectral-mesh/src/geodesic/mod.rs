@@ -72,27 +72,11 @@ pub enum Convention {
     Potpourri3d,
 }
 
-impl Convention {
-    /// Every convention, in the order of the names.
-    pub const ALL: [Self; 2] = [Self::Crane, Self::Potpourri3d];
-
-    /// The name users type (`crane`, `potpourri3d`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Convention::Crane => "crane",
-            Convention::Potpourri3d => "potpourri3d",
-        }
-    }
-}
-
 crate::io::names::names_as_text!(
     Convention,
-    aliases: &[
-        ("average", Convention::Crane),
-        ("geometry-central", Convention::Potpourri3d),
-        ("neumann", Convention::Potpourri3d),
-    ],
-    unknown: |s| format!("unknown heat-method convention '{s}': expected crane or potpourri3d")
+    names: [Crane => "crane", Potpourri3d => "potpourri3d"],
+    aliases: [Crane => ["average"], Potpourri3d => ["geometry-central", "neumann"]],
+    unknown: |s| format!("unknown heat-method convention '{s}': expected crane or potpourri3d"),
 );
 
 /// Parameters of the heat method. `Default`: `m = 1`, [`Convention::Crane`], the robust

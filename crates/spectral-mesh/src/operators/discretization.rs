@@ -33,29 +33,6 @@ pub enum Laplacian {
 }
 
 impl Laplacian {
-    /// Every discretization, in a stable order.
-    pub const ALL: [Laplacian; 6] = [
-        Laplacian::Cot,
-        Laplacian::VoronoiCot,
-        Laplacian::Fem,
-        Laplacian::MixedVoronoi,
-        Laplacian::Uniform,
-        Laplacian::Robust,
-    ];
-
-    /// The name users type (`cot`, `voronoi-cot`, `fem`, `mixed-voronoi`, `uniform`,
-    /// `robust`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Laplacian::Cot => "cot",
-            Laplacian::VoronoiCot => "voronoi-cot",
-            Laplacian::Fem => "fem",
-            Laplacian::MixedVoronoi => "mixed-voronoi",
-            Laplacian::Uniform => "uniform",
-            Laplacian::Robust => "robust",
-        }
-    }
-
     /// The mass matrix this discretization uses.
     ///
     /// For [`Laplacian::Robust`] this is [`MassKind::Barycentric`] in kind only: the lumping
@@ -87,23 +64,20 @@ impl Laplacian {
 
 crate::io::names::names_as_text!(
     Laplacian,
-    aliases: &[
-        ("voronoi", Laplacian::VoronoiCot),
-        ("barycentric", Laplacian::VoronoiCot),
-        ("lumped", Laplacian::VoronoiCot),
-        ("linear-fem", Laplacian::Fem),
-        ("wfem", Laplacian::Fem),
-        ("mixed", Laplacian::MixedVoronoi),
-        ("meyer", Laplacian::MixedVoronoi),
-        ("graph", Laplacian::Uniform),
-        ("combinatorial", Laplacian::Uniform),
-        ("tufted", Laplacian::Robust),
-        ("intrinsic-delaunay", Laplacian::Robust),
-        ("nonmanifold", Laplacian::Robust),
+    names: [
+        Cot => "cot", VoronoiCot => "voronoi-cot", Fem => "fem",
+        MixedVoronoi => "mixed-voronoi", Uniform => "uniform", Robust => "robust",
+    ],
+    aliases: [
+        VoronoiCot => ["voronoi", "barycentric", "lumped"],
+        Fem => ["linear-fem", "wfem"],
+        MixedVoronoi => ["mixed", "meyer"],
+        Uniform => ["graph", "combinatorial"],
+        Robust => ["tufted", "intrinsic-delaunay", "nonmanifold"],
     ],
     unknown: |s| format!(
         "unknown Laplacian '{s}': expected one of cot, voronoi-cot, fem, mixed-voronoi, uniform, robust"
-    )
+    ),
 );
 
 /// The operator pair of one mesh under one discretization.
