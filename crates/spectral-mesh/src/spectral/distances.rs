@@ -92,20 +92,19 @@ fn weighed_view_at<'a, 'w>(
     Ok((basis, w))
 }
 
-/// Refuses a diffusion time that is not finite and `>= 0`.
-fn check_time(t: f64) -> Result<(), DistanceError> {
+/// [`view_at`] the vertex `source`, refusing a diffusion time `t` that is not finite and
+/// `>= 0`.
+fn diffusion_view_at<'a>(
+    basis: impl Into<BasisView<'a>>,
+    source: usize,
+    t: f64,
+) -> Result<BasisView<'a>, DistanceError> {
+    let basis = view_at(basis, &[source])?;
     if t.is_finite() && t >= 0.0 {
-        Ok(())
+        Ok(basis)
     } else {
         Err(DistanceError::InvalidTime(t))
     }
-}
-
-/// The distances of weights `w` from `source` to every vertex.
-fn weighted_from(basis: BasisView<'_>, w: &[f64], source: usize) -> Vec<f64> {
-    let mut d = weighted_sq_from(basis.vectors, basis.n, w, source);
-    d.iter_mut().for_each(|v| *v = v.sqrt());
-    d
 }
 
 /// Squared distances from `source` with per-pair weights `w` on the vectors `x` (column-major
@@ -183,8 +182,7 @@ pub fn distances_from<'a, 'w>(
     source: usize,
     weights: impl Into<Weights<'w>>,
 ) -> Result<Vec<f64>, DistanceError> {
-    let (basis, w) = weighed_view_at(basis, &[source], weights)?;
-    Ok(weighted_from(basis, &w, source))
+    Ok(distances_from_many(basis, &[source], weights)?.swap_remove(0))
 }
 
 /// Distances from each of `sources` (one `n`-vector per source), parallel over sources.
@@ -196,7 +194,11 @@ pub fn distances_from_many<'a, 'w>(
     let (basis, w) = weighed_view_at(basis, sources, weights)?;
     Ok(sources
         .par_iter()
-        .map(|&s| weighted_from(basis, &w, s))
+        .map(|&s| {
+            let mut d = weighted_sq_from(basis.vectors, basis.n, &w, s);
+            d.iter_mut().for_each(|v| *v = v.sqrt());
+            d
+        })
         .collect())
 }
 
@@ -348,7 +350,7 @@ pub fn wfem_diffusion_distances_from<'a>(
     source: usize,
     t: f64,
 ) -> Result<Vec<f64>, DistanceError> {
-    let basis = view_at(basis, &[source])?;
+    let basis: BasisView<'a> = basis.into();
     wfem_diffusion_distances_with(basis, &mass_times_vectors(basis), source, t)
 }
 
@@ -360,8 +362,7 @@ pub fn wfem_diffusion_distances_with<'a>(
     source: usize,
     t: f64,
 ) -> Result<Vec<f64>, DistanceError> {
-    let basis = view_at(basis, &[source])?;
-    check_time(t)?;
+    let basis = diffusion_view_at(basis, source, t)?;
     let (n, k) = (basis.n, basis.k());
     assert!(bx.len() >= n * k, "B X holds fewer than k columns");
     let w: Vec<f64> = basis.values.iter().map(|l| (-l * t).exp()).collect();
@@ -376,8 +377,7 @@ pub fn wfem_diffusion_kernel_row<'a>(
     source: usize,
     t: f64,
 ) -> Result<Vec<f64>, DistanceError> {
-    let basis = view_at(basis, &[source])?;
-    check_time(t)?;
+    let basis = diffusion_view_at(basis, source, t)?;
     let n = basis.n;
     // S_t e_s = B X D_t (X^T B e_s).
     let bs: Vec<f64> = {
