@@ -4,6 +4,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 mod fields_util;
+mod spectral_util;
 
 use fields_util::{flat_square, icosphere, torus, union};
 use spectral_mesh::fields::critical_points::critical_points;
@@ -14,6 +15,7 @@ use spectral_mesh::fields::harmonic::{
 use spectral_mesh::mesh::topology::Topology;
 use spectral_mesh::operators::cotan_stiffness;
 use spectral_mesh::{Laplacian, Mesh, Operators};
+use spectral_util::max_diff;
 
 fn params(order: u32, laplacian: Laplacian) -> HarmonicParams {
     HarmonicParams { order, laplacian }
@@ -22,14 +24,6 @@ fn params(order: u32, laplacian: Laplacian) -> HarmonicParams {
 /// The constraint `f(vertex) = value`.
 fn fixed(vertex: usize, value: f64) -> Constraint {
     Constraint { vertex, value }
-}
-
-/// The largest `|a_i - b_i|`.
-fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
 }
 
 #[test]
@@ -93,7 +87,7 @@ fn linear_precision_on_an_irregular_flat_patch() {
             continue; // the graph Laplacian has no linear precision on irregular meshes
         }
         let f = harmonic_map(&m, &on_boundary, &params(1, lap)).unwrap();
-        let err = max_abs_diff(&f, &exact);
+        let err = max_diff(&f, &exact);
         assert!(err < 1e-10, "{lap}: harmonic error {err}");
     }
     // Bi-harmonic: boundary plus its first ring fixed reproduces linear functions (S f = 0
@@ -113,12 +107,12 @@ fn linear_precision_on_an_irregular_flat_patch() {
         Laplacian::Cot,
     ] {
         let f = harmonic_map(&m, &two, &params(2, lap)).unwrap();
-        let err = max_abs_diff(&f, &exact);
+        let err = max_diff(&f, &exact);
         assert!(err < 1e-10, "{lap}: bi-harmonic error {err}");
         // With the boundary alone, the natural boundary condition of the bi-harmonic
         // energy is not satisfied by a linear function: no linear precision.
         let g = harmonic_map(&m, &on_boundary, &params(2, lap)).unwrap();
-        let err_b = max_abs_diff(&g, &exact);
+        let err_b = max_diff(&g, &exact);
         assert!(
             err_b > 1e-6,
             "{lap}: boundary-only bi-harmonic unexpectedly exact"
@@ -150,7 +144,7 @@ fn solver_reuse_is_linear_and_reproduces_constants() {
             .map(|(&vertex, &value)| Constraint { vertex, value })
             .collect();
         let f1 = harmonic_map(&m, &cs, &p).unwrap();
-        let d = max_abs_diff(&f1, &fa);
+        let d = max_diff(&f1, &fa);
         assert!(d < 1e-12);
         // solve_many = columns of solve.
         let mut ab = a.clone();
@@ -174,7 +168,7 @@ fn scale_invariance() {
             for s in [1e-8, 1e8] {
                 let ms = m.map_positions(|p| [p[0] * s, p[1] * s, p[2] * s]).unwrap();
                 let g = harmonic_map(&ms, &cons, &params(order, lap)).unwrap();
-                let d = max_abs_diff(&f, &g);
+                let d = max_diff(&f, &g);
                 assert!(d < 1e-9, "order {order} {lap} scale {s}: {d}");
             }
         }
@@ -195,7 +189,7 @@ fn locality_of_added_constraints() {
     let far = max_change_near(&m, &f2, &f4, &seeds, 100);
     assert!(near > 0.0 && near < far, "near {near}, far {far}");
     // The largest change over everything is the global max |f4 - f2|.
-    let global = max_abs_diff(&f2, &f4);
+    let global = max_diff(&f2, &f4);
     assert_eq!(far, global);
 }
 

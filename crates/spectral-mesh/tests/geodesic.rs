@@ -3,6 +3,8 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod spectral_util;
+
 use spectral_mesh::Laplacian;
 use spectral_mesh::geodesic::{
     CloudGeodesicParams, CloudPoisson, Convention, GeodesicError, GeodesicParams, GeodesicSolver,
@@ -10,6 +12,7 @@ use spectral_mesh::geodesic::{
 };
 use spectral_mesh::mesh::{Mesh, PointCloud, dot, norm, normalize, sub};
 use spectral_mesh::shapes::build_str;
+use spectral_util::max_diff;
 
 fn great_circle(mesh: &Mesh, s: usize) -> Vec<f64> {
     let p0 = normalize(mesh.positions()[s]);
@@ -21,13 +24,6 @@ fn great_circle(mesh: &Mesh, s: usize) -> Vec<f64> {
 
 fn mean_abs_err(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum::<f64>() / a.len() as f64
-}
-
-fn max_abs_err(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
 }
 
 fn solver(mesh: &Mesh, l: Laplacian) -> GeodesicSolver {
@@ -47,7 +43,7 @@ fn sphere_error_falls_with_refinement() {
         errs.push((
             s.mean_edge_length(),
             mean_abs_err(&d, &exact),
-            max_abs_err(&d, &exact),
+            max_diff(&d, &exact),
         ));
     }
     for w in errs.windows(2) {
@@ -96,16 +92,16 @@ fn flat_disk_matches_euclidean_distance() {
         let (ec, en) = (mean_abs_err(&dc, &exact), mean_abs_err(&dn, &exact));
         eprintln!(
             "disk source {s}: mean error crane {ec:.3e} (max {:.3e}), neumann {en:.3e} (max {:.3e}); h = {:.4}",
-            max_abs_err(&dc, &exact),
-            max_abs_err(&dn, &exact),
+            max_diff(&dc, &exact),
+            max_diff(&dn, &exact),
             crane.mean_edge_length()
         );
         assert!(ec < 0.01, "{ec}");
-        assert!(max_abs_err(&dc, &exact) < 0.05);
+        assert!(max_diff(&dc, &exact) < 0.05);
         if s == off {
             // Measured: the average lowers the largest error (1.6e-2 against 2.2e-2 for
             // Neumann alone) but raises the mean one (8.4e-3 against 3.0e-3) here.
-            let (mc, mn) = (max_abs_err(&dc, &exact), max_abs_err(&dn, &exact));
+            let (mc, mn) = (max_diff(&dc, &exact), max_diff(&dn, &exact));
             assert!(
                 mc < mn,
                 "crane max {mc} neumann max {mn} (means {ec}, {en})"
@@ -135,7 +131,7 @@ fn multi_source_is_about_the_minimum() {
     assert!(e < 0.03 * maxd);
     // The block solve equals single solves to rounding.
     let one = s.distance_from_vertex(300).unwrap();
-    assert!(max_abs_err(&one, &singles[1]) < 1e-12 * maxd);
+    assert!(max_diff(&one, &singles[1]) < 1e-12 * maxd);
 }
 
 /// A face point with barycentric (1, 0, 0) is its first vertex; a point inside a face gives
@@ -153,7 +149,7 @@ fn face_point_sources() {
         }])
         .unwrap();
     let vertex = s.distance_from_vertex(tri[0]).unwrap();
-    assert!(max_abs_err(&at_vertex, &vertex) < 1e-12);
+    assert!(max_diff(&at_vertex, &vertex) < 1e-12);
     let b = [0.2, 0.3, 0.5];
     let d = s
         .distance(&[Source::FacePoint { face: f, bary: b }])
@@ -176,7 +172,7 @@ fn face_point_sources() {
             bary: [2.0, 3.0, 5.0],
         }])
         .unwrap();
-    assert!(max_abs_err(&d, &d2) < 1e-12);
+    assert!(max_diff(&d, &d2) < 1e-12);
 }
 
 /// Robust and voronoi-cot agree on an intrinsically Delaunay mesh (the icosphere), and the
@@ -190,7 +186,7 @@ fn robust_equals_voronoi_cot_on_a_delaunay_mesh() {
     let b = solver(&mesh, Laplacian::Robust)
         .distance_from_vertex(5)
         .unwrap();
-    assert!(max_abs_err(&a, &b) < 1e-9, "{}", max_abs_err(&a, &b));
+    assert!(max_diff(&a, &b) < 1e-9, "{}", max_diff(&a, &b));
 }
 
 /// Errors, unreachable components and unused vertices.
@@ -335,7 +331,7 @@ fn cloud_sphere_error_falls_with_density() {
                 .map(|&p| dot(pts[src], p).clamp(-1.0, 1.0).acos())
                 .collect();
             mean += mean_abs_err(d, &exact) / sources.len() as f64;
-            max = max.max(max_abs_err(d, &exact));
+            max = max.max(max_diff(d, &exact));
         }
         eprintln!(
             "cloud sphere n = {n}: h = {:.5}, mean error {mean:.3e}, max error {max:.3e}",
