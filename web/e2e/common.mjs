@@ -77,6 +77,20 @@ export function writeTorusOff(file, nu, nv) {
   return file;
 }
 
+// Loads the built-in shape `shape` (its spec) in `page` with the heat experiment at `k`
+// pairs and waits (at most `timeout` ms) for that field to be drawn.
+export async function loadHeat(page, shape, k, timeout) {
+  const before = await page.evaluate(() => window.__fieldCount || 0);
+  await page.evaluate(([s, kk]) => {
+    document.getElementById('experiment').value = 'heat';
+    document.getElementById('k').value = String(kk);
+    document.getElementById('shape-spec').value = s;
+    document.getElementById('shape-load').click();
+  }, [shape, k]);
+  await page.waitForFunction(([bb, kk]) => (window.__fieldCount || 0) > bb && window.__lastField.header.k === kk
+    && window.__lastField.header.kind === 'heat', [before, k], { timeout });
+}
+
 // What the page tests ask of the page, for the page `getPage()` returns (set in `before`):
 // counts of fields and errors, waiting for the next field or error (at most
 // `fieldTimeout` / `errorTimeout` ms), setting a control's value, and the screen points

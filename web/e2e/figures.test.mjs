@@ -6,7 +6,7 @@ import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { decodePng, openPage, writePyramidOff } from './common.mjs';
+import { decodePng, loadHeat, openPage, writePyramidOff } from './common.mjs';
 
 const BENCH = process.env.SPECTRAL_MESH_WEB_BENCH === '1';
 let page;
@@ -382,21 +382,9 @@ async function tMoves(n) {
   return { test_ms: m('test_ms'), page_ms: m('page_ms'), server_ms: m('server_ms'), all: out.map((x) => Math.round(x.test_ms)) };
 }
 
-async function heatOn(shape, k, timeout) {
-  const b = await fieldCount();
-  await page.evaluate(([s, kk]) => {
-    document.getElementById('experiment').value = 'heat';
-    document.getElementById('k').value = String(kk);
-    document.getElementById('shape-spec').value = s;
-    document.getElementById('shape-load').click();
-  }, [shape, k]);
-  await page.waitForFunction(([bb, kk]) => (window.__fieldCount || 0) > bb && window.__lastField.header.k === kk
-    && window.__lastField.header.kind === 'heat', [b, k], { timeout });
-}
-
 test('latency: input to the frame that shows the new field, 3-torus, k = 200', async () => {
   await page.setViewportSize({ width: 1280, height: 800 });
-  await heatOn('3torus', 200, 600000);
+  await loadHeat(page, '3torus', 200, 600000);
   const n = await page.evaluate(() => window.__lastField.header.n);
   await tMoves(3); // warm
   const r = await tMoves(15);
@@ -405,7 +393,7 @@ test('latency: input to the frame that shows the new field, 3-torus, k = 200', a
 });
 
 test('latency: input to the frame that shows the new field, ~100k vertices, k = 200', { skip: !BENCH }, async () => {
-  await heatOn('torus:res=5', 200, 3600000);
+  await loadHeat(page, 'torus:res=5', 200, 3600000);
   const n = await page.evaluate(() => window.__lastField.header.n);
   await tMoves(3);
   const r = await tMoves(15);

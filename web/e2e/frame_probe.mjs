@@ -8,7 +8,7 @@
 //   PROBE_SHAPE (default torus:res=5), PROBE_K (200), PROBE_MOVES (10), PROBE_ROUNDS (2),
 //   PROBE_MICRO=0 (moves only), PROBE_CONFIGS (the variations timed, comma-separated)
 import fs from 'node:fs';
-import { launch } from './common.mjs';
+import { launch, loadHeat } from './common.mjs';
 
 const URL = process.env.SPECTRAL_MESH_URL;
 if (!URL) { console.error('SPECTRAL_MESH_URL is not set'); process.exit(2); }
@@ -43,15 +43,7 @@ async function openVariant(file) {
   });
   await page.goto(URL);
   await page.waitForFunction(() => (window.__fieldCount || 0) > 0, null, { timeout: 600000 });
-  const before = await page.evaluate(() => window.__fieldCount);
-  await page.evaluate(([s, k]) => {
-    document.getElementById('experiment').value = 'heat';
-    document.getElementById('k').value = String(k);
-    document.getElementById('shape-spec').value = s;
-    document.getElementById('shape-load').click();
-  }, [SHAPE, K]);
-  await page.waitForFunction(([bb, kk]) => (window.__fieldCount || 0) > bb && window.__lastField.header.k === kk
-    && window.__lastField.header.kind === 'heat', [before, K], { timeout: 3600000 });
+  await loadHeat(page, SHAPE, K, 3600000);
   return b;
 }
 

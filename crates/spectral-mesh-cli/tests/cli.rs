@@ -7,19 +7,17 @@ use common::*;
 
 #[test]
 fn harmonic_experiment_writes_the_papers_files_and_a_true_summary() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path();
-    ok_with(
+    let (_dir, _, [out]) = ok_writing(
         "experiment harmonic torus:res=2 --out {} --size 200",
-        &[out],
+        ["out"],
     );
     for i in 1..=3 {
         for ext in ["wrl", "png"] {
-            assert!(dir.path().join(format!("harmonic-map-{i}.{ext}")).is_file());
+            assert!(out.join(format!("harmonic-map-{i}.{ext}")).is_file());
         }
-        let f = values(&dir.path().join(format!("harmonic-field-{i}.txt")));
+        let f = values(&out.join(format!("harmonic-field-{i}.txt")));
         let n: usize = serde_json::from_str::<serde_json::Value>(
-            &std::fs::read_to_string(dir.path().join("summary.json")).unwrap(),
+            &std::fs::read_to_string(out.join("summary.json")).unwrap(),
         )
         .unwrap()["mesh"]["vertices"]
             .as_u64()
@@ -28,8 +26,7 @@ fn harmonic_experiment_writes_the_papers_files_and_a_true_summary() {
         assert!(f.iter().all(|v| (-1e-12..=1.0 + 1e-12).contains(v)));
     }
     let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let first = &s["maps"][0];
     assert_eq!(first["m"], 1);
     assert_eq!(first["M"], 1);
@@ -37,20 +34,19 @@ fn harmonic_experiment_writes_the_papers_files_and_a_true_summary() {
     assert_eq!(first["chi"], 0);
     assert_eq!(first["critical_points"]["euler_check"]["holds"], true);
     // A second run must not overwrite without --force.
-    let e = err_with("experiment harmonic torus:res=2 --out {}", &[out]);
+    let e = err_with("experiment harmonic torus:res=2 --out {}", &[&out]);
     assert!(e.contains("already exists") && e.contains("--force"), "{e}");
     ok_with(
         "experiment harmonic torus:res=2 --out {} --force --size 64",
-        &[out],
+        &[&out],
     );
 }
 
 #[test]
 fn distance_and_diffusion_experiments_write_fields_of_the_right_length() {
-    let (dir, [d]) = temp_paths(["d"]);
-    ok_with(
+    let (dir, _, [d]) = ok_writing(
         "experiment spectral-distance sphere:res=2 -k 30 --source 5 --size 128 --out {}",
-        &[&d],
+        ["d"],
     );
     let dist = values(&d.join("filtered-spectral-distance.txt"));
     assert_eq!(dist.len(), 162);
@@ -114,8 +110,7 @@ fn info_reports_topology_and_bad_files_name_file_and_line() {
 
 #[test]
 fn operators_export_matrix_market_files() {
-    let (_dir, [out]) = temp_paths(["ops"]);
-    ok_with("operators sphere:res=1 --out {}", &[&out]);
+    let (_dir, _, [out]) = ok_writing("operators sphere:res=1 --out {}", ["ops"]);
     let s = std::fs::read_to_string(out.join("S.mtx")).unwrap();
     assert!(s.starts_with("%%MatrixMarket matrix coordinate real general"));
     let header = s.lines().find(|l| !l.starts_with('%')).unwrap();

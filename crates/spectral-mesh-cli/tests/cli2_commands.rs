@@ -42,10 +42,9 @@ fn number_after(text: &str, key: &str) -> f64 {
 
 #[test]
 fn eigs_summary_and_eigenvalues_are_right_for_the_sphere() {
-    let (_dir, [ev, plot]) = temp_paths(["ev.txt", "spectrum.png"]);
-    let out = ok_with(
+    let (_dir, out, [ev, plot]) = ok_writing(
         "eigs sphere:res=2 -k 16 --eigenvalues-txt {} --plot {}",
-        &[&ev, &plot],
+        ["ev.txt", "spectrum.png"],
     );
     let v = values(&ev);
     assert_eq!(v.len(), 16);
@@ -70,10 +69,9 @@ fn eigs_dirichlet_refuses_a_closed_mesh_and_pins_the_disk() {
         e.contains("--dirichlet-boundary") && e.contains("closed"),
         "{e}"
     );
-    let (_dir, [ev]) = temp_paths(["ev.txt"]);
-    let out = ok_with(
+    let (_dir, out, [ev]) = ok_writing(
         "eigs disk:res=2 -k 6 --dirichlet-boundary --eigenvalues-txt {}",
-        &[&ev],
+        ["ev.txt"],
     );
     let v = values(&ev);
     assert!(v[0] > 1e-3, "Dirichlet spectrum starts above 0: {v:?}");
@@ -82,10 +80,9 @@ fn eigs_dirichlet_refuses_a_closed_mesh_and_pins_the_disk() {
 
 #[test]
 fn heat_basis_function_peaks_at_the_anchor_and_keeps_the_mass() {
-    let (_dir, [txt, png]) = temp_paths(["h.txt", "h.png"]);
-    let out = ok_with(
+    let (_dir, out, [txt, png]) = ok_writing(
         "heat sphere:res=2 --anchor 7 --t 0.05 -k 30 -o {} -o {} --size 200",
-        &[&txt, &png],
+        ["h.txt", "h.png"],
     );
     let f = values(&txt);
     assert_eq!(f.len(), 162);
@@ -98,10 +95,9 @@ fn heat_basis_function_peaks_at_the_anchor_and_keeps_the_mass() {
 
 #[test]
 fn heat_diffuses_an_indicator_and_conserves_its_mass() {
-    let (_dir, [txt]) = temp_paths(["h.txt"]);
-    let out = ok_with(
+    let (_dir, out, [txt]) = ok_writing(
         "heat sphere:res=2 --indicator 0,0.4 --t 0.02 -k 30 -o {}",
-        &[&txt],
+        ["h.txt"],
     );
     let f = values(&txt);
     let m_in = number_after(&out, "input ");
@@ -198,10 +194,9 @@ fn bad_filters_are_refused_with_the_reason() {
 
 #[test]
 fn signature_writes_one_column_per_time_and_draws_the_chosen_one() {
-    let (dir, [txt, ply]) = temp_paths(["hks.txt", "hks.ply"]);
-    let out = ok_with(
+    let (dir, out, [txt, ply]) = ok_writing(
         "signature sphere:res=2 --kind hks --times 0.01,0.1,1 -k 30 --column 1 -o {} -o {}",
-        &[&txt, &ply],
+        ["hks.txt", "hks.ply"],
     );
     let r = rows(&txt);
     assert_eq!(r.len(), 162);
@@ -209,6 +204,7 @@ fn signature_writes_one_column_per_time_and_draws_the_chosen_one() {
     // HKS decreases with time at every vertex.
     assert!(r.iter().all(|row| row[0] > row[1] && row[1] > row[2]));
     assert!(out.contains("column 1 (t = 0.1)"), "{out}");
+    assert!(ply.is_file());
     let e = err(&[
         "signature",
         SPHERE,
@@ -303,10 +299,9 @@ fn embed_keeps_the_triangles_and_realizes_the_distance() {
 
 #[test]
 fn perturb_noise_moves_vertices_and_keeps_the_connectivity() {
-    let (_dir, [off, map]) = temp_paths(["p.off", "map.txt"]);
-    let out = ok_with(
+    let (_dir, out, [off, map]) = ok_writing(
         "perturb sphere:res=2 --apply noise:0.1,seed=4 -o {} --map {}",
-        &[&off, &map],
+        ["p.off", "map.txt"],
     );
     let p = read_mesh(&off).unwrap().mesh;
     let o = read_mesh_shape(SPHERE);
@@ -331,10 +326,9 @@ fn perturb_noise_moves_vertices_and_keeps_the_connectivity() {
 
 #[test]
 fn perturb_chain_map_reproduces_resampled_positions() {
-    let (_dir, [off, map]) = temp_paths(["p.off", "map.txt"]);
-    ok_with(
+    let (_dir, _, [off, map]) = ok_writing(
         "perturb sphere:res=2 --apply resample:1.5 --apply scale:1 --apply resample:1.5,seed=2 -o {} --map {}",
-        &[&off, &map],
+        ["p.off", "map.txt"],
     );
     let p = read_mesh(&off).unwrap().mesh;
     let o = read_mesh_shape(SPHERE);
@@ -393,10 +387,9 @@ fn outputs_are_never_overwritten_without_force() {
 
 #[test]
 fn eigs_npz_reads_back_with_the_same_eigenvalues() {
-    let (dir, [npz, ev]) = temp_paths(["basis.npz", "ev.txt"]);
-    ok_with(
+    let (dir, _, [npz, ev]) = ok_writing(
         "eigs sphere:res=2 -k 12 --laplacian voronoi-cot -o {} --eigenvalues-txt {}",
-        &[&npz, &ev],
+        ["basis.npz", "ev.txt"],
     );
     let (basis, meta) = spectral_mesh::spectral::store::load_npz(&npz).unwrap();
     let v = values(&ev);

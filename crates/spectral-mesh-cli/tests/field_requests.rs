@@ -48,14 +48,13 @@ fn field_file(dir: &Path, name: &str, mesh: &str, body: &str) {
 
 #[test]
 fn every_request_kind_written_by_the_cli_equals_the_librarys_field() {
-    let d = tempfile::tempdir().unwrap();
-    let p = d.path();
     let mesh = build_str(SPHERE).unwrap();
     let n = mesh.n_vertices();
     // A signal for the diffusion: the height, as a field file.
     let signal: Vec<f64> = mesh.positions().iter().map(|q| q[2]).collect();
     let text: String = signal.iter().map(|v| format!("{v:?}\n")).collect();
-    write_in(p, "signal.txt", text);
+    let d = folder_with("signal.txt", text);
+    let p = d.path();
     let signal_json = serde_json::to_string(&signal).unwrap();
 
     for (name, kind) in [
@@ -124,12 +123,11 @@ fn same_bytes(a: &Path, b: &Path) {
 
 #[test]
 fn save_experiment_on_each_field_command_replays_to_the_same_bytes() {
-    let d = tempfile::tempdir().unwrap();
-    let p = d.path();
     let field: String = (0..162)
         .map(|i| format!("{}\n", (i as f64 * 0.37).sin()))
         .collect();
-    write_in(p, "f.txt", field);
+    let d = folder_with("f.txt", field);
+    let p = d.path();
     // (command line without outputs, the kind the replay writes)
     #[rustfmt::skip]
     let cases: Vec<(&str, &str)> = vec![
@@ -209,11 +207,10 @@ fn save_experiment_on_each_field_command_replays_to_the_same_bytes() {
 
 #[test]
 fn run_of_a_saved_field_file_reproduces_it_and_honours_basis_k() {
-    let d = tempfile::tempdir().unwrap();
-    let p = d.path();
     // 40 pairs computed, the first 20 used: the field of the first 20 of 40 pairs.
     let file = "experiment = \"field\"\nmesh = \"sphere:res=2\"\nbasis_k = 40\n\n[figure]\nsize = 48\n\n[field]\nkind = \"distance\"\ndistance = \"commute\"\nk = 20\n";
-    write_in(p, "e.toml", file);
+    let d = folder_with("e.toml", file);
+    let p = d.path();
     ok_in_with(p, "run e.toml -o a", &[]);
     ok_in_with(p, "run e.toml -o b", &[]);
     for name in [

@@ -128,10 +128,9 @@ fn harmonic_replays_bit_for_bit_with_counts_and_explicit_constraints() {
 
 #[test]
 fn a_changed_mesh_is_refused_naming_both_hashes() {
-    let d = tempfile::tempdir().unwrap();
-    let p = d.path();
     let mesh = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
-    write_in(p, "tet.off", mesh);
+    let d = folder_with("tet.off", mesh);
+    let p = d.path();
     ok_in_with(
         p,
         "experiment harmonic tet.off --size 32 -o a --save-experiment e/tet.toml",
@@ -259,10 +258,8 @@ fn truncation_study_writes_falling_curves() {
 
 #[test]
 fn tiny_robustness_study_writes_the_expected_table() {
-    let d = tempfile::tempdir().unwrap();
-    let p = d.path();
-    std::fs::write(
-        p.join("s.toml"),
+    let d = folder_with(
+        "s.toml",
         r#"
 k = 25
 laplacians = ["voronoi-cot", "fem"]
@@ -279,8 +276,8 @@ meshes = ["sphere:res=2"]
 perturbations = ["noise:0.1,seed=2", "mesh:irregular-sphere:res=2"]
 quantities = ["heat"]
 "#,
-    )
-    .unwrap();
+    );
+    let p = d.path();
     let out = ok_in_with(p, "study robustness s.toml -o r", &[]);
     assert!(out.contains("### rigid"), "{out}");
     let (h, rows) = csv_rows(&p.join("r/robustness.csv"));

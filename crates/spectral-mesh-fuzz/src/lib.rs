@@ -20,11 +20,12 @@ use arbitrary::{Arbitrary, Unstructured};
 use spectral_mesh::Mesh;
 use spectral_mesh::io::{IoError, LoadedMesh, MeshFormat, WriteOptions};
 
-/// The file name picked by the first byte of `data` among `names`, and the rest of the
-/// bytes (the file's content); `None` for empty input.
-pub fn named<'a>(data: &'a [u8], names: &[&'static str]) -> Option<(&'static str, &'a [u8])> {
-    let (&b, rest) = data.split_first()?;
-    Some((names[usize::from(b) % names.len()], rest))
+/// Runs `check` on a file named by the first byte of `data` (picked among `names`) whose
+/// content is the rest of the bytes; an empty input is nothing to check.
+pub fn named(data: &[u8], names: &[&'static str], check: impl FnOnce(&'static str, &[u8])) {
+    if let Some((&b, rest)) = data.split_first() {
+        check(names[usize::from(b) % names.len()], rest);
+    }
 }
 
 /// Asserts the invariants [`Mesh::new`] promises (a reader must never hand out a mesh

@@ -102,14 +102,17 @@ impl FromStr for Colormap {
     /// Parses `hue | viridis | turbo | diverging | grey` (case-insensitive; `gray` and
     /// `hsv` are accepted as aliases).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "hue" | "hsv" => Ok(Colormap::Hue),
-            "viridis" => Ok(Colormap::Viridis),
-            "turbo" => Ok(Colormap::Turbo),
-            "diverging" => Ok(Colormap::Diverging),
-            "grey" | "gray" => Ok(Colormap::Grey),
-            _ => Err(UnknownColormap(s.to_string())),
-        }
+        let low = s.trim().to_ascii_lowercase();
+        let alias = match low.as_str() {
+            "hsv" => Some(Colormap::Hue),
+            "gray" => Some(Colormap::Grey),
+            _ => None,
+        };
+        Colormap::ALL
+            .into_iter()
+            .find(|c| c.name() == low)
+            .or(alias)
+            .ok_or_else(|| UnknownColormap(s.to_string()))
     }
 }
 

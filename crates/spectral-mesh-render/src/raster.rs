@@ -18,6 +18,7 @@
 //! Pixel `(x, y)` has its centre at `(x + 0.5, y + 0.5)`, `y` downwards.
 
 use crate::colormap::Colormap;
+use crate::options::view_name;
 use crate::text;
 use crate::{Image, RenderError};
 use rayon::prelude::*;
@@ -130,6 +131,9 @@ impl View {
     }
 }
 
+/// The views with a name, the one [`view_name`] writes and [`View::from_str`] reads.
+const NAMED_VIEWS: [View; 4] = [View::Front, View::Side, View::Top, View::Iso];
+
 impl FromStr for View {
     type Err = RenderError;
 
@@ -137,12 +141,8 @@ impl FromStr for View {
     /// (eye, target, up, vertical field of view in degrees: [`CameraSpec`]).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let low = s.trim().to_ascii_lowercase();
-        match low.as_str() {
-            "front" => return Ok(View::Front),
-            "side" => return Ok(View::Side),
-            "top" => return Ok(View::Top),
-            "iso" => return Ok(View::Iso),
-            _ => {}
+        if let Some(v) = NAMED_VIEWS.into_iter().find(|&v| view_name(v) == low) {
+            return Ok(v);
         }
         if let Some(nums) = low.strip_prefix("camera:") {
             let bad = |why: &str| {

@@ -465,6 +465,33 @@ fn perspective_and_named_views_fit_the_shape() {
     assert!("fisheye".parse::<Projection>().is_err());
 }
 
+/// The names of views, backgrounds, projections and colour maps, aliases included, in
+/// any case and with spaces around, parse to what they name.
+#[test]
+fn option_names_parse_in_any_case() {
+    fn parses_to<T>(text: &str, value: T)
+    where
+        T: std::str::FromStr + PartialEq + std::fmt::Debug,
+        T::Err: std::fmt::Debug,
+    {
+        assert_eq!(text.parse::<T>().unwrap(), value, "{text:?}");
+    }
+    parses_to("FRONT", View::Front);
+    parses_to(" Iso ", View::Iso);
+    parses_to("None", Background::Transparent);
+    parses_to("\tWHITE", Background::White);
+    parses_to("Ortho", Projection::Orthographic);
+    parses_to("PERSPECTIVE", Projection::Perspective { fov_deg: 40.0 });
+    parses_to("Gray", Colormap::Grey);
+    parses_to(" hsv ", Colormap::Hue);
+    parses_to(
+        "Camera:0,0,5,0,0,0,0,1,0,30",
+        "camera:0,0,5,0,0,0,0,1,0,30".parse::<View>().unwrap(),
+    );
+    assert!("front,".parse::<View>().is_err());
+    assert!("jet".parse::<Colormap>().is_err());
+}
+
 #[test]
 fn bad_inputs_are_errors() {
     let mesh = quad(2);

@@ -137,6 +137,25 @@ pub fn temp_paths<const N: usize>(names: [&str; N]) -> (tempfile::TempDir, [Path
     (dir, paths)
 }
 
+/// Runs [`ok_with`] with the paths of `names` in a fresh temporary folder for its `{}`
+/// (in that order); returns the folder (removed when dropped), the standard output and
+/// the paths: `let (_dir, out, [txt]) = ok_writing("heat sphere:res=2 -o {}", ["h.txt"])`.
+pub fn ok_writing<const N: usize>(
+    line: &str,
+    names: [&str; N],
+) -> (tempfile::TempDir, String, [PathBuf; N]) {
+    let (dir, paths) = temp_paths(names);
+    let out = ok_with(line, &paths.each_ref().map(PathBuf::as_path));
+    (dir, out, paths)
+}
+
+/// A fresh temporary folder (removed when dropped) holding one file, `name` with `text`.
+pub fn folder_with(name: &str, text: impl AsRef<[u8]>) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    write_in(dir.path(), name, text);
+    dir
+}
+
 /// Writes `text` to the file `name` in `dir`.
 pub fn write_in(dir: &Path, name: &str, text: impl AsRef<[u8]>) {
     std::fs::write(dir.join(name), text).unwrap();

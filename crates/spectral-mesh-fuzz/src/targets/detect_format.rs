@@ -24,19 +24,18 @@ const NAMES: [&str; 14] = [
 
 /// Runs one input of the target (what libFuzzer calls, and what the seed replay calls).
 pub fn run(data: &[u8]) {
-    let Some((name, rest)) = crate::named(data, &NAMES) else {
-        return;
-    };
-    let Some(l) = crate::read_and_check(rest, name) else {
-        return;
-    };
-    let by_name = MeshFormat::from_path(std::path::Path::new(name));
-    if by_name != Some(l.format) {
-        assert!(
-            l.warnings.iter().any(|w| w.contains(&l.format.to_string())),
-            "{name} read as {} without a warning: {:?}",
-            l.format,
-            l.warnings
-        );
-    }
+    crate::named(data, &NAMES, |name, rest| {
+        let Some(l) = crate::read_and_check(rest, name) else {
+            return;
+        };
+        let by_name = MeshFormat::from_path(std::path::Path::new(name));
+        if by_name != Some(l.format) {
+            assert!(
+                l.warnings.iter().any(|w| w.contains(&l.format.to_string())),
+                "{name} read as {} without a warning: {:?}",
+                l.format,
+                l.warnings
+            );
+        }
+    });
 }

@@ -26,65 +26,64 @@ const NAMES: [&str; 12] = [
 
 /// Runs one input of the target (what libFuzzer calls, and what the seed replay calls).
 pub fn run(data: &[u8]) {
-    let Some((name, rest)) = crate::named(data, &NAMES) else {
-        return;
-    };
-    let input = match read_input_from_bytes(rest, name) {
-        Ok(i) => i,
-        Err(e) => {
-            crate::check_error(rest, name, &e);
-            return;
-        }
-    };
-    let p = match input {
-        Input::Mesh(m) => {
-            crate::check_loaded_mesh(&m);
-            return;
-        }
-        Input::Points(p) => p,
-    };
-    let cloud = &p.cloud;
-    let n = cloud.n_points();
-    assert!(n > 0, "an empty point cloud returned as Ok");
-    assert_eq!(cloud.positions().len(), n);
-    assert!(
-        cloud.positions().iter().flatten().all(|c| c.is_finite()),
-        "non-finite coordinate returned as Ok"
-    );
-    if let Some(nr) = cloud.normals() {
-        assert_eq!(nr.len(), n, "one normal per point");
+    crate::named(data, &NAMES, |name, rest| {
+        let input = match read_input_from_bytes(rest, name) {
+            Ok(i) => i,
+            Err(e) => {
+                crate::check_error(rest, name, &e);
+                return;
+            }
+        };
+        let p = match input {
+            Input::Mesh(m) => {
+                crate::check_loaded_mesh(&m);
+                return;
+            }
+            Input::Points(p) => p,
+        };
+        let cloud = &p.cloud;
+        let n = cloud.n_points();
+        assert!(n > 0, "an empty point cloud returned as Ok");
+        assert_eq!(cloud.positions().len(), n);
         assert!(
-            nr.iter().flatten().all(|c| c.is_finite()),
-            "non-finite normal"
+            cloud.positions().iter().flatten().all(|c| c.is_finite()),
+            "non-finite coordinate returned as Ok"
         );
-        assert!(
-            nr.iter().any(|v| v.iter().any(|&c| c != 0.0)),
-            "every normal is zero but they were kept"
-        );
-    }
-    // Written back as text and read again: the same bits.
-    let mut text = String::new();
-    for (i, q) in cloud.positions().iter().enumerate() {
-        text.push_str(&format!("{:?} {:?} {:?}", q[0], q[1], q[2]));
         if let Some(nr) = cloud.normals() {
-            text.push_str(&format!(" {:?} {:?} {:?}", nr[i][0], nr[i][1], nr[i][2]));
+            assert_eq!(nr.len(), n, "one normal per point");
+            assert!(
+                nr.iter().flatten().all(|c| c.is_finite()),
+                "non-finite normal"
+            );
+            assert!(
+                nr.iter().any(|v| v.iter().any(|&c| c != 0.0)),
+                "every normal is zero but they were kept"
+            );
         }
-        text.push('\n');
-    }
-    let back = match read_input_from_bytes(text.as_bytes(), "rt.xyz") {
-        Ok(Input::Points(b)) => b,
-        Ok(Input::Mesh(_)) => panic!("written points read back as a mesh"),
-        Err(e) => panic!("written points do not read back: {e}"),
-    };
-    let bits = |v: &[[f64; 3]]| v.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
-    assert_eq!(
-        bits(back.cloud.positions()),
-        bits(cloud.positions()),
-        "positions round trip"
-    );
-    assert_eq!(
-        back.cloud.normals().map(bits),
-        cloud.normals().map(bits),
-        "normals round trip"
-    );
+        // Written back as text and read again: the same bits.
+        let mut text = String::new();
+        for (i, q) in cloud.positions().iter().enumerate() {
+            text.push_str(&format!("{:?} {:?} {:?}", q[0], q[1], q[2]));
+            if let Some(nr) = cloud.normals() {
+                text.push_str(&format!(" {:?} {:?} {:?}", nr[i][0], nr[i][1], nr[i][2]));
+            }
+            text.push('\n');
+        }
+        let back = match read_input_from_bytes(text.as_bytes(), "rt.xyz") {
+            Ok(Input::Points(b)) => b,
+            Ok(Input::Mesh(_)) => panic!("written points read back as a mesh"),
+            Err(e) => panic!("written points do not read back: {e}"),
+        };
+        let bits = |v: &[[f64; 3]]| v.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
+        assert_eq!(
+            bits(back.cloud.positions()),
+            bits(cloud.positions()),
+            "positions round trip"
+        );
+        assert_eq!(
+            back.cloud.normals().map(bits),
+            cloud.normals().map(bits),
+            "normals round trip"
+        );
+    });
 }

@@ -14,6 +14,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use rayon::prelude::*;
 
+use super::supernodal::Supernodes;
 use super::{SparseMatrix, ordering};
 
 /// Errors from the factorization.
@@ -35,18 +36,15 @@ pub enum CholeskyError {
 
 /// A sparse `L L^T` factorization of a symmetric positive definite matrix.
 ///
-/// The analysis (AMD ordering, supernodal structure) and the numeric factorization are
-/// faer's. The triangular solves are our own: the right-hand sides are gathered into a
-/// row-major block (a few columns side by side, permuted), and each supernode's columns
-/// are applied to those rows with fixed-width inner loops. Mesh Laplacians give many
-/// small supernodes, where this measured 2-3x faster per right-hand side than faer's
-/// general dense kernels per supernode (blocks of 8-16, 38k vertices); the factor is
-/// streamed once per block of up to 8 right-hand sides.
+/// The analysis (ordering, supernodal structure) and the numeric factorization are
+/// faer's. The triangular solves are our own (`supernodal.rs`).
 ///
-/// Parallelism is explicit and coarse: the factorization runs on one thread (it is cheap
-/// next to the solves that use it), and multi-right-hand-side solves split their columns
-/// over the rayon pool, each part solved sequentially. This avoids fine-grained spin
-/// barriers, which are very slow on a loaded machine.
+/// Parallelism is explicit and coarse: the factorization runs on one thread (faer's
+/// parallel factorization took twice as long on 104k vertices and 2 cores); a large
+/// factor's solve runs on two threads, one per half of the elimination tree; a small
+/// factor's multi-right-hand-side solves split their columns over the rayon pool, each
+/// part solved sequentially. This avoids fine-grained spin barriers, which are very slow
+/// on a loaded machine.
 #[derive(Debug, Clone)]
 pub struct SparseCholesky {
     n: usize,
@@ -72,251 +70,6 @@ fn pattern_fingerprint(a: &SparseMatrix) -> [u64; 2] {
         a.row_idx().hash(&mut h);
         h.finish()
     })
-}
-
-/// Runtime SIMD dispatch of [`Supernodes::solve_rows`] (AVX2/AVX-512 when available).
-struct SolveOp<'a, const C: usize> {
-    sn: &'a Supernodes,
-    vals: &'a [f64],
-    x: &'a mut [[f64; C]],
-}
-
-impl<const C: usize> pulp::WithSimd for SolveOp<'_, C> {
-    type Output = ();
-    #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _simd: S) {
-        self.sn.solve_rows::<C>(self.vals, self.x);
-    }
-}
-
-/// Supernodes with at least this many columns are applied column by column (contiguous
-/// in L); smaller ones row by row (each scattered row of the right-hand side once).
-const ROW_OUTER_MAX: usize = 8;
-
-/// The supernodal layout of the factor, copied out of faer's symbolic structure: supernode
-/// `s` holds columns `begin[s]..begin[s + 1]`; its values are a column-major block of
-/// `(size + pattern) x size` starting at `val_ptr[s]` (the lower-triangular diagonal block
-/// on top, then the rows `row_idx[row_ptr[s]..row_ptr[s + 1]]`); `fwd[i]` is the original
-/// index of permuted row `i`.
-#[derive(Debug)]
-struct Supernodes {
-    begin: Vec<usize>,
-    row_ptr: Vec<usize>,
-    val_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
-    fwd: Vec<usize>,
-}
-
-impl Supernodes {
-    fn from_symbolic(sym: &SymbolicCholesky<usize>) -> Option<Self> {
-        let SymbolicCholeskyRaw::Supernodal(sn) = sym.raw() else {
-            return None;
-        };
-        let ns = sn.n_supernodes();
-        let mut begin = sn.supernode_begin().to_vec();
-        begin.push(*sn.supernode_end().last().unwrap_or(&0));
-        let fwd = match sym.perm() {
-            Some(p) => p.arrays().0.to_vec(),
-            None => (0..sym.nrows()).collect(),
-        };
-        Some(Self {
-            begin,
-            row_ptr: sn.col_ptr_for_row_idx()[..=ns].to_vec(),
-            val_ptr: sn.col_ptr_for_val()[..=ns].to_vec(),
-            row_idx: sn.row_idx().to_vec(),
-            fwd,
-        })
-    }
-
-    /// Supernode `s` of the factor values `vals`: its first column, its number of
-    /// columns, its off-diagonal rows, its number of rows and its column-major block.
-    #[inline(always)]
-    fn block<'v>(&self, vals: &'v [f64], s: usize) -> (usize, usize, &[usize], usize, &'v [f64]) {
-        let f = self.begin[s];
-        let size = self.begin[s + 1] - f;
-        let pat = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
-        let nr = size + pat.len();
-        (
-            f,
-            size,
-            pat,
-            nr,
-            &vals[self.val_ptr[s]..self.val_ptr[s] + nr * size],
-        )
-    }
-
-    /// Solves `L L^T y = x` in place for a row-major block `x` of `C` columns (permuted).
-    /// Off-diagonal rows of small supernodes are visited once per supernode (not once per
-    /// column), which matters because those accesses are scattered over `x`. Always
-    /// inlined into [`SolveOp`], so that it is compiled for the SIMD level pulp detects.
-    #[inline(always)]
-    fn solve_rows<const C: usize>(&self, vals: &[f64], x: &mut [[f64; C]]) {
-        let ns = self.begin.len() - 1;
-        let max_size = (0..ns)
-            .map(|s| self.begin[s + 1] - self.begin[s])
-            .max()
-            .unwrap_or(0);
-        let mut top = vec![[0.0; C]; max_size];
-        // Forward: L y = x.
-        for s in 0..ns {
-            let (f, size, pat, nr, l) = self.block(vals, s);
-            let top = &mut top[..size];
-            top.copy_from_slice(&x[f..f + size]);
-            for jj in 0..size {
-                let col = &l[jj * nr..jj * nr + size];
-                let inv = 1.0 / col[jj];
-                let mut xj = top[jj];
-                for v in xj.iter_mut() {
-                    *v *= inv;
-                }
-                top[jj] = xj;
-                for ii in jj + 1..size {
-                    let a = col[ii];
-                    for q in 0..C {
-                        top[ii][q] -= a * xj[q];
-                    }
-                }
-            }
-            x[f..f + size].copy_from_slice(top);
-            if size == 1 {
-                let xj = top[0];
-                for (&r, &a) in pat.iter().zip(&l[1..nr]) {
-                    let xi = &mut x[r];
-                    for q in 0..C {
-                        xi[q] -= a * xj[q];
-                    }
-                }
-            } else if size >= ROW_OUTER_MAX {
-                // Large (dense) supernodes: stream the columns of L contiguously.
-                for (jj, tj) in top.iter().enumerate() {
-                    let col = &l[jj * nr + size..(jj + 1) * nr];
-                    for (&r, &a) in pat.iter().zip(col) {
-                        let xi = &mut x[r];
-                        for q in 0..C {
-                            xi[q] -= a * tj[q];
-                        }
-                    }
-                }
-            } else {
-                // Small supernodes: touch each scattered row of x once.
-                for (p, &r) in pat.iter().enumerate() {
-                    let mut acc = [0.0; C];
-                    for (jj, tj) in top.iter().enumerate() {
-                        let a = l[jj * nr + size + p];
-                        for q in 0..C {
-                            acc[q] += a * tj[q];
-                        }
-                    }
-                    let xi = &mut x[r];
-                    for q in 0..C {
-                        xi[q] -= acc[q];
-                    }
-                }
-            }
-        }
-        // Backward: L^T z = y.
-        for s in (0..ns).rev() {
-            let (f, size, pat, nr, l) = self.block(vals, s);
-            let top = &mut top[..size];
-            top.copy_from_slice(&x[f..f + size]);
-            if size == 1 {
-                let mut acc = top[0];
-                for (&r, &a) in pat.iter().zip(&l[1..nr]) {
-                    let xi = x[r];
-                    for q in 0..C {
-                        acc[q] -= a * xi[q];
-                    }
-                }
-                top[0] = acc;
-            } else if size >= ROW_OUTER_MAX {
-                for (jj, tj) in top.iter_mut().enumerate() {
-                    let col = &l[jj * nr + size..(jj + 1) * nr];
-                    let mut acc = *tj;
-                    for (&r, &a) in pat.iter().zip(col) {
-                        let xi = x[r];
-                        for q in 0..C {
-                            acc[q] -= a * xi[q];
-                        }
-                    }
-                    *tj = acc;
-                }
-            } else {
-                for (p, &r) in pat.iter().enumerate() {
-                    let xi = x[r];
-                    for (jj, tj) in top.iter_mut().enumerate() {
-                        let a = l[jj * nr + size + p];
-                        for q in 0..C {
-                            tj[q] -= a * xi[q];
-                        }
-                    }
-                }
-            }
-            for jj in (0..size).rev() {
-                let col = &l[jj * nr..jj * nr + size];
-                let mut acc = top[jj];
-                for ii in jj + 1..size {
-                    let a = col[ii];
-                    for q in 0..C {
-                        acc[q] -= a * top[ii][q];
-                    }
-                }
-                let inv = 1.0 / col[jj];
-                for v in acc.iter_mut() {
-                    *v *= inv;
-                }
-                top[jj] = acc;
-            }
-            x[f..f + size].copy_from_slice(top);
-        }
-    }
-
-    /// Solves for `C` column-major columns of `b` (`n` rows each) in place.
-    fn solve_cols<const C: usize>(&self, vals: &[f64], b: &mut [f64], n: usize) {
-        // The row-major block comes from the per-thread scratch pool (fresh large
-        // allocations cost page faults on every call; the pool is capped and released
-        // when an eigensolve ends).
-        let mut buf = super::scratch::take(n * C);
-        let (x, _) = buf.as_chunks_mut::<C>();
-        for (i, row) in x.iter_mut().enumerate() {
-            let src = self.fwd[i];
-            for (q, v) in row.iter_mut().enumerate() {
-                *v = b[q * n + src];
-            }
-        }
-        pulp::Arch::new().dispatch(SolveOp { sn: self, vals, x });
-        for (i, row) in x.iter().enumerate() {
-            let dst = self.fwd[i];
-            for (q, v) in row.iter().enumerate() {
-                b[q * n + dst] = *v;
-            }
-        }
-        super::scratch::give(buf);
-    }
-
-    /// Solves for any number of column-major columns, 8 (then 4, 2, 1) at a time.
-    fn solve_many(&self, vals: &[f64], b: &mut [f64], n: usize) {
-        let mut rest = b;
-        while !rest.is_empty() {
-            let c = rest.len() / n;
-            let w = if c >= 8 {
-                8
-            } else if c >= 4 {
-                4
-            } else if c >= 2 {
-                2
-            } else {
-                1
-            };
-            let (head, tail) = rest.split_at_mut(n * w);
-            match w {
-                8 => self.solve_cols::<8>(vals, head, n),
-                4 => self.solve_cols::<4>(vals, head, n),
-                2 => self.solve_cols::<2>(vals, head, n),
-                _ => self.solve_cols::<1>(vals, head, n),
-            }
-            rest = tail;
-        }
-    }
 }
 
 fn view(a: &SparseMatrix) -> Result<SparseColMatRef<'_, usize, f64>, CholeskyError> {
@@ -453,6 +206,12 @@ impl SparseCholesky {
         self.values.len()
     }
 
+    /// The share of a one-thread solve's time that a solve is predicted to take with the
+    /// elimination tree split over two threads (1 when it is not split).
+    pub(crate) fn split_share(&self) -> f64 {
+        self.layout.as_ref().map_or(1.0, |l| l.split_share())
+    }
+
     /// Refactors a matrix with the same sparsity pattern, reusing the symbolic analysis
     /// (falls back to a fresh analysis when the pattern differs). The result is the same,
     /// bit for bit, as [`SparseCholesky::new`] of `a`; on error the factor is left as it
@@ -510,8 +269,15 @@ impl SparseCholesky {
             self.solve_seq(b, k);
             return;
         }
-        // Groups of at least 4 columns (multi-RHS solves are cheaper per column), at most
-        // one group per thread.
+        // A factor whose solves run on two threads already (split over its elimination
+        // tree) is solved in one group: at 104k vertices and k = 128 one group of 8
+        // columns took 0.9 of the time of two groups of 4, and it reads the factor once.
+        // Otherwise groups of at least 4 columns (multi-RHS solves are cheaper per column),
+        // at most one group per thread.
+        if self.layout.as_ref().is_some_and(|l| l.is_split()) {
+            self.solve_seq(b, k);
+            return;
+        }
         let groups = threads.min(k.div_ceil(4)).max(1);
         let per = k.div_ceil(groups);
         b.par_chunks_mut(self.n * per).for_each(|chunk| {
@@ -680,6 +446,52 @@ mod tests {
             let mut one = a.mul_vec(&x_true[j * n..(j + 1) * n]);
             c.solve_in_place(&mut one);
             assert_eq!(&one[..], &b[j * n..(j + 1) * n]);
+        }
+    }
+
+    #[test]
+    fn a_tree_split_solve_equals_the_one_thread_solve_on_any_pool() {
+        // Grids above the split threshold: 12k rows (AMD) and 55k rows (nested dissection,
+        // postordered). The split must be found, agree with the unsplit solve to
+        // rounding, and give the same bits whatever the number of threads.
+        for m in [110, 235] {
+            let a = ordering::tests::grid_matrix(m, 4.5);
+            let n = a.nrows();
+            let c = SparseCholesky::new(&a).unwrap();
+            let split = c.layout.as_ref().unwrap();
+            assert!(split.is_split(), "{m} x {m}: no split");
+            let share = c.split_share();
+            assert!(share > 0.5 && share < 0.8, "{m} x {m}: share {share}");
+            let plain = Supernodes::build(&c.symbolic, false).unwrap();
+            assert!(!plain.is_split());
+            let mut rand = crate::test_support::lcg53(m as u64);
+            let k = 5;
+            let b: Vec<f64> = (0..n * k).map(|_| rand() - 0.5).collect();
+            let mut x = b.clone();
+            split.solve_many(&c.values, &mut x, n);
+            let mut y = b.clone();
+            plain.solve_many(&c.values, &mut y, n);
+            let scale = y.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+            let diff = x
+                .iter()
+                .zip(&y)
+                .fold(0.0f64, |d, (p, q)| d.max((p - q).abs()));
+            assert!(diff <= 1e-13 * scale, "{m} x {m}: split differs by {diff}");
+            for q in 0..k {
+                let r = a.mul_vec(&x[q * n..(q + 1) * n]);
+                let err = r
+                    .iter()
+                    .zip(&b[q * n..(q + 1) * n])
+                    .fold(0.0f64, |d, (p, q)| d.max((p - q).abs()));
+                assert!(err < 1e-12, "{m} x {m}: residual {err}");
+            }
+            let one = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .unwrap();
+            let mut z = b.clone();
+            one.install(|| split.solve_many(&c.values, &mut z, n));
+            assert!(x.iter().zip(&z).all(|(p, q)| p.to_bits() == q.to_bits()));
         }
     }
 

@@ -9,6 +9,7 @@ pub mod eigen;
 mod ordering;
 mod scratch;
 pub mod sparse;
+mod supernodal;
 pub mod timing;
 
 pub use cholesky::{CholeskyError, Inertia, SparseCholesky, inertia};

@@ -398,7 +398,71 @@ pub(crate) fn nested_dissection(a: &SparseMatrix) -> Vec<usize> {
             None => d.order_leaf(&p),
         }
     }
-    d.order
+    postorder(&g, d.order)
+}
+
+/// The same elimination order renumbered in a postorder of its elimination tree (children
+/// in increasing order, each subtree a range of positions). The fill and the tree's shape
+/// do not change; the factor's supernodes then number every subtree as a range, which the
+/// two-thread triangular solves rely on (`supernodal.rs`), and siblings sit side by side.
+fn postorder(g: &Graph, order: Vec<usize>) -> Vec<usize> {
+    const NONE: usize = usize::MAX;
+    let n = order.len();
+    let mut inv = vec![0usize; n];
+    for (p, &v) in order.iter().enumerate() {
+        inv[v] = p;
+    }
+    // The elimination tree by ancestor links with path compression: for every entry
+    // (j, k) with k < j, the root of k's current tree becomes a child of j.
+    let mut parent = vec![NONE; n];
+    let mut ancestor = vec![NONE; n];
+    for (j, &v) in order.iter().enumerate() {
+        for &u in g.neighbours(v) {
+            let mut i = inv[u as usize];
+            while i != NONE && i < j {
+                let next = ancestor[i];
+                ancestor[i] = j;
+                if next == NONE {
+                    parent[i] = j;
+                }
+                i = next;
+            }
+        }
+    }
+    // Children lists (increasing, as compressed rows), then a depth-first postorder.
+    let mut start = vec![0usize; n + 1];
+    for &p in &parent {
+        if p != NONE {
+            start[p + 1] += 1;
+        }
+    }
+    for j in 0..n {
+        start[j + 1] += start[j];
+    }
+    let mut fill = start.clone();
+    let mut children = vec![0usize; start[n]];
+    for (i, &p) in parent.iter().enumerate() {
+        if p != NONE {
+            children[fill[p]] = i;
+            fill[p] += 1;
+        }
+    }
+    let mut out = Vec::with_capacity(n);
+    let mut stack: Vec<(usize, usize)> = Vec::new();
+    for root in (0..n).filter(|&i| parent[i] == NONE) {
+        stack.push((root, start[root]));
+        while let Some((node, next)) = stack.last_mut() {
+            if *next < start[*node + 1] {
+                let child = children[*next];
+                *next += 1;
+                stack.push((child, start[child]));
+            } else {
+                out.push(order[*node]);
+                stack.pop();
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -131,7 +131,11 @@ impl ShiftInvert {
             match attempt {
                 Ok(chol) => {
                     if crate::linalg::timing::enabled() {
-                        eprintln!("factor: n = {n}, {} values of L", chol.factor_len());
+                        eprintln!(
+                            "factor: n = {n}, {} values of L, split solve {:.2} of one thread's",
+                            chol.factor_len(),
+                            chol.split_share()
+                        );
                     }
                     return Ok(Self { chol, shift });
                 }
