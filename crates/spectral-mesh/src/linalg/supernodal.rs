@@ -62,6 +62,23 @@ struct TreeSplit {
     hi_map: Vec<u32>,
 }
 
+/// `y -= a x`, lane by lane.
+#[inline(always)]
+fn sub_scaled<const C: usize>(y: &mut [f64; C], a: f64, x: &[f64; C]) {
+    for q in 0..C {
+        y[q] -= a * x[q];
+    }
+}
+
+/// The direction of a sweep of the triangular solve.
+#[derive(Clone, Copy)]
+enum Sweep {
+    /// `L y = x`.
+    Forward,
+    /// `L^T z = y`.
+    Backward,
+}
+
 /// Where the rows of one part of a solve live: rows below `bound` in `lo` (row `r` at
 /// `r - off`), the others in `hi` (row `r` at `hi_map[r - bound]`).
 struct Rows<'a, const C: usize> {
@@ -264,11 +281,14 @@ impl Supernodes {
         (left.max(right) + top) / (left + right + top)
     }
 
-    /// Forward substitution `L y = x` over `nodes` (increasing; every supernode a node's
-    /// rows depend on is among the nodes before it or already applied).
+    /// One sweep of the triangular solve over `nodes`: [`Sweep::Forward`], `L y = x` (nodes
+    /// increasing; every supernode a node's rows depend on is among the nodes before it or
+    /// already applied), or [`Sweep::Backward`], `L^T z = y` (decreasing; every supernode in
+    /// a node's pattern among the nodes before it or already applied).
     #[inline(always)]
-    fn forward<const C: usize>(
+    fn sweep<const C: usize>(
         &self,
+        sweep: Sweep,
         vals: &[f64],
         nodes: impl Iterator<Item = usize>,
         x: &mut Rows<'_, C>,
@@ -280,128 +300,100 @@ impl Supernodes {
             let pat = self.pattern(s);
             let nr = size + pat.len();
             let l = &vals[self.val_ptr[s]..self.val_ptr[s] + nr * size];
+            let own = f - x.off..f - x.off + size;
             let top = &mut top[..size];
-            top.copy_from_slice(&x.lo[f - x.off..f - x.off + size]);
-            for jj in 0..size {
-                let col = &l[jj * nr..jj * nr + size];
-                let inv = 1.0 / col[jj];
-                let mut xj = top[jj];
-                for v in xj.iter_mut() {
-                    *v *= inv;
-                }
-                top[jj] = xj;
-                for ii in jj + 1..size {
-                    let a = col[ii];
-                    for q in 0..C {
-                        top[ii][q] -= a * xj[q];
+            top.copy_from_slice(&x.lo[own.clone()]);
+            match sweep {
+                Sweep::Forward => {
+                    for jj in 0..size {
+                        let col = &l[jj * nr..jj * nr + size];
+                        let inv = 1.0 / col[jj];
+                        let mut xj = top[jj];
+                        for v in xj.iter_mut() {
+                            *v *= inv;
+                        }
+                        top[jj] = xj;
+                        for ii in jj + 1..size {
+                            let a = col[ii];
+                            sub_scaled(&mut top[ii], a, &xj);
+                        }
                     }
-                }
-            }
-            x.lo[f - x.off..f - x.off + size].copy_from_slice(top);
-            if size == 1 {
-                let xj = top[0];
-                for (&r, &a) in pat.iter().zip(&l[1..nr]) {
-                    let xi = x.at_mut(r);
-                    for q in 0..C {
-                        xi[q] -= a * xj[q];
-                    }
-                }
-            } else if size >= ROW_OUTER_MAX {
-                // Large (dense) supernodes: stream the columns of L contiguously.
-                for (jj, tj) in top.iter().enumerate() {
-                    let col = &l[jj * nr + size..(jj + 1) * nr];
-                    for (&r, &a) in pat.iter().zip(col) {
-                        let xi = x.at_mut(r);
-                        for q in 0..C {
-                            xi[q] -= a * tj[q];
+                    x.lo[own].copy_from_slice(top);
+                    if size == 1 {
+                        let xj = top[0];
+                        for (&r, &a) in pat.iter().zip(&l[1..nr]) {
+                            let xi = x.at_mut(r);
+                            sub_scaled(xi, a, &xj);
+                        }
+                    } else if size >= ROW_OUTER_MAX {
+                        // Large (dense) supernodes: stream the columns of L contiguously.
+                        for (jj, tj) in top.iter().enumerate() {
+                            let col = &l[jj * nr + size..(jj + 1) * nr];
+                            for (&r, &a) in pat.iter().zip(col) {
+                                let xi = x.at_mut(r);
+                                sub_scaled(xi, a, tj);
+                            }
+                        }
+                    } else {
+                        // Small supernodes: touch each scattered row of x once.
+                        for (p, &r) in pat.iter().enumerate() {
+                            let mut acc = [0.0; C];
+                            for (jj, tj) in top.iter().enumerate() {
+                                let a = l[jj * nr + size + p];
+                                for q in 0..C {
+                                    acc[q] += a * tj[q];
+                                }
+                            }
+                            let xi = x.at_mut(r);
+                            for q in 0..C {
+                                xi[q] -= acc[q];
+                            }
                         }
                     }
                 }
-            } else {
-                // Small supernodes: touch each scattered row of x once.
-                for (p, &r) in pat.iter().enumerate() {
-                    let mut acc = [0.0; C];
-                    for (jj, tj) in top.iter().enumerate() {
-                        let a = l[jj * nr + size + p];
-                        for q in 0..C {
-                            acc[q] += a * tj[q];
+                Sweep::Backward => {
+                    if size == 1 {
+                        let mut acc = top[0];
+                        for (&r, &a) in pat.iter().zip(&l[1..nr]) {
+                            let xi = x.at(r);
+                            sub_scaled(&mut acc, a, &xi);
+                        }
+                        top[0] = acc;
+                    } else if size >= ROW_OUTER_MAX {
+                        for (jj, tj) in top.iter_mut().enumerate() {
+                            let col = &l[jj * nr + size..(jj + 1) * nr];
+                            let mut acc = *tj;
+                            for (&r, &a) in pat.iter().zip(col) {
+                                let xi = x.at(r);
+                                sub_scaled(&mut acc, a, &xi);
+                            }
+                            *tj = acc;
+                        }
+                    } else {
+                        for (p, &r) in pat.iter().enumerate() {
+                            let xi = x.at(r);
+                            for (jj, tj) in top.iter_mut().enumerate() {
+                                let a = l[jj * nr + size + p];
+                                sub_scaled(tj, a, &xi);
+                            }
                         }
                     }
-                    let xi = x.at_mut(r);
-                    for q in 0..C {
-                        xi[q] -= acc[q];
-                    }
-                }
-            }
-        }
-    }
-
-    /// Back substitution `L^T z = y` over `nodes` (decreasing; every supernode in a node's
-    /// pattern among the nodes before it or already applied).
-    #[inline(always)]
-    fn backward<const C: usize>(
-        &self,
-        vals: &[f64],
-        nodes: impl Iterator<Item = usize>,
-        x: &mut Rows<'_, C>,
-        top: &mut [[f64; C]],
-    ) {
-        for s in nodes {
-            let f = self.begin[s];
-            let size = self.size(s);
-            let pat = self.pattern(s);
-            let nr = size + pat.len();
-            let l = &vals[self.val_ptr[s]..self.val_ptr[s] + nr * size];
-            let top = &mut top[..size];
-            top.copy_from_slice(&x.lo[f - x.off..f - x.off + size]);
-            if size == 1 {
-                let mut acc = top[0];
-                for (&r, &a) in pat.iter().zip(&l[1..nr]) {
-                    let xi = x.at(r);
-                    for q in 0..C {
-                        acc[q] -= a * xi[q];
-                    }
-                }
-                top[0] = acc;
-            } else if size >= ROW_OUTER_MAX {
-                for (jj, tj) in top.iter_mut().enumerate() {
-                    let col = &l[jj * nr + size..(jj + 1) * nr];
-                    let mut acc = *tj;
-                    for (&r, &a) in pat.iter().zip(col) {
-                        let xi = x.at(r);
-                        for q in 0..C {
-                            acc[q] -= a * xi[q];
+                    for jj in (0..size).rev() {
+                        let col = &l[jj * nr..jj * nr + size];
+                        let mut acc = top[jj];
+                        for ii in jj + 1..size {
+                            let a = col[ii];
+                            sub_scaled(&mut acc, a, &top[ii]);
                         }
-                    }
-                    *tj = acc;
-                }
-            } else {
-                for (p, &r) in pat.iter().enumerate() {
-                    let xi = x.at(r);
-                    for (jj, tj) in top.iter_mut().enumerate() {
-                        let a = l[jj * nr + size + p];
-                        for q in 0..C {
-                            tj[q] -= a * xi[q];
+                        let inv = 1.0 / col[jj];
+                        for v in acc.iter_mut() {
+                            *v *= inv;
                         }
+                        top[jj] = acc;
                     }
+                    x.lo[own].copy_from_slice(top);
                 }
             }
-            for jj in (0..size).rev() {
-                let col = &l[jj * nr..jj * nr + size];
-                let mut acc = top[jj];
-                for ii in jj + 1..size {
-                    let a = col[ii];
-                    for q in 0..C {
-                        acc[q] -= a * top[ii][q];
-                    }
-                }
-                let inv = 1.0 / col[jj];
-                for v in acc.iter_mut() {
-                    *v *= inv;
-                }
-                top[jj] = acc;
-            }
-            x.lo[f - x.off..f - x.off + size].copy_from_slice(top);
         }
     }
 
@@ -423,38 +415,44 @@ impl Supernodes {
         let ns = self.n_supernodes();
         let mut top = self.diagonal_scratch::<C>();
         let Some(sp) = &self.split else {
-            self.forward(vals, 0..ns, &mut Rows::all(x, 0), &mut top);
-            self.backward(vals, (0..ns).rev(), &mut Rows::all(x, 0), &mut top);
+            self.sweep(Sweep::Forward, vals, 0..ns, &mut Rows::all(x, 0), &mut top);
+            self.sweep(
+                Sweep::Backward,
+                vals,
+                (0..ns).rev(),
+                &mut Rows::all(x, 0),
+                &mut top,
+            );
             return;
         };
         let mut shared = vec![[0.0; C]; sp.top_cols.len()];
         let mut top_right = self.diagonal_scratch::<C>();
         // Forward: both parts side by side (the left part's updates of top rows go to
         // `shared`, added afterwards), then the top.
-        {
-            let (left, right) = x.split_at_mut(sp.c);
-            let mut lo = Rows {
-                lo: left,
-                off: 0,
-                bound: sp.c,
-                hi: &mut shared,
-                hi_map: &sp.hi_map,
-            };
-            let mut hi = Rows::all(right, sp.c);
-            rayon::join(
-                || self.forward(vals, 0..sp.q, &mut lo, &mut top),
-                || self.forward(vals, sp.right.iter().copied(), &mut hi, &mut top_right),
-            );
-        }
+        self.sweep_parts(
+            Sweep::Forward,
+            vals,
+            sp,
+            x,
+            &mut shared,
+            [&mut top, &mut top_right],
+        );
         for (t, &j) in sp.top_cols.iter().enumerate() {
             for q in 0..C {
                 x[j][q] += shared[t][q];
             }
         }
-        self.forward(vals, sp.top.iter().copied(), &mut Rows::all(x, 0), &mut top);
+        self.sweep(
+            Sweep::Forward,
+            vals,
+            sp.top.iter().copied(),
+            &mut Rows::all(x, 0),
+            &mut top,
+        );
         // Backward: the top, then both parts side by side (the left part reads the top's
         // rows from `shared`).
-        self.backward(
+        self.sweep(
+            Sweep::Backward,
             vals,
             sp.top.iter().rev().copied(),
             &mut Rows::all(x, 0),
@@ -463,26 +461,49 @@ impl Supernodes {
         for (t, &j) in sp.top_cols.iter().enumerate() {
             shared[t] = x[j];
         }
-        let (left, right) = x.split_at_mut(sp.c);
+        self.sweep_parts(
+            Sweep::Backward,
+            vals,
+            sp,
+            x,
+            &mut shared,
+            [&mut top, &mut top_right],
+        );
+    }
+
+    /// A sweep over the two parts of `split` side by side, the left part on the rows of
+    /// `x` before the split's first column and `shared` (the top's rows), the right part
+    /// on the others; `tops` is each part's scratch.
+    #[inline(always)]
+    fn sweep_parts<const C: usize>(
+        &self,
+        sweep: Sweep,
+        vals: &[f64],
+        split: &TreeSplit,
+        x: &mut [[f64; C]],
+        shared: &mut [[f64; C]],
+        [top_left, top_right]: [&mut [[f64; C]]; 2],
+    ) {
+        let (left, right) = x.split_at_mut(split.c);
         let mut lo = Rows {
             lo: left,
             off: 0,
-            bound: sp.c,
-            hi: &mut shared,
-            hi_map: &sp.hi_map,
+            bound: split.c,
+            hi: shared,
+            hi_map: &split.hi_map,
         };
-        let mut hi = Rows::all(right, sp.c);
-        rayon::join(
-            || self.backward(vals, (0..sp.q).rev(), &mut lo, &mut top),
-            || {
-                self.backward(
-                    vals,
-                    sp.right.iter().rev().copied(),
-                    &mut hi,
-                    &mut top_right,
-                )
-            },
-        );
+        let mut hi = Rows::all(right, split.c);
+        let right_nodes = split.right.iter().copied();
+        match sweep {
+            Sweep::Forward => rayon::join(
+                || self.sweep(sweep, vals, 0..split.q, &mut lo, top_left),
+                || self.sweep(sweep, vals, right_nodes, &mut hi, top_right),
+            ),
+            Sweep::Backward => rayon::join(
+                || self.sweep(sweep, vals, (0..split.q).rev(), &mut lo, top_left),
+                || self.sweep(sweep, vals, right_nodes.rev(), &mut hi, top_right),
+            ),
+        };
     }
 
     /// Solves for `C` column-major columns of `b` (`n` rows each) in place.
