@@ -486,17 +486,7 @@ impl Analysis {
             return Ok(b);
         }
         let mut solver = lock(&self.solver);
-        // Every report of a basis reads the topology: it is computed on a thread of its
-        // own beside the solve, whose ordering and factorization use one core (at 104k
-        // vertices this took the topology's 0.07 s off the `eigs` command).
-        let solved = std::thread::scope(|scope| {
-            if self.topology.get().is_none() {
-                scope.spawn(|| {
-                    self.topology();
-                });
-            }
-            solver.solve(k, progress, cancel)
-        });
+        let solved = solver.solve(k, progress, cancel);
         // A factorization made before a cancellation or failure is kept too.
         self.factor_len
             .store(solver.factor_len(), Ordering::Relaxed);

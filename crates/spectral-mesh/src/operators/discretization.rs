@@ -146,17 +146,12 @@ impl Operators {
                 mass: r.mass,
             };
         }
-        // S and B are independent: assembled side by side.
-        let (stiffness, mass) = rayon::join(
-            || {
-                if laplacian.is_cotangent() {
-                    cotan_stiffness(mesh)
-                } else {
-                    uniform_laplacian(mesh)
-                }
-            },
-            || mass_matrix(mesh, laplacian.mass_kind()),
-        );
+        let stiffness = if laplacian.is_cotangent() {
+            cotan_stiffness(mesh)
+        } else {
+            uniform_laplacian(mesh)
+        };
+        let mass = mass_matrix(mesh, laplacian.mass_kind());
         Self {
             laplacian,
             stiffness,
