@@ -126,31 +126,21 @@ impl Quantity {
     }
 }
 
-/// Parameters of a study. `Default`: k = 60, heat t = 0.05, diffusion t = 0.05,
-/// HKS t = 0.01 (unit-area times), the default source.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StudyParams {
-    /// Number of eigenpairs.
-    pub k: usize,
-    /// Time of the heat basis function.
-    pub heat_t: f64,
-    /// Time of the diffusion distance.
-    pub diffusion_t: f64,
-    /// Time of the heat kernel signature.
-    pub hks_t: f64,
-    /// Source on the original meshes; `None`: the vertex of largest x.
-    pub source: Option<usize>,
-}
-
-impl Default for StudyParams {
-    fn default() -> Self {
-        Self {
-            k: 60,
-            heat_t: 0.05,
-            diffusion_t: 0.05,
-            hks_t: 0.01,
-            source: None,
-        }
+crate::defaults::with_defaults! {
+    /// Parameters of a study. `Default`: k = 60, heat t = 0.05, diffusion t = 0.05,
+    /// HKS t = 0.01 (unit-area times), the default source.
+    #[derive(Debug, Clone, PartialEq)]
+    pub struct StudyParams {
+        /// Number of eigenpairs.
+        pub k: usize = 60,
+        /// Time of the heat basis function.
+        pub heat_t: f64 = 0.05,
+        /// Time of the diffusion distance.
+        pub diffusion_t: f64 = 0.05,
+        /// Time of the heat kernel signature.
+        pub hks_t: f64 = 0.01,
+        /// Source on the original meshes; `None`: the vertex of largest x.
+        pub source: Option<usize> = None,
     }
 }
 
