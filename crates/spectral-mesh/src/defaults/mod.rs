@@ -153,24 +153,7 @@ pub fn to_json() -> Value {
             "min_size": MIN_PICTURE,
             "max_size": MAX_PICTURE,
         },
-        "server": {
-            "port": server::PORT,
-            "memory_mib": server::MEMORY_MIB,
-            "cache_mib": server::CACHE_MIB,
-            "max_upload_mib": server::MAX_UPLOAD_MIB,
-            "max_json_bytes": server::MAX_JSON_BYTES,
-            "max_vertices": server::MAX_VERTICES,
-            "max_faces": server::MAX_FACES,
-            "max_shape_vertices": server::MAX_SHAPE_VERTICES,
-            "max_k": server::MAX_K,
-            "max_jobs": server::MAX_JOBS,
-            "max_queued": server::MAX_QUEUED,
-            "job_seconds": server::JOB_SECONDS,
-            "job_idle_seconds": server::JOB_IDLE_SECONDS,
-            "request_seconds": server::REQUEST_SECONDS,
-            "max_requests": server::MAX_REQUESTS,
-            "idle_seconds": server::IDLE_SECONDS,
-        },
+        "server": server::to_json(),
         "zero_eigenvalue_eps": ZERO_EIGENVALUE_EPS,
         "shape": DEFAULT_SHAPE,
         "laplacians": Laplacian::ALL.iter().map(|l| l.name()).collect::<Vec<_>>(),
@@ -243,6 +226,43 @@ mod tests {
             Some(crate::batch::pairs::DEFAULT_PAIR_GEODESIC_SOURCES)
         );
         assert_eq!(p.solve, b.solve);
+    }
+
+    #[test]
+    fn the_server_limits_keep_their_keys() {
+        let j = to_json();
+        let keys: Vec<&str> = j["server"]
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        let mut expected = vec![
+            "port",
+            "memory_mib",
+            "cache_mib",
+            "max_upload_mib",
+            "max_json_bytes",
+            "max_vertices",
+            "max_faces",
+            "max_shape_vertices",
+            "max_k",
+            "max_jobs",
+            "max_queued",
+            "job_seconds",
+            "job_idle_seconds",
+            "request_seconds",
+            "max_requests",
+            "idle_seconds",
+        ];
+        expected.sort_unstable();
+        let mut keys = keys;
+        keys.sort_unstable();
+        assert_eq!(keys, expected);
+        assert_eq!(j["server"]["port"], json!(server::PORT));
+        assert_eq!(j["server"]["max_json_bytes"], json!(1 << 20));
+        assert_eq!(j["server"]["max_shape_vertices"], json!(2_000_000));
+        assert_eq!(j["server"]["idle_seconds"], json!(server::IDLE_SECONDS));
     }
 
     #[test]
