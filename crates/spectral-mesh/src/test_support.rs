@@ -3,47 +3,49 @@
 
 use crate::mesh::Mesh;
 
+/// The mesh of these positions and triangles (which must make a valid mesh).
+fn mesh(positions: &[[f64; 3]], triangles: &[[usize; 3]]) -> Mesh {
+    Mesh::new(positions.to_vec(), triangles.to_vec()).unwrap()
+}
+
 /// The tetrahedron on the origin and the three unit points, faces oriented outward.
 pub(crate) fn tetra() -> Mesh {
-    Mesh::new(
-        vec![
+    mesh(
+        &[
             [0.0, 0.0, 0.0],
             [1.0, 0.0, 0.0],
             [0.0, 1.0, 0.0],
             [0.0, 0.0, 1.0],
         ],
-        vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        &[[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
     )
-    .unwrap()
 }
 
 /// Two triangles in z = 0 that share only vertex 0 (a bow tie: a non-manifold vertex).
 pub(crate) fn bow_tie() -> Mesh {
-    Mesh::new(
-        vec![
+    mesh(
+        &[
             [0.0, 0.0, 0.0],
             [1.0, 0.0, 0.0],
             [1.0, 1.0, 0.0],
             [-1.0, 0.0, 0.0],
             [-1.0, -1.0, 0.0],
         ],
-        vec![[0, 1, 2], [0, 3, 4]],
+        &[[0, 1, 2], [0, 3, 4]],
     )
-    .unwrap()
 }
 
 /// The unit square in z = 0 as two triangles split along the diagonal 0-2.
 pub(crate) fn unit_square() -> Mesh {
-    Mesh::new(
-        vec![
+    mesh(
+        &[
             [0.0, 0.0, 0.0],
             [1.0, 0.0, 0.0],
             [1.0, 1.0, 0.0],
             [0.0, 1.0, 0.0],
         ],
-        vec![[0, 1, 2], [0, 2, 3]],
+        &[[0, 1, 2], [0, 2, 3]],
     )
-    .unwrap()
 }
 
 /// The regular octahedron with vertices `+-e_x, +-e_y, +-e_z` (indices `2 a` and `2 a + 1`

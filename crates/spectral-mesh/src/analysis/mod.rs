@@ -65,27 +65,19 @@ use crate::spectral::eigenbasis::{EigenError, EigenParams, EigenSolver};
 use crate::spectral::heat::HeatError;
 use crate::spectral::signatures::SignatureError;
 
-/// How an analysis is set up. `Default` is the paper's: linear FEM, unit-area times, the
-/// eigensolver's defaults.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AnalysisOptions {
-    /// The discretization (default fem).
-    pub laplacian: Laplacian,
-    /// Analyse the shape scaled to unit total mass (default `true`; see the module
-    /// documentation).
-    pub normalize: bool,
-    /// Eigensolver parameters (tolerance, seed, method, Dirichlet vertices); `k` is ignored
-    /// (each request names its own).
-    pub eigen: EigenParams,
-}
-
-impl Default for AnalysisOptions {
-    fn default() -> Self {
-        Self {
-            laplacian: Laplacian::Fem,
-            normalize: crate::defaults::values::NORMALIZE,
-            eigen: EigenParams::default(),
-        }
+crate::defaults::with_defaults! {
+    /// How an analysis is set up. `Default` is the paper's: linear FEM, unit-area times, the
+    /// eigensolver's defaults.
+    #[derive(Debug, Clone, PartialEq)]
+    pub struct AnalysisOptions {
+        /// The discretization (default fem).
+        pub laplacian: Laplacian = Laplacian::Fem,
+        /// Analyse the shape scaled to unit total mass (default `true`; see the module
+        /// documentation).
+        pub normalize: bool = crate::defaults::values::NORMALIZE,
+        /// Eigensolver parameters (tolerance, seed, method, Dirichlet vertices); `k` is ignored
+        /// (each request names its own).
+        pub eigen: EigenParams = EigenParams::default(),
     }
 }
 

@@ -206,29 +206,21 @@ fn find(inputs: &[BatchInput], key: &str) -> Result<usize, BatchError> {
         })
 }
 
-/// Parameters of a pair batch. `Default`: the match defaults, the analysis defaults
-/// (fem, unit area, the eigensolver's tolerance), at most
-/// [`DEFAULT_PAIR_GEODESIC_SOURCES`] geodesic solves per evaluation. In JSON the keys of
-/// [`SolveParams`] stand beside the others.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
-pub struct PairParams {
-    /// The match pipeline's parameters.
-    pub matching: MatchParams,
-    /// How both shapes are solved (for [`MatchParams::basis_size`] pairs).
-    #[serde(flatten)]
-    pub solve: SolveParams,
-    /// Most geodesic solves of an evaluation (`None`: every wrongly mapped vertex).
-    pub max_geodesic_sources: Option<usize>,
-}
-
-impl Default for PairParams {
-    fn default() -> Self {
-        Self {
-            matching: MatchParams::default(),
-            solve: SolveParams::default(),
-            max_geodesic_sources: Some(DEFAULT_PAIR_GEODESIC_SOURCES),
-        }
+crate::defaults::with_defaults! {
+    /// Parameters of a pair batch. `Default`: the match defaults, the analysis defaults
+    /// (fem, unit area, the eigensolver's tolerance), at most
+    /// [`DEFAULT_PAIR_GEODESIC_SOURCES`] geodesic solves per evaluation. In JSON the keys of
+    /// [`SolveParams`] stand beside the others.
+    #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+    #[serde(default)]
+    pub struct PairParams {
+        /// The match pipeline's parameters.
+        pub matching: MatchParams = MatchParams::default(),
+        /// How both shapes are solved (for [`MatchParams::basis_size`] pairs).
+        #[serde(flatten)]
+        pub solve: SolveParams = SolveParams::default(),
+        /// Most geodesic solves of an evaluation (`None`: every wrongly mapped vertex).
+        pub max_geodesic_sources: Option<usize> = Some(DEFAULT_PAIR_GEODESIC_SOURCES),
     }
 }
 

@@ -88,33 +88,24 @@ impl FromStr for Schedule {
     }
 }
 
-/// How the eigenbasis of each shape is computed: the discretization, the scale and the
-/// eigensolver's tolerance (the number of pairs is the caller's: [`BatchParams::k`] for the
-/// shapes of a batch, the match's basis size for a pair, see
-/// [`super::pairs::PairParams`]). `Default`: the analysis defaults (fem, unit area, the
-/// eigensolver's tolerance).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
-pub struct SolveParams {
-    /// The discretization of meshes. Point clouds always use the point-cloud Laplacian
-    /// (`robust`, with [`BatchParams::point_cloud`]).
-    pub laplacian: Laplacian,
-    /// Target relative residual of every eigenpair.
-    pub tolerance: f64,
-    /// Analyse each shape scaled to unit total mass (see
-    /// [`crate::analysis`]'s scale normalisation): eigenvalues and times comparable across
-    /// shapes of different sizes. Off: the operators as assembled (what `eigs` saves).
-    pub normalize: bool,
-}
-
-impl Default for SolveParams {
-    fn default() -> Self {
-        let a = AnalysisOptions::default();
-        Self {
-            laplacian: a.laplacian,
-            tolerance: a.eigen.tolerance,
-            normalize: a.normalize,
-        }
+crate::defaults::with_defaults! {
+    /// How the eigenbasis of each shape is computed: the discretization, the scale and the
+    /// eigensolver's tolerance (the number of pairs is the caller's: [`BatchParams::k`] for the
+    /// shapes of a batch, the match's basis size for a pair, see
+    /// [`super::pairs::PairParams`]). `Default`: the analysis defaults (fem, unit area, the
+    /// eigensolver's tolerance).
+    #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+    #[serde(default)]
+    pub struct SolveParams {
+        /// The discretization of meshes. Point clouds always use the point-cloud Laplacian
+        /// (`robust`, with [`BatchParams::point_cloud`]).
+        pub laplacian: Laplacian = AnalysisOptions::default().laplacian,
+        /// Target relative residual of every eigenpair.
+        pub tolerance: f64 = AnalysisOptions::default().eigen.tolerance,
+        /// Analyse each shape scaled to unit total mass (see
+        /// [`crate::analysis`]'s scale normalisation): eigenvalues and times comparable across
+        /// shapes of different sizes. Off: the operators as assembled (what `eigs` saves).
+        pub normalize: bool = AnalysisOptions::default().normalize,
     }
 }
 
@@ -199,54 +190,42 @@ impl DescriptorParams {
     }
 }
 
-/// What is computed and saved for every shape of a batch. `Default`: 100 FEM pairs of the
-/// shape scaled to unit area at tolerance `1e-10`, the basis saved, no descriptor, no
-/// thumbnail.
-///
-/// Everything here enters [`BatchParams::hash`]; how the work is run (threads, workers,
-/// the output folder) does not. In JSON the keys of [`SolveParams`] and
-/// [`DescriptorParams`] stand beside the others (flat, as [`BatchParams::KEYS`]); an
-/// unknown key is refused.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(remote = "Self", default)]
-pub struct BatchParams {
-    /// Eigenpairs per shape (the smallest eigenvalues).
-    pub k: usize,
-    /// How each shape is solved.
-    #[serde(flatten)]
-    pub solve: SolveParams,
-    /// Save the eigenvectors (`n x k`) and the mass matrix; off, the result holds the
-    /// eigenvalues (and descriptors) only.
-    pub basis: bool,
-    /// The descriptors saved.
-    #[serde(flatten)]
-    pub descriptors: DescriptorParams,
-    /// A PNG thumbnail of this width and height (pixels) showing the first eigenvector
-    /// with a non-zero eigenvalue (meshes only).
-    pub thumbnail: Option<u32>,
-    /// Parameters of the point-cloud Laplacian (point-cloud inputs only).
-    pub point_cloud: PointCloudParams,
-    /// Geodesic distances (the heat method with its defaults, in the mesh's units) from
-    /// this many farthest-point samples of each mesh, the first at the vertex of largest x:
-    /// the `n x N` array `geodesic` (column `j`: the distance from sample `j`, `inf` on
-    /// components it cannot reach) and the samples `geodesic_sources`. Meshes only (a
-    /// point cloud gets a warning). Left out of the hash when `None`, so that the results
-    /// of earlier batches stay valid.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub geodesic: Option<usize>,
-}
-
-impl Default for BatchParams {
-    fn default() -> Self {
-        Self {
-            k: DEFAULT_K,
-            solve: SolveParams::default(),
-            basis: true,
-            descriptors: DescriptorParams::default(),
-            thumbnail: None,
-            point_cloud: PointCloudParams::default(),
-            geodesic: None,
-        }
+crate::defaults::with_defaults! {
+    /// What is computed and saved for every shape of a batch. `Default`: 100 FEM pairs of the
+    /// shape scaled to unit area at tolerance `1e-10`, the basis saved, no descriptor, no
+    /// thumbnail.
+    ///
+    /// Everything here enters [`BatchParams::hash`]; how the work is run (threads, workers,
+    /// the output folder) does not. In JSON the keys of [`SolveParams`] and
+    /// [`DescriptorParams`] stand beside the others (flat, as [`BatchParams::KEYS`]); an
+    /// unknown key is refused.
+    #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+    #[serde(remote = "Self", default)]
+    pub struct BatchParams {
+        /// Eigenpairs per shape (the smallest eigenvalues).
+        pub k: usize = DEFAULT_K,
+        /// How each shape is solved.
+        #[serde(flatten)]
+        pub solve: SolveParams = SolveParams::default(),
+        /// Save the eigenvectors (`n x k`) and the mass matrix; off, the result holds the
+        /// eigenvalues (and descriptors) only.
+        pub basis: bool = true,
+        /// The descriptors saved.
+        #[serde(flatten)]
+        pub descriptors: DescriptorParams = DescriptorParams::default(),
+        /// A PNG thumbnail of this width and height (pixels) showing the first eigenvector
+        /// with a non-zero eigenvalue (meshes only).
+        pub thumbnail: Option<u32> = None,
+        /// Parameters of the point-cloud Laplacian (point-cloud inputs only).
+        pub point_cloud: PointCloudParams = PointCloudParams::default(),
+        /// Geodesic distances (the heat method with its defaults, in the mesh's units) from
+        /// this many farthest-point samples of each mesh, the first at the vertex of largest x:
+        /// the `n x N` array `geodesic` (column `j`: the distance from sample `j`, `inf` on
+        /// components it cannot reach) and the samples `geodesic_sources`. Meshes only (a
+        /// point cloud gets a warning). Left out of the hash when `None`, so that the results
+        /// of earlier batches stay valid.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub geodesic: Option<usize> = None,
     }
 }
 

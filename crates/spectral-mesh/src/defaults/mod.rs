@@ -35,6 +35,33 @@ pub use values::{
 
 pub mod values;
 
+/// Declares a parameter struct with each field's default written beside it
+/// (`pub k: usize = 60,`) and the `Default` that builds them: the field list is written
+/// once instead of again in a `Default` impl. Attributes of the struct and of its fields
+/// (documentation, derives, serde) pass through.
+macro_rules! with_defaults {
+    (
+        $(#[$attr:meta])*
+        $vis:vis struct $name:ident {
+            $($(#[$field_attr:meta])* $field_vis:vis $field:ident: $ty:ty = $default:expr,)*
+        }
+    ) => {
+        $(#[$attr])*
+        $vis struct $name {
+            $($(#[$field_attr])* $field_vis $field: $ty,)*
+        }
+
+        impl Default for $name {
+            fn default() -> Self {
+                Self {
+                    $($field: $default,)*
+                }
+            }
+        }
+    };
+}
+pub(crate) use with_defaults;
+
 /// The discretization of an input: the one `given`, or the input's default (fem for a
 /// mesh, [`Laplacian::Robust`], the point-cloud Laplacian, for a point cloud). A point
 /// cloud refuses any other (it needs triangles): the error says why.
@@ -126,24 +153,7 @@ pub fn to_json() -> Value {
             "min_size": MIN_PICTURE,
             "max_size": MAX_PICTURE,
         },
-        "server": {
-            "port": server::PORT,
-            "memory_mib": server::MEMORY_MIB,
-            "cache_mib": server::CACHE_MIB,
-            "max_upload_mib": server::MAX_UPLOAD_MIB,
-            "max_json_bytes": server::MAX_JSON_BYTES,
-            "max_vertices": server::MAX_VERTICES,
-            "max_faces": server::MAX_FACES,
-            "max_shape_vertices": server::MAX_SHAPE_VERTICES,
-            "max_k": server::MAX_K,
-            "max_jobs": server::MAX_JOBS,
-            "max_queued": server::MAX_QUEUED,
-            "job_seconds": server::JOB_SECONDS,
-            "job_idle_seconds": server::JOB_IDLE_SECONDS,
-            "request_seconds": server::REQUEST_SECONDS,
-            "max_requests": server::MAX_REQUESTS,
-            "idle_seconds": server::IDLE_SECONDS,
-        },
+        "server": server::to_json(),
         "zero_eigenvalue_eps": ZERO_EIGENVALUE_EPS,
         "shape": DEFAULT_SHAPE,
         "laplacians": Laplacian::ALL.iter().map(|l| l.name()).collect::<Vec<_>>(),
@@ -170,6 +180,89 @@ mod tests {
         assert_eq!(j["pictures"]["levels"], json!(LEVELS));
         assert_eq!(j["default_laplacian"]["point cloud"], json!("robust"));
         assert_eq!(j["default_laplacian"]["mesh"], json!("fem"));
+    }
+
+    #[test]
+    fn structs_with_defaults_default_to_what_their_fields_say() {
+        use crate::experiments::harmonic::HarmonicExperimentParams;
+        use crate::experiments::study::StudyParams;
+        use crate::experiments::truncation::{TruncationParams, TruncationReference};
+        let t = TruncationParams::default();
+        assert_eq!(
+            t.laplacians,
+            [Laplacian::Cot, Laplacian::VoronoiCot, Laplacian::Fem]
+        );
+        assert_eq!(t.times, [0.01, 0.05, 0.1]);
+        assert_eq!(t.ks, [10, 20, 50, 100, 200, usize::MAX]);
+        assert_eq!(
+            (t.anchor, t.reference, t.dense_max_n),
+            (None, TruncationReference::Auto, 2500)
+        );
+        let s = StudyParams::default();
+        assert_eq!(
+            (s.k, s.heat_t, s.diffusion_t, s.hks_t, s.source),
+            (60, 0.05, 0.05, 0.01, None)
+        );
+        let h = HarmonicExperimentParams::default();
+        assert_eq!(h.constraint_counts, [2, 4, 6]);
+        assert_eq!(
+            (h.order, h.laplacian, h.locality_rings),
+            (1, Laplacian::Fem, 2)
+        );
+        let a = AnalysisOptions::default();
+        assert_eq!((a.laplacian, a.normalize), (Laplacian::Fem, NORMALIZE));
+        let b = BatchParams::default();
+        assert_eq!(
+            (b.k, b.basis, b.thumbnail, b.geodesic),
+            (DEFAULT_K, true, None, None)
+        );
+        assert_eq!(
+            (b.solve.laplacian, b.solve.tolerance, b.solve.normalize),
+            (a.laplacian, a.eigen.tolerance, a.normalize)
+        );
+        let p = crate::batch::pairs::PairParams::default();
+        assert_eq!(
+            p.max_geodesic_sources,
+            Some(crate::batch::pairs::DEFAULT_PAIR_GEODESIC_SOURCES)
+        );
+        assert_eq!(p.solve, b.solve);
+    }
+
+    #[test]
+    fn the_server_limits_keep_their_keys() {
+        let j = to_json();
+        let keys: Vec<&str> = j["server"]
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        let mut expected = vec![
+            "port",
+            "memory_mib",
+            "cache_mib",
+            "max_upload_mib",
+            "max_json_bytes",
+            "max_vertices",
+            "max_faces",
+            "max_shape_vertices",
+            "max_k",
+            "max_jobs",
+            "max_queued",
+            "job_seconds",
+            "job_idle_seconds",
+            "request_seconds",
+            "max_requests",
+            "idle_seconds",
+        ];
+        expected.sort_unstable();
+        let mut keys = keys;
+        keys.sort_unstable();
+        assert_eq!(keys, expected);
+        assert_eq!(j["server"]["port"], json!(server::PORT));
+        assert_eq!(j["server"]["max_json_bytes"], json!(1 << 20));
+        assert_eq!(j["server"]["max_shape_vertices"], json!(2_000_000));
+        assert_eq!(j["server"]["idle_seconds"], json!(server::IDLE_SECONDS));
     }
 
     #[test]

@@ -41,6 +41,22 @@ pub fn check_picture_size(size: u32) -> Result<(), String> {
     }
 }
 
+/// Declares each limit as a public constant, and `to_json`, which names every one by its
+/// name in lower case (`MAX_K` -> `max_k`): a limit is written once.
+macro_rules! limits {
+    ($($(#[$doc:meta])* $name:ident: $ty:ty = $value:expr;)*) => {
+        $($(#[$doc])* pub const $name: $ty = $value;)*
+
+        /// Every limit but [`HOST`], keyed by its name in lower case (`GET /api/defaults`'
+        /// `server` object).
+        pub fn to_json() -> serde_json::Value {
+            let mut m = serde_json::Map::new();
+            $(m.insert(stringify!($name).to_ascii_lowercase(), $name.into());)*
+            serde_json::Value::Object(m)
+        }
+    };
+}
+
 /// The web server's limits (`spectral-mesh serve`'s options and the web crate's
 /// `Limits::default()`): memory, sizes, counts and times.
 pub mod server {
@@ -48,39 +64,42 @@ pub mod server {
 
     /// Address to listen on: this machine only.
     pub const HOST: IpAddr = IpAddr::V4(Ipv4Addr::LOCALHOST);
-    /// Port.
-    pub const PORT: u16 = 8000;
-    /// Memory budget (cache plus work in progress), in MiB.
-    pub const MEMORY_MIB: usize = 2048;
-    /// Most the cache of meshes and analyses may hold, in MiB.
-    pub const CACHE_MIB: usize = 1024;
-    /// Largest mesh upload, in MiB.
-    pub const MAX_UPLOAD_MIB: usize = 64;
-    /// Largest JSON body, in bytes.
-    pub const MAX_JSON_BYTES: usize = 1 << 20;
-    /// Most vertices (or points) of an input.
-    pub const MAX_VERTICES: usize = 1_000_000;
-    /// Largest built-in shape the server builds whatever `MAX_VERTICES` says (a
-    /// resolution typo must not exhaust memory).
-    pub const MAX_SHAPE_VERTICES: usize = 2_000_000;
-    /// Most triangles of a mesh, after polygons are split.
-    pub const MAX_FACES: usize = 2_000_000;
-    /// Most eigenpairs of a basis.
-    pub const MAX_K: usize = 1000;
-    /// Eigenbasis computations running at once.
-    pub const MAX_JOBS: usize = 2;
-    /// Eigenbasis requests waiting in the queue.
-    pub const MAX_QUEUED: usize = 16;
-    /// Longest an eigenbasis computation may run, in seconds.
-    pub const JOB_SECONDS: u64 = 600;
-    /// A job nobody asked about for this many seconds is cancelled.
-    pub const JOB_IDLE_SECONDS: u64 = 60;
-    /// Longest time of any other request, in seconds.
-    pub const REQUEST_SECONDS: u64 = 120;
-    /// Requests in progress at once.
-    pub const MAX_REQUESTS: usize = 64;
-    /// Inputs and analyses unused for this many seconds are dropped (0: never).
-    pub const IDLE_SECONDS: u64 = 3600;
+
+    limits! {
+        /// Port.
+        PORT: u16 = 8000;
+        /// Memory budget (cache plus work in progress), in MiB.
+        MEMORY_MIB: usize = 2048;
+        /// Most the cache of meshes and analyses may hold, in MiB.
+        CACHE_MIB: usize = 1024;
+        /// Largest mesh upload, in MiB.
+        MAX_UPLOAD_MIB: usize = 64;
+        /// Largest JSON body, in bytes.
+        MAX_JSON_BYTES: usize = 1 << 20;
+        /// Most vertices (or points) of an input.
+        MAX_VERTICES: usize = 1_000_000;
+        /// Largest built-in shape the server builds whatever `MAX_VERTICES` says (a
+        /// resolution typo must not exhaust memory).
+        MAX_SHAPE_VERTICES: usize = 2_000_000;
+        /// Most triangles of a mesh, after polygons are split.
+        MAX_FACES: usize = 2_000_000;
+        /// Most eigenpairs of a basis.
+        MAX_K: usize = 1000;
+        /// Eigenbasis computations running at once.
+        MAX_JOBS: usize = 2;
+        /// Eigenbasis requests waiting in the queue.
+        MAX_QUEUED: usize = 16;
+        /// Longest an eigenbasis computation may run, in seconds.
+        JOB_SECONDS: u64 = 600;
+        /// A job nobody asked about for this many seconds is cancelled.
+        JOB_IDLE_SECONDS: u64 = 60;
+        /// Longest time of any other request, in seconds.
+        REQUEST_SECONDS: u64 = 120;
+        /// Requests in progress at once.
+        MAX_REQUESTS: usize = 64;
+        /// Inputs and analyses unused for this many seconds are dropped (0: never).
+        IDLE_SECONDS: u64 = 3600;
+    }
 }
 
 /// Default `m` of the heat method's time step `t = m h^2` (`h` the mean edge length;

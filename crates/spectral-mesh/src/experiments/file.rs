@@ -31,69 +31,86 @@ fn key_err(key: &str, msg: impl std::fmt::Display) -> ExperimentFileError {
     ExperimentFileError(format!("key '{key}': {msg}"))
 }
 
-/// Picture options (`[figure]`), as plain data: the render crate turns them into its
-/// options and checks the names (colour map, view).
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct FigureFile {
-    /// Number of level sets (0 = none).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub levels: Option<usize>,
-    /// Colour map name.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub colormap: Option<String>,
-    /// View: front, side, top, iso or "AZ,EL".
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub view: Option<String>,
-    /// Picture size in pixels.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub size: Option<u32>,
-    /// Transparent background.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub transparent: Option<bool>,
-    /// Mark critical points.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub critical_points: Option<bool>,
-    /// Draw the colour bar.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub colorbar: Option<bool>,
-    /// Picture height in pixels (default: `size`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub height: Option<u32>,
-    /// Picture pixels per screen pixel (markers, lines, text).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub scale: Option<f64>,
-    /// Print resolution of the PNG, dots per inch.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub dpi: Option<u32>,
-    /// Draw the legend.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub legend: Option<bool>,
+/// Declares a table of keys of which those after `optional` may be left out: each of these
+/// is an `Option`, `None` when the key is absent and not written when `None` (the serde rule
+/// said once for every optional key of a file).
+macro_rules! optional_keys {
+    (
+        $(#[$attr:meta])*
+        pub struct $name:ident {
+            $($(#[$required_attr:meta])* pub $required:ident: $required_ty:ty,)*
+        }
+        optional {
+            $($(#[$optional_attr:meta])* $optional:ident: Option<$optional_ty:ty>,)*
+        }
+    ) => {
+        $(#[$attr])*
+        pub struct $name {
+            $($(#[$required_attr])* pub $required: $required_ty,)*
+            $(
+                $(#[$optional_attr])*
+                #[serde(default, skip_serializing_if = "Option::is_none")]
+                pub $optional: Option<$optional_ty>,
+            )*
+        }
+    };
 }
 
-/// The point-cloud Laplacian's parameters (`[point_cloud]`), for an input that is a point
-/// cloud. Every key is optional on reading (the library's [`PointCloudParams::default`]
-/// applies); saved files write them all, so a replay builds the same Laplacian (and so the
-/// same field, bit for bit) whatever the defaults are then.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PointCloudFile {
-    /// Neighbours per point (at least 2).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub neighbors: Option<usize>,
-    /// Relative mollification of the robust pipeline.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub mollify_factor: Option<f64>,
-    /// Delaunay tolerance of the robust pipeline.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub delaunay_tolerance: Option<f64>,
-    /// Tangent planes: `estimate` (PCA) or `from-cloud` (the file's normals where non-zero).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub normals: Option<NormalSource>,
-    /// How the local triangulations are combined: `consensus`, `consensus-only`,
-    /// `multiplicity` or `interleaved`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub union: Option<TriangleUnion>,
+optional_keys! {
+    /// Picture options (`[figure]`), as plain data: the render crate turns them into its
+    /// options and checks the names (colour map, view).
+    #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct FigureFile {
+    }
+    optional {
+        /// Number of level sets (0 = none).
+        levels: Option<usize>,
+        /// Colour map name.
+        colormap: Option<String>,
+        /// View: front, side, top, iso or "AZ,EL".
+        view: Option<String>,
+        /// Picture size in pixels.
+        size: Option<u32>,
+        /// Transparent background.
+        transparent: Option<bool>,
+        /// Mark critical points.
+        critical_points: Option<bool>,
+        /// Draw the colour bar.
+        colorbar: Option<bool>,
+        /// Picture height in pixels (default: `size`).
+        height: Option<u32>,
+        /// Picture pixels per screen pixel (markers, lines, text).
+        scale: Option<f64>,
+        /// Print resolution of the PNG, dots per inch.
+        dpi: Option<u32>,
+        /// Draw the legend.
+        legend: Option<bool>,
+    }
+}
+
+optional_keys! {
+    /// The point-cloud Laplacian's parameters (`[point_cloud]`), for an input that is a point
+    /// cloud. Every key is optional on reading (the library's [`PointCloudParams::default`]
+    /// applies); saved files write them all, so a replay builds the same Laplacian (and so the
+    /// same field, bit for bit) whatever the defaults are then.
+    #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct PointCloudFile {
+    }
+    optional {
+        /// Neighbours per point (at least 2).
+        neighbors: Option<usize>,
+        /// Relative mollification of the robust pipeline.
+        mollify_factor: Option<f64>,
+        /// Delaunay tolerance of the robust pipeline.
+        delaunay_tolerance: Option<f64>,
+        /// Tangent planes: `estimate` (PCA) or `from-cloud` (the file's normals where non-zero).
+        normals: Option<NormalSource>,
+        /// How the local triangulations are combined: `consensus`, `consensus-only`,
+        /// `multiplicity` or `interleaved`.
+        union: Option<TriangleUnion>,
+    }
 }
 
 impl PointCloudFile {
@@ -122,67 +139,55 @@ impl PointCloudFile {
     }
 }
 
-/// An experiment file. Every key but `experiment` and `mesh` is optional on reading (the
-/// default applies); saved files write every key that applies.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ExperimentFile {
-    /// harmonic | diffusion-basis | spectral-distance | field.
-    pub experiment: String,
-    /// Mesh file (relative to the experiment file's folder, `${VAR}` expanded) or shape.
-    pub mesh: String,
-    /// blake3 of the mesh as read (before any repair), 64 hex digits.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub mesh_hash: Option<String>,
-    /// Repair the mesh after reading.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub repair: Option<bool>,
-    /// Discretization.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub laplacian: Option<String>,
-    /// Scale normalisation to unit area (default true).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub normalize: Option<bool>,
-    /// Pairs the eigenbasis was computed with, when more than the `k` used (the first `k`
-    /// pairs of a larger basis): the replay computes the same basis, so the field is the
-    /// same to the last bit.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub basis_k: Option<usize>,
-    /// Number of eigenpairs (diffusion-basis, spectral-distance).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub k: Option<usize>,
-    /// Diffusion time (diffusion-basis).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub t: Option<f64>,
-    /// Anchor vertex (diffusion-basis).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub anchor: Option<usize>,
-    /// Distance / filter (spectral-distance).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub distance: Option<String>,
-    /// Source vertex (spectral-distance).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub source: Option<usize>,
-    /// Constraint counts `[2, 4, 6]` or explicit `[{ vertex = 3, value = 0.0 }, ...]`
-    /// (harmonic).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub constraints: Option<toml::Value>,
-    /// 1 = harmonic, 2 = bi-harmonic (harmonic).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub order: Option<u32>,
-    /// Output folder (relative to the experiment file's folder).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub out: Option<String>,
-    /// The field (experiment = "field").
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub field: Option<FieldRequest>,
-    /// The point-cloud Laplacian's parameters (point-cloud inputs only; absent: the
-    /// library's defaults).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub point_cloud: Option<PointCloudFile>,
-    /// Picture options.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub figure: Option<FigureFile>,
+optional_keys! {
+    /// An experiment file. Every key but `experiment` and `mesh` is optional on reading (the
+    /// default applies); saved files write every key that applies.
+    #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct ExperimentFile {
+        /// harmonic | diffusion-basis | spectral-distance | field.
+        pub experiment: String,
+        /// Mesh file (relative to the experiment file's folder, `${VAR}` expanded) or shape.
+        pub mesh: String,
+    }
+    optional {
+        /// blake3 of the mesh as read (before any repair), 64 hex digits.
+        mesh_hash: Option<String>,
+        /// Repair the mesh after reading.
+        repair: Option<bool>,
+        /// Discretization.
+        laplacian: Option<String>,
+        /// Scale normalisation to unit area (default true).
+        normalize: Option<bool>,
+        /// Pairs the eigenbasis was computed with, when more than the `k` used (the first `k`
+        /// pairs of a larger basis): the replay computes the same basis, so the field is the
+        /// same to the last bit.
+        basis_k: Option<usize>,
+        /// Number of eigenpairs (diffusion-basis, spectral-distance).
+        k: Option<usize>,
+        /// Diffusion time (diffusion-basis).
+        t: Option<f64>,
+        /// Anchor vertex (diffusion-basis).
+        anchor: Option<usize>,
+        /// Distance / filter (spectral-distance).
+        distance: Option<String>,
+        /// Source vertex (spectral-distance).
+        source: Option<usize>,
+        /// Constraint counts `[2, 4, 6]` or explicit `[{ vertex = 3, value = 0.0 }, ...]`
+        /// (harmonic).
+        constraints: Option<toml::Value>,
+        /// 1 = harmonic, 2 = bi-harmonic (harmonic).
+        order: Option<u32>,
+        /// Output folder (relative to the experiment file's folder).
+        out: Option<String>,
+        /// The field (experiment = "field").
+        field: Option<FieldRequest>,
+        /// The point-cloud Laplacian's parameters (point-cloud inputs only; absent: the
+        /// library's defaults).
+        point_cloud: Option<PointCloudFile>,
+        /// Picture options.
+        figure: Option<FigureFile>,
+    }
 }
 
 /// The harmonic constraints of a file.
@@ -832,6 +837,46 @@ mod tests {
             let e = err(&format!("{base}{extra}"));
             assert!(e.contains(key), "{extra:?}: {e}");
         }
+    }
+
+    #[test]
+    fn saved_keys_keep_their_names_order_and_absence() {
+        let mut f = ExperimentFile::new("diffusion-basis", "bunny.off");
+        f.mesh_hash = Some("ab".repeat(32));
+        f.laplacian = Some("fem".into());
+        f.normalize = Some(true);
+        f.k = Some(30);
+        f.t = Some(0.25);
+        f.anchor = Some(4);
+        f.out = Some("out".into());
+        f.point_cloud = Some(PointCloudFile {
+            neighbors: Some(8),
+            ..Default::default()
+        });
+        f.figure = Some(FigureFile {
+            levels: Some(7),
+            colormap: Some("hue".into()),
+            dpi: Some(300),
+            ..Default::default()
+        });
+        let body = toml::to_string(&f).unwrap();
+        let expected = format!(
+            "experiment = \"diffusion-basis\"\nmesh = \"bunny.off\"\nmesh_hash = \"{}\"\n\
+             laplacian = \"fem\"\nnormalize = true\nk = 30\nt = 0.25\nanchor = 4\nout = \"out\"\n\
+             \n[point_cloud]\nneighbors = 8\n\n[figure]\nlevels = 7\ncolormap = \"hue\"\ndpi = 300\n",
+            "ab".repeat(32)
+        );
+        assert_eq!(body, expected);
+        assert_eq!(ExperimentFile::parse(&body, "x").unwrap(), f);
+        // Every optional key may be left out, in the file and in its tables.
+        let bare = ExperimentFile::parse(
+            "experiment = \"field\"\nmesh = \"x\"\n[field]\nkind = \"heat\"\n[figure]\n[point_cloud]\n",
+            "x",
+        )
+        .unwrap();
+        assert_eq!(bare.figure, Some(FigureFile::default()));
+        assert_eq!(bare.point_cloud, Some(PointCloudFile::default()));
+        assert_eq!(bare.mesh_hash, None);
     }
 
     #[test]

@@ -25,27 +25,18 @@ pub enum HarmonicExperimentError {
     CriticalPoints(#[from] CriticalPointsError),
 }
 
-/// Parameters; `Default` is the executable paper's (2, 4, 6 constraints, harmonic, FEM).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct HarmonicExperimentParams {
-    /// Numbers of default constraints, each 2, 4 or 6, one map per entry.
-    pub constraint_counts: Vec<usize>,
-    /// 1 = harmonic, 2 = bi-harmonic.
-    pub order: u32,
-    /// The discretization.
-    pub laplacian: Laplacian,
-    /// Rings around the previous map's constraints over which the change is measured.
-    pub locality_rings: usize,
-}
-
-impl Default for HarmonicExperimentParams {
-    fn default() -> Self {
-        Self {
-            constraint_counts: vec![2, 4, 6],
-            order: 1,
-            laplacian: Laplacian::Fem,
-            locality_rings: 2,
-        }
+crate::defaults::with_defaults! {
+    /// Parameters; `Default` is the executable paper's (2, 4, 6 constraints, harmonic, FEM).
+    #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+    pub struct HarmonicExperimentParams {
+        /// Numbers of default constraints, each 2, 4 or 6, one map per entry.
+        pub constraint_counts: Vec<usize> = vec![2, 4, 6],
+        /// 1 = harmonic, 2 = bi-harmonic.
+        pub order: u32 = 1,
+        /// The discretization.
+        pub laplacian: Laplacian = Laplacian::Fem,
+        /// Rings around the previous map's constraints over which the change is measured.
+        pub locality_rings: usize = 2,
     }
 }
 

@@ -41,6 +41,7 @@ use crate::Laplacian;
 use crate::fields::harmonic::{Constraint, HarmonicParams, harmonic_map};
 use crate::mesh::{Mesh, dot, sub};
 use crate::operators::{MassKind, Operators};
+pub use crate::perturb::remesh::closest_point_barycentric;
 use crate::perturb::{Perturbed, SurfaceMap, compare_fields};
 use crate::spectral::Eigenbasis;
 use crate::spectral::distances::distances_from;
@@ -125,31 +126,21 @@ impl Quantity {
     }
 }
 
-/// Parameters of a study. `Default`: k = 60, heat t = 0.05, diffusion t = 0.05,
-/// HKS t = 0.01 (unit-area times), the default source.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StudyParams {
-    /// Number of eigenpairs.
-    pub k: usize,
-    /// Time of the heat basis function.
-    pub heat_t: f64,
-    /// Time of the diffusion distance.
-    pub diffusion_t: f64,
-    /// Time of the heat kernel signature.
-    pub hks_t: f64,
-    /// Source on the original meshes; `None`: the vertex of largest x.
-    pub source: Option<usize>,
-}
-
-impl Default for StudyParams {
-    fn default() -> Self {
-        Self {
-            k: 60,
-            heat_t: 0.05,
-            diffusion_t: 0.05,
-            hks_t: 0.01,
-            source: None,
-        }
+crate::defaults::with_defaults! {
+    /// Parameters of a study. `Default`: k = 60, heat t = 0.05, diffusion t = 0.05,
+    /// HKS t = 0.01 (unit-area times), the default source.
+    #[derive(Debug, Clone, PartialEq)]
+    pub struct StudyParams {
+        /// Number of eigenpairs.
+        pub k: usize = 60,
+        /// Time of the heat basis function.
+        pub heat_t: f64 = 0.05,
+        /// Time of the diffusion distance.
+        pub diffusion_t: f64 = 0.05,
+        /// Time of the heat kernel signature.
+        pub hks_t: f64 = 0.01,
+        /// Source on the original meshes; `None`: the vertex of largest x.
+        pub source: Option<usize> = None,
     }
 }
 
@@ -250,63 +241,6 @@ pub fn corresponding_vertex(
         }
     }
     Ok(best.1)
-}
-
-/// The closest point of triangle `(a, b, c)` to `p` as barycentric coordinates (in the
-/// order a, b, c), with the squared distance. Degenerate triangles fall back to the closest
-/// of their edges.
-pub fn closest_point_barycentric(
-    p: [f64; 3],
-    a: [f64; 3],
-    b: [f64; 3],
-    c: [f64; 3],
-) -> ([f64; 3], f64) {
-    let at = |w: [f64; 3]| -> ([f64; 3], f64) {
-        let q = [
-            w[0] * a[0] + w[1] * b[0] + w[2] * c[0],
-            w[0] * a[1] + w[1] * b[1] + w[2] * c[1],
-            w[0] * a[2] + w[1] * b[2] + w[2] * c[2],
-        ];
-        let d = sub(p, q);
-        (w, dot(d, d))
-    };
-    // Closest point on segment (u, v): parameter s in [0, 1].
-    let seg = |u: [f64; 3], v: [f64; 3]| -> f64 {
-        let e = sub(v, u);
-        let l2 = dot(e, e);
-        if l2 > 0.0 {
-            (dot(sub(p, u), e) / l2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        }
-    };
-    let ab = sub(b, a);
-    let ac = sub(c, a);
-    let ap = sub(p, a);
-    // Solve the 2x2 normal equations for the projection onto the plane.
-    let (d00, d01, d11) = (dot(ab, ab), dot(ab, ac), dot(ac, ac));
-    let (d20, d21) = (dot(ap, ab), dot(ap, ac));
-    let den = d00 * d11 - d01 * d01;
-    if den > 1e-300 * (d00 * d11).max(f64::MIN_POSITIVE) {
-        let v = (d11 * d20 - d01 * d21) / den;
-        let w = (d00 * d21 - d01 * d20) / den;
-        let u = 1.0 - v - w;
-        if u >= 0.0 && v >= 0.0 && w >= 0.0 {
-            return at([u, v, w]);
-        }
-    }
-    // Outside (or degenerate): the closest point is on an edge.
-    let s_ab = seg(a, b);
-    let s_bc = seg(b, c);
-    let s_ca = seg(c, a);
-    let cands = [
-        at([1.0 - s_ab, s_ab, 0.0]),
-        at([0.0, 1.0 - s_bc, s_bc]),
-        at([s_ca, 0.0, 1.0 - s_ca]),
-    ];
-    cands
-        .into_iter()
-        .fold(cands[0], |best, c| if c.1 < best.1 { c } else { best })
 }
 
 /// A map from the vertices of `other` (a different sampling of the same surface) to the
@@ -671,22 +605,6 @@ pub fn run_study(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn closest_point_inside_on_edge_and_at_corner() {
-        let (a, b, c) = ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
-        let (w, d2) = closest_point_barycentric([0.25, 0.25, 2.0], a, b, c);
-        assert!((w[0] - 0.5).abs() < 1e-12 && (w[1] - 0.25).abs() < 1e-12);
-        assert!((d2 - 4.0).abs() < 1e-12);
-        let (w, d2) = closest_point_barycentric([0.5, -1.0, 0.0], a, b, c);
-        assert!((w[0] - 0.5).abs() < 1e-12 && (w[1] - 0.5).abs() < 1e-12 && w[2] == 0.0);
-        assert!((d2 - 1.0).abs() < 1e-12);
-        let (w, d2) = closest_point_barycentric([2.0, 2.0, 0.0], a, b, c);
-        assert!((w[1] - 0.5).abs() < 1e-12 && (w[2] - 0.5).abs() < 1e-12);
-        assert!((d2 - 4.5).abs() < 1e-12);
-        let (w, _) = closest_point_barycentric([-1.0, -1.0, 0.0], a, b, c);
-        assert_eq!(w, [1.0, 0.0, 0.0]);
-    }
 
     #[test]
     fn drift_skips_zero_eigenvalues() {

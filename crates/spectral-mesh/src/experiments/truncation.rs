@@ -74,38 +74,26 @@ pub enum TruncationReference {
     },
 }
 
-/// Parameters of [`truncation_study`]. `Default`: the paper's Fig. 12 set-up: cot,
-/// voronoi-cot and fem; t = 0.01, 0.05, 0.1; k = 10, 20, 50, 100, 200 and all pairs.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TruncationParams {
-    /// Discretizations.
-    pub laplacians: Vec<Laplacian>,
-    /// Diffusion times.
-    pub times: Vec<f64>,
-    /// Numbers of pairs; values above `n` (or `usize::MAX`, "all") are clamped to `n`
-    /// (time-stepping reference: to the largest computed).
-    pub ks: Vec<usize>,
-    /// Anchor vertex; `None`: the vertex of largest x (lowest index on ties).
-    pub anchor: Option<usize>,
-    /// Scale normalisation of the times.
-    pub normalization: ScaleNormalization,
-    /// The reference.
-    pub reference: TruncationReference,
-    /// Largest `n` for which [`TruncationReference::Auto`] uses the dense reference.
-    pub dense_max_n: usize,
-}
-
-impl Default for TruncationParams {
-    fn default() -> Self {
-        Self {
-            laplacians: vec![Laplacian::Cot, Laplacian::VoronoiCot, Laplacian::Fem],
-            times: vec![0.01, 0.05, 0.1],
-            ks: vec![10, 20, 50, 100, 200, usize::MAX],
-            anchor: None,
-            normalization: ScaleNormalization::UnitArea,
-            reference: TruncationReference::Auto,
-            dense_max_n: 2500,
-        }
+crate::defaults::with_defaults! {
+    /// Parameters of [`truncation_study`]. `Default`: the paper's Fig. 12 set-up: cot,
+    /// voronoi-cot and fem; t = 0.01, 0.05, 0.1; k = 10, 20, 50, 100, 200 and all pairs.
+    #[derive(Debug, Clone, PartialEq)]
+    pub struct TruncationParams {
+        /// Discretizations.
+        pub laplacians: Vec<Laplacian> = vec![Laplacian::Cot, Laplacian::VoronoiCot, Laplacian::Fem],
+        /// Diffusion times.
+        pub times: Vec<f64> = vec![0.01, 0.05, 0.1],
+        /// Numbers of pairs; values above `n` (or `usize::MAX`, "all") are clamped to `n`
+        /// (time-stepping reference: to the largest computed).
+        pub ks: Vec<usize> = vec![10, 20, 50, 100, 200, usize::MAX],
+        /// Anchor vertex; `None`: the vertex of largest x (lowest index on ties).
+        pub anchor: Option<usize> = None,
+        /// Scale normalisation of the times.
+        pub normalization: ScaleNormalization = ScaleNormalization::UnitArea,
+        /// The reference.
+        pub reference: TruncationReference = TruncationReference::Auto,
+        /// Largest `n` for which [`TruncationReference::Auto`] uses the dense reference.
+        pub dense_max_n: usize = 2500,
     }
 }
 

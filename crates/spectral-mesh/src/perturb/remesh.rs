@@ -417,65 +417,67 @@ pub fn resample_with(
     ))
 }
 
-/// Closest distance from point `p` to the triangle with corners `a, b, c` (Voronoi-region
-/// case analysis of the closest point; degenerate triangles fall back to their edges).
+/// Closest distance from point `p` to the triangle with corners `a, b, c` (the distance
+/// to [`closest_point_barycentric`]'s point).
 pub fn point_triangle_distance(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    closest_point_barycentric(p, a, b, c).1.sqrt()
+}
+
+/// The closest point of triangle `(a, b, c)` to `p` as barycentric coordinates (in the
+/// order a, b, c), with the squared distance. Degenerate triangles fall back to the closest
+/// of their edges.
+pub fn closest_point_barycentric(
+    p: [f64; 3],
+    a: [f64; 3],
+    b: [f64; 3],
+    c: [f64; 3],
+) -> ([f64; 3], f64) {
+    let at = |w: [f64; 3]| -> ([f64; 3], f64) {
+        let q = [
+            w[0] * a[0] + w[1] * b[0] + w[2] * c[0],
+            w[0] * a[1] + w[1] * b[1] + w[2] * c[1],
+            w[0] * a[2] + w[1] * b[2] + w[2] * c[2],
+        ];
+        let d = sub(p, q);
+        (w, dot(d, d))
+    };
+    // Closest point on segment (u, v): parameter s in [0, 1].
+    let seg = |u: [f64; 3], v: [f64; 3]| -> f64 {
+        let e = sub(v, u);
+        let l2 = dot(e, e);
+        if l2 > 0.0 {
+            (dot(sub(p, u), e) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    };
     let ab = sub(b, a);
     let ac = sub(c, a);
     let ap = sub(p, a);
-    let d1 = dot(ab, ap);
-    let d2 = dot(ac, ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return norm(ap);
+    // Solve the 2x2 normal equations for the projection onto the plane.
+    let (d00, d01, d11) = (dot(ab, ab), dot(ab, ac), dot(ac, ac));
+    let (d20, d21) = (dot(ap, ab), dot(ap, ac));
+    let den = d00 * d11 - d01 * d01;
+    if den > 1e-300 * (d00 * d11).max(f64::MIN_POSITIVE) {
+        let v = (d11 * d20 - d01 * d21) / den;
+        let w = (d00 * d21 - d01 * d20) / den;
+        let u = 1.0 - v - w;
+        if u >= 0.0 && v >= 0.0 && w >= 0.0 {
+            return at([u, v, w]);
+        }
     }
-    let bp = sub(p, b);
-    let d3 = dot(ab, bp);
-    let d4 = dot(ac, bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return norm(bp);
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 && d1 - d3 > 0.0 {
-        let v = d1 / (d1 - d3);
-        return norm(sub(p, add(a, vscale(ab, v))));
-    }
-    let cp = sub(p, c);
-    let d5 = dot(ab, cp);
-    let d6 = dot(ac, cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return norm(cp);
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 && d2 - d6 > 0.0 {
-        let w = d2 / (d2 - d6);
-        return norm(sub(p, add(a, vscale(ac, w))));
-    }
-    let va = d3 * d6 - d5 * d4;
-    let e43 = d4 - d3;
-    let e56 = d5 - d6;
-    if va <= 0.0 && e43 >= 0.0 && e56 >= 0.0 && e43 + e56 > 0.0 {
-        let w = e43 / (e43 + e56);
-        return norm(sub(p, add(b, vscale(sub(c, b), w))));
-    }
-    let den = va + vb + vc;
-    if den.abs() <= f64::MIN_POSITIVE || !den.is_finite() {
-        // Degenerate: distance to the three edges.
-        return seg(p, a, b).min(seg(p, b, c)).min(seg(p, c, a));
-    }
-    let v = vb / den;
-    let w = vc / den;
-    norm(sub(p, add(a, add(vscale(ab, v), vscale(ac, w)))))
-}
-
-fn seg(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
-    let ab = sub(b, a);
-    let l = dot(ab, ab);
-    let t = if l > 0.0 {
-        (dot(sub(p, a), ab) / l).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    norm(sub(p, add(a, vscale(ab, t))))
+    // Outside (or degenerate): the closest point is on an edge.
+    let s_ab = seg(a, b);
+    let s_bc = seg(b, c);
+    let s_ca = seg(c, a);
+    let cands = [
+        at([1.0 - s_ab, s_ab, 0.0]),
+        at([0.0, 1.0 - s_bc, s_bc]),
+        at([s_ca, 0.0, 1.0 - s_ca]),
+    ];
+    cands
+        .into_iter()
+        .fold(cands[0], |best, c| if c.1 < best.1 { c } else { best })
 }
 
 /// Local refinement inside the ball of `radius` about `center`: `levels` rounds, each
@@ -551,4 +553,32 @@ pub fn tiny_triangles(mesh: &Mesh, count: usize, seed: u64) -> Result<Perturbed,
     r.finish(format!(
         "tiny triangles: {count} triangles split by a vertex at relative distance {e} from a corner or an edge, seed {seed}"
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn closest_point_inside_on_edge_and_at_corner() {
+        let (a, b, c) = ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        let (w, d2) = closest_point_barycentric([0.25, 0.25, 2.0], a, b, c);
+        assert!((w[0] - 0.5).abs() < 1e-12 && (w[1] - 0.25).abs() < 1e-12);
+        assert!((d2 - 4.0).abs() < 1e-12);
+        let (w, d2) = closest_point_barycentric([0.5, -1.0, 0.0], a, b, c);
+        assert!((w[0] - 0.5).abs() < 1e-12 && (w[1] - 0.5).abs() < 1e-12 && w[2] == 0.0);
+        assert!((d2 - 1.0).abs() < 1e-12);
+        let (w, d2) = closest_point_barycentric([2.0, 2.0, 0.0], a, b, c);
+        assert!((w[1] - 0.5).abs() < 1e-12 && (w[2] - 0.5).abs() < 1e-12);
+        assert!((d2 - 4.5).abs() < 1e-12);
+        let (w, _) = closest_point_barycentric([-1.0, -1.0, 0.0], a, b, c);
+        assert_eq!(w, [1.0, 0.0, 0.0]);
+        // The distance is the one to that point: above the inside, off an edge, off a corner.
+        assert!((point_triangle_distance([0.25, 0.25, 2.0], a, b, c) - 2.0).abs() < 1e-12);
+        assert!((point_triangle_distance([0.5, -1.0, 0.0], a, b, c) - 1.0).abs() < 1e-12);
+        assert!((point_triangle_distance([-3.0, -4.0, 0.0], a, b, c) - 5.0).abs() < 1e-12);
+        // A degenerate (collinear) triangle: the distance to its segment.
+        let d = point_triangle_distance([0.5, 1.0, 0.0], a, b, [0.5, 0.0, 0.0]);
+        assert!((d - 1.0).abs() < 1e-12);
+    }
 }
