@@ -21,6 +21,14 @@ impl UnionFind {
         }
     }
 
+    /// `n` singletons again, keeping the allocation.
+    pub fn reset(&mut self, n: usize) {
+        self.parent.clear();
+        self.parent.extend(0..n);
+        self.size.clear();
+        self.size.resize(n, 1);
+    }
+
     /// Representative of `x`.
     pub fn find(&mut self, mut x: usize) -> usize {
         while self.parent[x] != x {
@@ -133,20 +141,35 @@ impl Topology {
     pub fn new(mesh: &Mesh) -> Self {
         let n = mesh.n_vertices();
         let tris = mesh.triangles();
-        // Half-edges keyed by undirected edge.
-        let mut half: Vec<([usize; 2], usize, bool)> = Vec::with_capacity(3 * tris.len());
+        // Half-edges keyed by undirected edge, sorted: grouped by their smaller vertex (a
+        // counting sort), then each group sorted on its own, which gives the order of one
+        // sort of them all in linear time plus small sorts.
+        let mut start = vec![0usize; n + 1];
+        for tri in tris {
+            for k in 0..3 {
+                start[tri[k].min(tri[(k + 1) % 3]) + 1] += 1;
+            }
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut half: Vec<([usize; 2], usize, bool)> = vec![([0, 0], 0, false); 3 * tris.len()];
         for (t, tri) in tris.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                half.push(([a.min(b), a.max(b)], t, a < b));
+                let lo = a.min(b);
+                half[fill[lo]] = ([lo, a.max(b)], t, a < b);
+                fill[lo] += 1;
             }
         }
-        half.sort_unstable();
+        for v in 0..n {
+            half[start[v]..start[v + 1]].sort_unstable();
+        }
         let mut edges = Vec::new();
         let mut edge_face_count = Vec::new();
         let mut non_manifold_edges = Vec::new();
         let mut inconsistent = 0usize;
-        let mut tri_uf = UnionFind::new(tris.len());
         // Orientation parity graph: for each interior manifold edge, relation between faces.
         let mut same_dir_pairs: Vec<(usize, usize, bool)> = Vec::new();
         let mut boundary_half: Vec<(usize, usize)> = Vec::new();
@@ -159,9 +182,6 @@ impl Topology {
             let e = half[i].0;
             edges.push(e);
             edge_face_count.push((j - i) as u32);
-            for h in &half[i + 1..j] {
-                tri_uf.union(half[i].1, h.1);
-            }
             match j - i {
                 1 => {
                     let (t, fwd) = (half[i].1, half[i].2);
@@ -195,16 +215,20 @@ impl Topology {
                 used[v] = true;
             }
         }
+        // Components numbered in the order of their first vertex.
         let mut comp_id = vec![usize::MAX; n];
-        let mut root_to_comp = std::collections::HashMap::new();
+        let mut comp_of_root = vec![usize::MAX; n];
+        let mut nc = 0;
         for v in 0..n {
             if used[v] {
                 let r = vertex_uf.find(v);
-                let next = root_to_comp.len();
-                comp_id[v] = *root_to_comp.entry(r).or_insert(next);
+                if comp_of_root[r] == usize::MAX {
+                    comp_of_root[r] = nc;
+                    nc += 1;
+                }
+                comp_id[v] = comp_of_root[r];
             }
         }
-        let nc = root_to_comp.len();
         let triangle_component: Vec<usize> = tris.iter().map(|t| comp_id[t[0]]).collect();
         let unreferenced_vertices: Vec<usize> = (0..n).filter(|&v| !used[v]).collect();
 
@@ -241,14 +265,17 @@ impl Topology {
         // Non-manifold vertices: the link of the vertex is not one fan.
         let vt = VertexTriangles::new(mesh);
         let mut non_manifold_vertices = Vec::new();
+        // Reused for every vertex.
+        let mut local = UnionFind::new(0);
+        let mut spokes: Vec<(usize, usize)> = Vec::new();
         for v in 0..n {
             let ts = vt.of(v);
             if ts.len() < 2 {
                 continue;
             }
             // Local union-find over the triangles of v, merged across shared edges at v.
-            let mut local = UnionFind::new(ts.len());
-            let mut spokes: Vec<(usize, usize)> = Vec::with_capacity(2 * ts.len());
+            local.reset(ts.len());
+            spokes.clear();
             for (k, &t) in ts.iter().enumerate() {
                 for &u in &tris[t] {
                     if u != v {
@@ -310,7 +337,6 @@ impl Topology {
                 comp.genus = Some(twice / 2);
             }
         }
-        let _ = tri_uf;
         Self {
             edges,
             edge_face_count,
@@ -395,6 +421,48 @@ fn trace_loops(boundary: &[(usize, usize)]) -> Vec<Vec<usize>> {
 mod tests {
     use super::*;
     use crate::test_support::{bow_tie, tetra};
+
+    #[test]
+    fn edges_are_every_triangle_side_once_sorted_with_their_face_counts() {
+        // A grid with a fold (an edge of three triangles), a pinched vertex and a triangle
+        // listed twice: the bucketed sort must give the order of one sort of all sides.
+        let mut tris = crate::test_support::grid(6, |i, j| [i as f64, j as f64, 0.0])
+            .triangles()
+            .to_vec();
+        tris.push([0, 1, 40]);
+        tris.push([7, 45, 48]);
+        tris.push(tris[3]);
+        let n = 49;
+        let positions: Vec<[f64; 3]> = (0..n).map(|v| [v as f64, (v * v) as f64, 1.0]).collect();
+        let mesh = Mesh::new(positions, tris.clone()).unwrap();
+        let t = Topology::new(&mesh);
+        let mut sides: Vec<[usize; 2]> = tris
+            .iter()
+            .flat_map(|t| (0..3).map(move |k| [t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])]))
+            .collect();
+        sides.sort_unstable();
+        let mut expected: Vec<([usize; 2], u32)> = Vec::new();
+        for e in sides {
+            match expected.last_mut() {
+                Some((last, c)) if *last == e => *c += 1,
+                _ => expected.push((e, 1)),
+            }
+        }
+        let got: Vec<([usize; 2], u32)> = t
+            .edges
+            .iter()
+            .copied()
+            .zip(t.edge_face_count.iter().copied())
+            .collect();
+        assert_eq!(got, expected);
+        let folds: Vec<[usize; 2]> = expected
+            .iter()
+            .filter(|(_, c)| *c > 2)
+            .map(|(e, _)| *e)
+            .collect();
+        assert!(!folds.is_empty());
+        assert_eq!(t.non_manifold_edges, folds);
+    }
 
     #[test]
     fn tetrahedron_is_a_closed_sphere() {
