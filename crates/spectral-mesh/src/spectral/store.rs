@@ -807,6 +807,24 @@ mod tests {
     use super::*;
     use crate::spectral::eigenbasis::test_meshes::icosphere;
 
+    /// A 37 x 5 `.npy` written by npyz value by value.
+    fn npyz_bytes<T: npyz::AutoSerialize>(
+        values: impl Iterator<Item = T>,
+        order: npyz::Order,
+    ) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut w = npyz::WriteOptions::<T>::new()
+            .default_dtype()
+            .shape(&[37, 5])
+            .order(order)
+            .writer(&mut out)
+            .begin_nd()
+            .unwrap();
+        w.extend(values).unwrap();
+        w.finish().unwrap();
+        out
+    }
+
     #[test]
     fn bulk_npy_bytes_equal_npyz_value_by_value() {
         let data: Vec<f64> = (0..37 * 5).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
@@ -819,28 +837,10 @@ mod tests {
             for dtype in [BasisDtype::Float64, BasisDtype::Float32] {
                 let mut bulk = Vec::new();
                 write_npy(&mut bulk, &data, &[37, 5], fortran, dtype).unwrap();
-                let mut reference = Vec::new();
-                if dtype == BasisDtype::Float64 {
-                    let mut w = npyz::WriteOptions::<f64>::new()
-                        .default_dtype()
-                        .shape(&[37, 5])
-                        .order(order)
-                        .writer(&mut reference)
-                        .begin_nd()
-                        .unwrap();
-                    w.extend(data.iter().copied()).unwrap();
-                    w.finish().unwrap();
-                } else {
-                    let mut w = npyz::WriteOptions::<f32>::new()
-                        .default_dtype()
-                        .shape(&[37, 5])
-                        .order(order)
-                        .writer(&mut reference)
-                        .begin_nd()
-                        .unwrap();
-                    w.extend(data.iter().map(|&x| x as f32)).unwrap();
-                    w.finish().unwrap();
-                }
+                let reference = match dtype {
+                    BasisDtype::Float64 => npyz_bytes(data.iter().copied(), order),
+                    BasisDtype::Float32 => npyz_bytes(data.iter().map(|&x| x as f32), order),
+                };
                 assert_eq!(bulk, reference, "fortran {fortran}, {dtype:?}");
             }
         }
