@@ -6,7 +6,8 @@
 use serde_json::{Value, json};
 
 use crate::Colormap;
-use crate::options::{FigureOptions, view_name};
+use crate::options::FigureOptions;
+use crate::raster::view_name;
 
 /// The library's defaults plus `figure` (levels, colour map, view, size, transparent,
 /// critical points, colour bar, legend) and `colormaps`.

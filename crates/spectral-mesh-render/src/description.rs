@@ -9,7 +9,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::colormap::Colormap;
-use crate::options::{FigureOptions, view_name};
+use crate::options::FigureOptions;
+use crate::raster::view_name;
 use crate::raster::{
     AMBIENT, DIFFUSE, LIGHT_DIRECTION, LINE_COLOR, LINE_WIDTH, MARKER_DEPTH_BIAS, MarkerKind,
     MarkerShape, colour_range, largest_marker,

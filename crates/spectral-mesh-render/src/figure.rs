@@ -18,7 +18,8 @@ use crate::raster::{
 };
 use crate::{Image, RenderError, extract_level_sets, write_vrml};
 
-pub use crate::options::{Canvas, FigureError, FigureOptions, view_name};
+pub use crate::options::{Canvas, FigureError, FigureOptions};
+pub use crate::raster::view_name;
 
 /// A field ready to draw.
 pub struct Figure<'a> {

@@ -5,7 +5,7 @@
 use spectral_mesh::experiments::file::FigureFile;
 use spectral_mesh::io::IoError;
 
-use crate::raster::View;
+use crate::raster::{View, view_name};
 use crate::{Colormap, RenderError};
 
 /// How to draw a field. `Default` is what every face draws unless told otherwise.
@@ -185,20 +185,5 @@ impl FigureOptions {
             dpi: self.canvas.dpi,
             legend: Some(self.legend),
         }
-    }
-}
-
-/// The text form of a view that parses back to it.
-pub fn view_name(v: View) -> String {
-    match v {
-        View::Front => "front".into(),
-        View::Side => "side".into(),
-        View::Top => "top".into(),
-        View::Iso => "iso".into(),
-        View::Angles {
-            azimuth_deg,
-            elevation_deg,
-        } => format!("{azimuth_deg:?},{elevation_deg:?}"),
-        View::Camera(c) => c.to_string(),
     }
 }

@@ -18,7 +18,6 @@
 //! Pixel `(x, y)` has its centre at `(x + 0.5, y + 0.5)`, `y` downwards.
 
 use crate::colormap::Colormap;
-use crate::options::view_name;
 use crate::text;
 use crate::{Image, RenderError};
 use rayon::prelude::*;
@@ -128,6 +127,21 @@ impl View {
                 )
             }
         }
+    }
+}
+
+/// The text form of a view that parses back to it.
+pub fn view_name(v: View) -> String {
+    match v {
+        View::Front => "front".into(),
+        View::Side => "side".into(),
+        View::Top => "top".into(),
+        View::Iso => "iso".into(),
+        View::Angles {
+            azimuth_deg,
+            elevation_deg,
+        } => format!("{azimuth_deg:?},{elevation_deg:?}"),
+        View::Camera(c) => c.to_string(),
     }
 }
 

@@ -65,7 +65,7 @@ use crate::spectral::eigenbasis::{EigenError, EigenParams, EigenSolver};
 use crate::spectral::heat::HeatError;
 use crate::spectral::signatures::SignatureError;
 
-crate::defaults::with_defaults! {
+crate::defaults::declare::with_defaults! {
     /// How an analysis is set up. `Default` is the paper's: linear FEM, unit-area times, the
     /// eigensolver's defaults.
     #[derive(Debug, Clone, PartialEq)]

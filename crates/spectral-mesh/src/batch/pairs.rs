@@ -206,7 +206,7 @@ fn find(inputs: &[BatchInput], key: &str) -> Result<usize, BatchError> {
         })
 }
 
-crate::defaults::with_defaults! {
+crate::defaults::declare::with_defaults! {
     /// Parameters of a pair batch. `Default`: the match defaults, the analysis defaults
     /// (fem, unit area, the eigensolver's tolerance), at most
     /// [`DEFAULT_PAIR_GEODESIC_SOURCES`] geodesic solves per evaluation. In JSON the keys of

@@ -88,7 +88,7 @@ impl FromStr for Schedule {
     }
 }
 
-crate::defaults::with_defaults! {
+crate::defaults::declare::with_defaults! {
     /// How the eigenbasis of each shape is computed: the discretization, the scale and the
     /// eigensolver's tolerance (the number of pairs is the caller's: [`BatchParams::k`] for the
     /// shapes of a batch, the match's basis size for a pair, see
@@ -190,7 +190,7 @@ impl DescriptorParams {
     }
 }
 
-crate::defaults::with_defaults! {
+crate::defaults::declare::with_defaults! {
     /// What is computed and saved for every shape of a batch. `Default`: 100 FEM pairs of the
     /// shape scaled to unit area at tolerance `1e-10`, the basis saved, no descriptor, no
     /// thumbnail.

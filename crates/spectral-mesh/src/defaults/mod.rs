@@ -33,34 +33,8 @@ pub use values::{
     PICTURE_SIZE, check_picture_size, server,
 };
 
+pub(crate) mod declare;
 pub mod values;
-
-/// Declares a parameter struct with each field's default written beside it
-/// (`pub k: usize = 60,`) and the `Default` that builds them: the field list is written
-/// once instead of again in a `Default` impl. Attributes of the struct and of its fields
-/// (documentation, derives, serde) pass through.
-macro_rules! with_defaults {
-    (
-        $(#[$attr:meta])*
-        $vis:vis struct $name:ident {
-            $($(#[$field_attr:meta])* $field_vis:vis $field:ident: $ty:ty = $default:expr,)*
-        }
-    ) => {
-        $(#[$attr])*
-        $vis struct $name {
-            $($(#[$field_attr])* $field_vis $field: $ty,)*
-        }
-
-        impl Default for $name {
-            fn default() -> Self {
-                Self {
-                    $($field: $default,)*
-                }
-            }
-        }
-    };
-}
-pub(crate) use with_defaults;
 
 /// The discretization of an input: the one `given`, or the input's default (fem for a
 /// mesh, [`Laplacian::Robust`], the point-cloud Laplacian, for a point cloud). A point

@@ -25,7 +25,7 @@ pub enum HarmonicExperimentError {
     CriticalPoints(#[from] CriticalPointsError),
 }
 
-crate::defaults::with_defaults! {
+crate::defaults::declare::with_defaults! {
     /// Parameters; `Default` is the executable paper's (2, 4, 6 constraints, harmonic, FEM).
     #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
     pub struct HarmonicExperimentParams {

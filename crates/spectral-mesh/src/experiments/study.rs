@@ -126,7 +126,7 @@ impl Quantity {
     }
 }
 
-crate::defaults::with_defaults! {
+crate::defaults::declare::with_defaults! {
     /// Parameters of a study. `Default`: k = 60, heat t = 0.05, diffusion t = 0.05,
     /// HKS t = 0.01 (unit-area times), the default source.
     #[derive(Debug, Clone, PartialEq)]

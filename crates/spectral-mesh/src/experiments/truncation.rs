@@ -74,7 +74,7 @@ pub enum TruncationReference {
     },
 }
 
-crate::defaults::with_defaults! {
+crate::defaults::declare::with_defaults! {
     /// Parameters of [`truncation_study`]. `Default`: the paper's Fig. 12 set-up: cot,
     /// voronoi-cot and fem; t = 0.01, 0.05, 0.1; k = 10, 20, 50, 100, 200 and all pairs.
     #[derive(Debug, Clone, PartialEq)]
