@@ -39,6 +39,8 @@ pub(super) struct Supernodes {
     val_ptr: Vec<usize>,
     row_idx: Vec<usize>,
     fwd: Vec<usize>,
+    /// Columns of the largest supernode (the size of each sweep's scratch).
+    max_size: usize,
     split: Option<TreeSplit>,
 }
 
@@ -60,6 +62,8 @@ struct TreeSplit {
     top_cols: Vec<usize>,
     /// For each row `r >= c`: its position in `top_cols` (`u32::MAX` for other rows).
     hi_map: Vec<u32>,
+    /// The share of a one-thread solve's time the split solve is predicted to take.
+    share: f64,
 }
 
 /// `y -= a x`, lane by lane.
@@ -160,8 +164,10 @@ impl Supernodes {
             val_ptr: sn.col_ptr_for_val()[..=ns].to_vec(),
             row_idx: sn.row_idx().to_vec(),
             fwd,
+            max_size: 0,
             split: None,
         };
+        layout.max_size = (0..ns).map(|s| layout.size(s)).max().unwrap_or(0);
         if split && layout.fwd.len() >= SPLIT_MIN_ROWS {
             layout.split = layout.tree_split();
         }
@@ -238,7 +244,8 @@ impl Supernodes {
             prefix[q].max(total - prefix[q] - top) + top
         };
         let q = (1..ns).min_by(|&a, &b| cost(a).total_cmp(&cost(b)))?;
-        if cost(q) > SPLIT_MAX_SHARE * total {
+        let share = cost(q) / total;
+        if share > SPLIT_MAX_SHARE {
             return None;
         }
         let mut in_top = vec![false; ns];
@@ -265,20 +272,14 @@ impl Supernodes {
             top,
             top_cols,
             hi_map,
+            share,
         })
     }
 
     /// The share of a sequential solve's time a split solve is predicted to take (1 when
     /// the factor is solved on one thread).
     pub(super) fn split_share(&self) -> f64 {
-        let Some(sp) = &self.split else {
-            return 1.0;
-        };
-        let w = |s: usize| (self.size(s) * (self.size(s) + self.pattern(s).len())) as f64;
-        let left: f64 = (0..sp.q).map(w).sum();
-        let right: f64 = sp.right.iter().map(|&s| w(s)).sum();
-        let top: f64 = sp.top.iter().map(|&s| w(s)).sum();
-        (left.max(right) + top) / (left + right + top)
+        self.split.as_ref().map_or(1.0, |sp| sp.share)
     }
 
     /// One sweep of the triangular solve over `nodes`: [`Sweep::Forward`], `L y = x` (nodes
@@ -400,11 +401,7 @@ impl Supernodes {
     /// A block of zeroed rows, one per column of the largest supernode (each thread's
     /// copy of a supernode's own rows).
     fn diagonal_scratch<const C: usize>(&self) -> Vec<[f64; C]> {
-        let max_size = (0..self.n_supernodes())
-            .map(|s| self.size(s))
-            .max()
-            .unwrap_or(0);
-        vec![[0.0; C]; max_size]
+        vec![[0.0; C]; self.max_size]
     }
 
     /// Solves `L L^T y = x` in place for a row-major block `x` of `C` columns (permuted):

@@ -170,26 +170,31 @@ fn write_npy(
     } else {
         npyz::Order::C
     };
+    match dtype {
+        BasisDtype::Float64 => write_le::<f64, 8>(out, data, shape, order, f64::to_le_bytes),
+        BasisDtype::Float32 => {
+            write_le::<f32, 4>(out, data, shape, order, |x| (x as f32).to_le_bytes())
+        }
+    }
+}
+
+/// npyz's header for an array of `T`, then each value's little-endian bytes (`bytes`), a
+/// buffer at a time.
+fn write_le<T: npyz::AutoSerialize, const B: usize>(
+    out: &mut impl Write,
+    data: &[f64],
+    shape: &[u64],
+    order: npyz::Order,
+    bytes: impl Fn(f64) -> [u8; B],
+) -> std::io::Result<()> {
     /// Values per write.
     const CHUNK: usize = 1 << 14;
-    let mut buf: Vec<u8> = Vec::with_capacity(8 * CHUNK);
-    match dtype {
-        BasisDtype::Float64 => {
-            out.write_all(&npy_header::<f64>(shape, order)?)?;
-            for chunk in data.chunks(CHUNK) {
-                buf.clear();
-                buf.extend(chunk.iter().flat_map(|x| x.to_le_bytes()));
-                out.write_all(&buf)?;
-            }
-        }
-        BasisDtype::Float32 => {
-            out.write_all(&npy_header::<f32>(shape, order)?)?;
-            for chunk in data.chunks(CHUNK) {
-                buf.clear();
-                buf.extend(chunk.iter().flat_map(|&x| (x as f32).to_le_bytes()));
-                out.write_all(&buf)?;
-            }
-        }
+    out.write_all(&npy_header::<T>(shape, order)?)?;
+    let mut buf: Vec<u8> = Vec::with_capacity(B * CHUNK);
+    for chunk in data.chunks(CHUNK) {
+        buf.clear();
+        buf.extend(chunk.iter().flat_map(|&x| bytes(x)));
+        out.write_all(&buf)?;
     }
     Ok(())
 }
