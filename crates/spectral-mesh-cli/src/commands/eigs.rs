@@ -152,7 +152,7 @@ pub fn run(args: Args) -> Result<()> {
     // The solver's own orthogonality report when it computed the basis now.
     let r = BasisReport::with_orthogonality(
         b,
-        an.topology(),
+        an.components(),
         dirichlet.as_deref(),
         args.cluster_tolerance,
         // The solver's report is of the basis it returned, not of a completed one.

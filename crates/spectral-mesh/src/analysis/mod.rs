@@ -55,7 +55,7 @@ use crate::fields::persistence::{
 use crate::fields::segmentation::SegmentationError;
 use crate::geodesic::{GeodesicError, GeodesicParams, GeodesicSolver};
 use crate::linalg::EigenProgress;
-use crate::mesh::topology::Topology;
+use crate::mesh::topology::{Topology, VertexComponents};
 use crate::mesh::{Mesh, PointCloud};
 use crate::operators::robust::RobustError;
 use crate::operators::{Laplacian, Operators, PointCloudParams, point_cloud_laplacian};
@@ -264,6 +264,8 @@ pub struct Analysis {
     input_mass: f64,
     ops: Arc<Operators>,
     topology: OnceLock<Topology>,
+    /// The vertex components (built on first use, see [`Analysis::components`]).
+    components: OnceLock<VertexComponents>,
     /// The link edges of every vertex, for critical points (built on first use).
     critical: OnceLock<CriticalPointFinder>,
     solver: Mutex<EigenSolver>,
@@ -331,6 +333,7 @@ impl Analysis {
             input_mass,
             ops,
             topology: OnceLock::new(),
+            components: OnceLock::new(),
             critical: OnceLock::new(),
             solver: Mutex::new(solver),
             held: RwLock::new(None),
@@ -437,6 +440,18 @@ impl Analysis {
         self.topology.get_or_init(|| Topology::new(&self.mesh))
     }
 
+    /// The vertex components (computed on first use: from the topology when that exists,
+    /// else on their own, which is much cheaper than the whole topology).
+    pub fn components(&self) -> &VertexComponents {
+        self.components.get_or_init(|| match self.topology.get() {
+            Some(t) => VertexComponents {
+                of_vertex: t.vertex_component.clone(),
+                count: t.n_components(),
+            },
+            None => VertexComponents::new(&self.mesh),
+        })
+    }
+
     /// The default source or anchor: the vertex of largest x (lowest index on ties).
     pub fn default_source(&self) -> usize {
         self.mesh.vertex_of_largest_x()
@@ -541,12 +556,13 @@ impl Analysis {
                     .map(|l| l.len() * 8 + 24)
                     .sum::<usize>()
         });
+        let components = self.components.get().map_or(0, |c| c.of_vertex.len() * 8);
         // Link edges: one per triangle corner (two indices each), offsets, flags.
         let critical = self
             .critical
             .get()
             .map_or(0, |_| 3 * m * 16 + (n + 1) * 8 + n);
-        ops + factor + basis + bx + harmonic + geodesic + topology + critical
+        ops + factor + basis + bx + harmonic + geodesic + topology + components + critical
     }
 
     /// The field of `request`, computing the eigenbasis first when the held one is too

@@ -23,7 +23,7 @@ use crate::fields::harmonic::{Constraint, ConstraintSpec, harmonic_map_with_oper
 use crate::fields::persistence::persistence;
 use crate::linalg::{EigenProgress, b_orthogonality_error};
 use crate::mesh::Mesh;
-use crate::mesh::topology::Topology;
+use crate::mesh::topology::{Topology, VertexComponents};
 use crate::operators::{Laplacian, Operators, PointCloudParams};
 use crate::spectral::Eigenbasis;
 use crate::spectral::filters::ZERO_EIGENVALUE_EPS;
@@ -698,22 +698,23 @@ pub struct BasisReport {
 }
 
 impl BasisReport {
-    /// The report of `basis` on a mesh of topology `topology`, with the Dirichlet
-    /// vertices the basis was computed with.
+    /// The report of `basis` on a mesh of vertex components `components` (see
+    /// [`crate::analysis::Analysis::components`]), with the Dirichlet vertices the basis
+    /// was computed with.
     pub fn new(
         basis: &Eigenbasis,
-        topology: &Topology,
+        components: &VertexComponents,
         dirichlet: Option<&[usize]>,
         cluster_tolerance: f64,
     ) -> Self {
-        Self::with_orthogonality(basis, topology, dirichlet, cluster_tolerance, None)
+        Self::with_orthogonality(basis, components, dirichlet, cluster_tolerance, None)
     }
 
     /// [`BasisReport::new`] with `max |X^T B X - I|` of the basis when already known (the
     /// solver reports it: [`EigenProgress::Finished`]); computed when `None`.
     pub fn with_orthogonality(
         basis: &Eigenbasis,
-        topology: &Topology,
+        components: &VertexComponents,
         dirichlet: Option<&[usize]>,
         cluster_tolerance: f64,
         orthogonality: Option<f64>,
@@ -724,9 +725,9 @@ impl BasisReport {
             .iter()
             .filter(|v| v.abs() <= ZERO_EIGENVALUE_EPS * lmax)
             .count();
-        let mut pinned = vec![false; topology.n_components()];
+        let mut pinned = vec![false; components.count];
         for &v in dirichlet.unwrap_or(&[]) {
-            if let Some(&c) = topology.vertex_component.get(v)
+            if let Some(&c) = components.of_vertex.get(v)
                 && let Some(p) = pinned.get_mut(c)
             {
                 *p = true;
@@ -752,7 +753,7 @@ impl BasisReport {
                 .then(|| basis.residuals.iter().copied().fold(0.0, f64::max)),
             orthonormality_error: orthogonality.unwrap_or_else(|| basis.orthogonality_error()),
             near_zero,
-            components: topology.n_components(),
+            components: components.count,
             expected_near_zero: pinned.iter().filter(|p| !**p).count().min(basis.k()),
             cluster_tolerance,
             last_cluster_reaches_k: clusters.last().is_some_and(|&(i, c)| i + c == basis.k()),
@@ -878,7 +879,7 @@ mod tests {
         let measured = BasisSummary::of(&held, 20).max_orthonormality_error;
         let reported = run.summary.basis.unwrap().max_orthonormality_error;
         assert_eq!(reported.to_bits(), measured.to_bits());
-        let r = BasisReport::with_orthogonality(&held, an.topology(), None, 1e-6, Some(reported));
+        let r = BasisReport::with_orthogonality(&held, an.components(), None, 1e-6, Some(reported));
         assert_eq!(
             r.orthonormality_error.to_bits(),
             held.orthogonality_error().to_bits()
@@ -947,7 +948,7 @@ mod tests {
             AnalysisOptions::default(),
         );
         let b = an.basis(16, &mut |_| {}, &CancelToken::new()).unwrap();
-        let r = BasisReport::new(&b, an.topology(), None, 1e-6);
+        let r = BasisReport::new(&b, an.components(), None, 1e-6);
         assert_eq!((r.near_zero, r.expected_near_zero, r.components), (1, 1, 1));
         // l = 1 is triple, l = 2 five-fold; the icosahedral symmetry splits l = 3 into
         // 3 + 4, the last group ending at k = 16.

@@ -1,7 +1,14 @@
-//! The one atomic write every face uses: a temporary file in the target's folder, written,
-//! synced and renamed into place, so an interrupted or failed write never leaves a half
-//! file and never destroys what was there. (Whether an existing file may be replaced at
-//! all is the caller's policy: the CLI refuses without `--force`.)
+//! The one atomic write every face uses: a temporary file in the target's folder, written
+//! and renamed into place, so an interrupted or failed write never leaves a half file and
+//! never destroys what was there. (Whether an existing file may be replaced at all is the
+//! caller's policy: the CLI refuses without `--force`.)
+//!
+//! The temporary file is synced to disk before the rename only when the rename replaces a
+//! file: then a crash of the system right after the rename could otherwise leave an empty
+//! file where the user's old one was. A new file has nothing to protect (after such a
+//! crash it is missing or empty, as if the command had not run), and the sync is the
+//! slowest part of writing a large output: 41 MB of eigenvectors (104k vertices, k = 50)
+//! took 0.11 s to write with it, 0.04 s without.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -22,9 +29,9 @@ pub struct AtomicWriteError {
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
 
-/// Writes `path` by calling `write` on a fresh temporary file beside it, then syncing and
-/// renaming it into place; on any error the temporary file is removed and `path` is left
-/// as it was.
+/// Writes `path` by calling `write` on a fresh temporary file beside it, then syncing it
+/// (when `path` exists: see the module's documentation) and renaming it into place; on any
+/// error the temporary file is removed and `path` is left as it was.
 pub fn write_atomic_with(
     path: &Path,
     write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
@@ -60,9 +67,10 @@ pub fn write_atomic_with(
             Err(e) => return Err(err("create a temporary file next to")(e)),
         }
     };
+    let replaces = path.exists();
     let result = write(&mut file)
         .and_then(|()| file.flush())
-        .and_then(|()| file.sync_all())
+        .and_then(|()| if replaces { file.sync_all() } else { Ok(()) })
         .map_err(err("write"));
     drop(file);
     let result = result.and_then(|()| std::fs::rename(&tmp, path).map_err(err("rename into")));
