@@ -10,7 +10,7 @@ use std::time::Instant;
 use crate::analysis::Analysis;
 use crate::cancel::CancelToken;
 use crate::geodesic::{GeodesicParams, farthest_point_sampling};
-use crate::io::{Input, read_input_from_bytes, write_atomic};
+use crate::io::{Input, read_input_from_bytes, write_atomic_durable};
 use crate::linalg::{EigenProgress, connected_components};
 use crate::mesh::Mesh;
 use crate::operators::{Laplacian, Operators};
@@ -288,7 +288,7 @@ fn record_failure(input: &BatchInput, out: &Path, rec: &BatchRecord, keep: bool)
         && let Some(dir) = p.marker.parent()
         && std::fs::create_dir_all(dir).is_ok()
     {
-        let _ = write_atomic(&p.marker, &json);
+        let _ = write_atomic_durable(&p.marker, &json);
     }
 }
 
@@ -616,7 +616,8 @@ fn write_outputs(
                 let png = t
                     .png(mesh, thumbnail_vector(&solved.basis), size)
                     .map_err(|e| format!("thumbnail: {e}"))?;
-                write_atomic(&paths.thumbnail, &png).map_err(|e| transient(e.to_string()))?;
+                write_atomic_durable(&paths.thumbnail, &png)
+                    .map_err(|e| transient(e.to_string()))?;
                 outputs.push(relative(&paths.thumbnail, out));
             }
             (Some(_), None) => {

@@ -25,7 +25,7 @@
 //! threads (the eigensolver's results do not depend on the thread count).
 //!
 //! Every file is written to a temporary name beside it and renamed into place
-//! ([`crate::io::write_atomic_with`]); the result is written last, so its presence means
+//! ([`crate::io::write_atomic_as`], always synced); the result is written last, so its presence means
 //! the shape is complete. A run that is killed leaves complete files and possibly
 //! temporary ones (`.NAME.npz.tmp-PID-N`), which [`remove_stale_temporaries`] clears at
 //! the start of the next run.
@@ -119,7 +119,7 @@ pub fn prepare_output(out: &Path, force: bool) -> Result<(), BatchError> {
              choose an empty or new folder, or pass --force to write into it"
         )));
     }
-    crate::io::write_atomic(&marker, b"spectral-mesh batch output folder\n")
+    crate::io::write_atomic_durable(&marker, b"spectral-mesh batch output folder\n")
         .map_err(|e| BatchError::Write(e.to_string()))
 }
 

@@ -33,7 +33,7 @@ use crate::correspondence::{
     MatchParams, geodesic_errors, match_shapes, parse_point_map, point_map_text,
 };
 use crate::geodesic::{GeodesicParams, GeodesicSolver};
-use crate::io::{read_mesh, write_atomic};
+use crate::io::{read_mesh, write_atomic_durable};
 use crate::operators::Laplacian;
 
 /// The summary file of a pair batch, in the output folder.
@@ -429,7 +429,7 @@ fn run_pair(
             .max(res.reverse.as_ref().map_or(0, |r| r.fmap.k1)),
     );
     let write = |path: PathBuf, map: &[usize], rec: &mut PairRecord| {
-        write_atomic(&path, point_map_text(map).as_bytes()).map_err(|e| e.to_string())?;
+        write_atomic_durable(&path, point_map_text(map).as_bytes()).map_err(|e| e.to_string())?;
         rec.outputs.push(relative(&path, out));
         Ok::<_, String>(())
     };
@@ -532,7 +532,7 @@ pub fn pairs_csv(records: &[PairRecord]) -> String {
 /// Writes `out/pairs.csv` ([`pairs_csv`]); returns its path.
 pub fn write_pairs_summary(out: &Path, records: &[PairRecord]) -> Result<PathBuf, BatchError> {
     let path = out.join(PAIRS_CSV);
-    write_atomic(&path, pairs_csv(records).as_bytes())
+    write_atomic_durable(&path, pairs_csv(records).as_bytes())
         .map_err(|e| BatchError::Write(e.to_string()))?;
     Ok(path)
 }

@@ -17,7 +17,7 @@ use parquet::schema::parser::parse_message_type;
 
 use super::BatchError;
 use super::record::BatchRecord;
-use crate::io::write_atomic;
+use crate::io::write_atomic_durable;
 
 /// The columns of the summary, in order.
 pub const COLUMNS: [&str; 18] = [
@@ -197,11 +197,11 @@ pub fn write_summary(
     sorted.sort_by(|a, b| a.name.cmp(&b.name));
     let csv = out.join("summary.csv");
     let pq = out.join("summary.parquet");
-    write_atomic(&csv, summary_csv(&sorted).as_bytes())
+    write_atomic_durable(&csv, summary_csv(&sorted).as_bytes())
         .map_err(|e| BatchError::Write(e.to_string()))?;
     let bytes = summary_parquet(&sorted)
         .map_err(|e| BatchError::Write(format!("{}: {e}", pq.display())))?;
-    write_atomic(&pq, &bytes).map_err(|e| BatchError::Write(e.to_string()))?;
+    write_atomic_durable(&pq, &bytes).map_err(|e| BatchError::Write(e.to_string()))?;
     Ok([csv, pq])
 }
 

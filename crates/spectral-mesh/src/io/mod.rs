@@ -68,7 +68,10 @@ use std::str::FromStr;
 
 use crate::mesh::Mesh;
 
-pub use atomic::{AtomicWriteError, write_atomic, write_atomic_with};
+pub use atomic::{
+    AtomicWriteError, Durability, write_atomic, write_atomic_as, write_atomic_durable,
+    write_atomic_with,
+};
 pub use field::{field_to_text, read_field, read_field_text, write_field, write_field_text};
 pub use points::{
     Input, LoadedPoints, PointFormat, read_input, read_input_from_bytes, read_points,

@@ -267,14 +267,23 @@ pub(crate) fn csc_npy(prefix: &str, m: &SparseMatrix) -> std::io::Result<[(Strin
 /// The eigenvalues and eigenvectors are stored in `meta.dtype` (float32: each double
 /// rounded once; see [`BasisDtype`]).
 pub fn save_npz(basis: &Eigenbasis, path: &Path, meta: &BasisMeta) -> Result<(), StoreError> {
-    save_npz_as(basis, path, meta, true, &[], meta.dtype)
+    save_npz_as(
+        basis,
+        path,
+        meta,
+        (true, &[]),
+        meta.dtype,
+        crate::io::Durability::WhenReplacing,
+    )
 }
 
 /// [`save_npz`] with any metadata (`meta`, serialized as the `meta` JSON array), the
 /// eigenvectors and mass left out when `vectors` is false (an eigenvalues-only archive,
 /// which [`load_npz`] refuses), and `extra` arrays appended: `(name, .npy bytes)` pairs
 /// (see [`npy_f64`]), stored as `name.npy`, deflated. The archive is deterministic: the
-/// same arguments give the same bytes (entries dated 1980-01-01, as NumPy's `savez`).
+/// same arguments give the same bytes (entries dated 1980-01-01, as NumPy's `savez`). It
+/// is on disk before its name appears ([`crate::io::Durability::Always`]): the batch
+/// results are written with it, and their presence says a shape is done.
 pub fn save_npz_with(
     basis: &Eigenbasis,
     path: &Path,
@@ -282,16 +291,23 @@ pub fn save_npz_with(
     vectors: bool,
     extra: &[(String, Vec<u8>)],
 ) -> Result<(), StoreError> {
-    save_npz_as(basis, path, meta, vectors, extra, BasisDtype::Float64)
+    save_npz_as(
+        basis,
+        path,
+        meta,
+        (vectors, extra),
+        BasisDtype::Float64,
+        crate::io::Durability::Always,
+    )
 }
 
 fn save_npz_as(
     basis: &Eigenbasis,
     path: &Path,
     meta: &impl serde::Serialize,
-    vectors: bool,
-    extra: &[(String, Vec<u8>)],
+    (vectors, extra): (bool, &[(String, Vec<u8>)]),
     dtype: BasisDtype,
+    durability: crate::io::Durability,
 ) -> Result<(), StoreError> {
     let (n, k) = (basis.n, basis.k());
     let e = io_err(path);
@@ -319,7 +335,7 @@ fn save_npz_as(
         ),
         ("meta", npy_1d(&meta_json).map_err(&e)?),
     ]);
-    crate::io::write_atomic_with(path, |file| {
+    crate::io::write_atomic_as(path, durability, |file| {
         let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
         let (first, rest) = small.split_at(1);
         for (name, bytes) in first {
