@@ -33,31 +33,29 @@ impl SparseMatrix {
         for c in 0..ncols {
             count[c + 1] += count[c];
         }
-        // Counting sort by column keeps input order within a column (stable).
+        // Counting sort by column keeps input order within a column (stable); each column's
+        // (row, value) pairs are contiguous, sorted by row (stably: input order among equal
+        // rows, so duplicates are summed in input order).
         let mut fill = count.clone();
-        let mut rows = vec![0usize; triplets.len()];
-        let mut vals = vec![0f64; triplets.len()];
+        let mut pairs = vec![(0usize, 0f64); triplets.len()];
         for &(r, c, v) in triplets {
-            rows[fill[c]] = r;
-            vals[fill[c]] = v;
+            pairs[fill[c]] = (r, v);
             fill[c] += 1;
         }
+        drop(fill);
         let mut col_ptr = Vec::with_capacity(ncols + 1);
         let mut row_idx = Vec::with_capacity(triplets.len());
         let mut values = Vec::with_capacity(triplets.len());
         col_ptr.push(0);
-        let mut order: Vec<usize> = Vec::new();
         for c in 0..ncols {
-            let (lo, hi) = (count[c], count[c + 1]);
-            order.clear();
-            order.extend(lo..hi);
-            order.sort_by_key(|&k| rows[k]); // stable: input order among equal rows
+            let col = &mut pairs[count[c]..count[c + 1]];
+            col.sort_by_key(|p| p.0);
             let mut k = 0;
-            while k < order.len() {
-                let r = rows[order[k]];
+            while k < col.len() {
+                let r = col[k].0;
                 let mut s = 0.0;
-                while k < order.len() && rows[order[k]] == r {
-                    s += vals[order[k]];
+                while k < col.len() && col[k].0 == r {
+                    s += col[k].1;
                     k += 1;
                 }
                 row_idx.push(r);

@@ -55,20 +55,28 @@ pub(crate) fn assemble_laplacian(n: usize, edge_weights: &[(usize, usize, f64)])
         t.push((i, i, 0.0));
     }
     let off = SparseMatrix::from_triplets(n, n, &t);
-    // Diagonal = minus the sum of the off-diagonal entries of its column (= row).
-    let mut t2 = Vec::with_capacity(off.nnz());
+    drop(t);
+    // Diagonal = minus the sum of the off-diagonal entries of its column (= row), summed
+    // in row order, and set in its place among them (every column holds its diagonal).
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    let mut row_idx = Vec::with_capacity(off.nnz());
+    let mut values = Vec::with_capacity(off.nnz());
+    col_ptr.push(0);
     for c in 0..n {
         let (rows, vals) = off.col(c);
-        let mut s = 0.0;
+        let s = rows
+            .iter()
+            .zip(vals)
+            .filter(|(r, _)| **r != c)
+            .fold(0.0, |s, (_, &v)| s - v);
         for (&r, &v) in rows.iter().zip(vals) {
-            if r != c {
-                s -= v;
-                t2.push((r, c, v));
-            }
+            row_idx.push(r);
+            values.push(if r == c { s } else { v });
         }
-        t2.push((c, c, s));
+        col_ptr.push(row_idx.len());
     }
-    SparseMatrix::from_triplets(n, n, &t2)
+    SparseMatrix::from_csc(n, n, col_ptr, row_idx, values)
+        .expect("the columns of a matrix from triplets are sorted and in range")
 }
 
 /// The cotangent stiffness matrix S, `n x n`, positive semi-definite.
