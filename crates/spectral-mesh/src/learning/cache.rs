@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use super::{LearningError, LearningOperators, LearningParams, LearningShape, compute_operators};
 use crate::cancel::CancelToken;
 use crate::linalg::EigenProgress;
-use crate::spectral::store::{NpzReader, NpzWriter, StoreError, csc_npy, io_err, npy_1d, npy_f64};
+use crate::spectral::store::{NpzReader, NpzWriter, StoreError, io_err, npy_1d, npy_f64};
 
 /// Version of the archive layout; a change makes every older file a cache miss.
 pub const CACHE_FORMAT_VERSION: u32 = 1;
@@ -86,7 +86,7 @@ pub fn save_operators(
         reason: err.to_string(),
     })?;
     let frames: Vec<f64> = ops.frames.iter().flatten().flatten().copied().collect();
-    let mut arrays: Vec<(String, Vec<u8>)> = vec![
+    let arrays: Vec<(String, Vec<u8>)> = vec![
         (
             "frames".into(),
             npy_f64(&frames, &[n, 3, 3], false).map_err(&e)?,
@@ -101,14 +101,7 @@ pub fn save_operators(
             npy_f64(&ops.evecs, &[n, k], true).map_err(&e)?,
         ),
     ];
-    for (name, m) in [
-        ("L", &ops.laplacian),
-        ("gradX", &ops.grad_x),
-        ("gradY", &ops.grad_y),
-    ] {
-        arrays.extend(csc_npy(name, m).map_err(&e)?);
-    }
-    arrays.push(("meta".into(), npy_1d(&meta_json).map_err(&e)?));
+    let meta = npy_1d(&meta_json).map_err(&e)?;
     crate::io::write_atomic_with(path, |file| {
         let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
         // Stored, not deflated (as NumPy's `savez`): the cache is read far more often than
@@ -116,6 +109,14 @@ pub fn save_operators(
         for (name, bytes) in &arrays {
             npz.add(name, bytes, false)?;
         }
+        for (name, m) in [
+            ("L", &ops.laplacian),
+            ("gradX", &ops.grad_x),
+            ("gradY", &ops.grad_y),
+        ] {
+            npz.add_csc(name, m)?;
+        }
+        npz.add("meta", &meta, false)?;
         npz.finish()
     })
     .map_err(|err| e(err.source))

@@ -206,6 +206,11 @@ impl SparseCholesky {
         self.values.len()
     }
 
+    /// Number of row indices of the supernodal layout (0 for a simplicial factor).
+    pub(crate) fn row_indices(&self) -> usize {
+        self.layout.as_ref().map_or(0, |l| l.row_indices())
+    }
+
     /// The share of a one-thread solve's time that a solve is predicted to take with the
     /// elimination tree split over two threads (1 when it is not split).
     pub(crate) fn split_share(&self) -> f64 {

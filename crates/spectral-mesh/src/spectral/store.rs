@@ -171,21 +171,21 @@ fn write_npy(
         npyz::Order::C
     };
     match dtype {
-        BasisDtype::Float64 => write_le::<f64, 8>(out, data, shape, order, f64::to_le_bytes),
+        BasisDtype::Float64 => write_le::<f64, f64, 8>(out, data, shape, order, f64::to_le_bytes),
         BasisDtype::Float32 => {
-            write_le::<f32, 4>(out, data, shape, order, |x| (x as f32).to_le_bytes())
+            write_le::<f32, f64, 4>(out, data, shape, order, |x| (x as f32).to_le_bytes())
         }
     }
 }
 
 /// npyz's header for an array of `T`, then each value's little-endian bytes (`bytes`), a
 /// buffer at a time.
-fn write_le<T: npyz::AutoSerialize, const B: usize>(
+fn write_le<T: npyz::AutoSerialize, S: Copy, const B: usize>(
     out: &mut impl Write,
-    data: &[f64],
+    data: &[S],
     shape: &[u64],
     order: npyz::Order,
-    bytes: impl Fn(f64) -> [u8; B],
+    bytes: impl Fn(S) -> [u8; B],
 ) -> std::io::Result<()> {
     /// Values per write.
     const CHUNK: usize = 1 << 14;
@@ -239,25 +239,6 @@ pub(crate) fn npy_1d<T: npyz::AutoSerialize + Copy>(data: &[T]) -> std::io::Resu
     w.extend(data.iter().copied())?;
     w.finish()?;
     Ok(buf)
-}
-
-/// The four `.npy` files of a sparse matrix in SciPy's CSC layout, named `{prefix}_data`,
-/// `{prefix}_indices`, `{prefix}_indptr` and `{prefix}_shape` (float64 values, int64
-/// indices; [`NpzReader::square_csc`] reads them back).
-pub(crate) fn csc_npy(prefix: &str, m: &SparseMatrix) -> std::io::Result<[(String, Vec<u8>); 4]> {
-    let to_i64 = |v: &[usize]| v.iter().map(|&x| x as i64).collect::<Vec<i64>>();
-    Ok([
-        (
-            format!("{prefix}_data"),
-            npy_f64(m.values(), &[m.nnz() as u64], false)?,
-        ),
-        (format!("{prefix}_indices"), npy_1d(&to_i64(m.row_idx()))?),
-        (format!("{prefix}_indptr"), npy_1d(&to_i64(m.col_ptr()))?),
-        (
-            format!("{prefix}_shape"),
-            npy_1d(&[m.nrows() as i64, m.ncols() as i64])?,
-        ),
-    ])
 }
 
 /// Writes `basis` to `path` as an `.npz` archive (the eigenvectors and the mass stored, the small
@@ -323,11 +304,6 @@ fn save_npz_as(
     let mut small: Vec<(&str, Vec<u8>)> = vec![("eigenvalues", values_npy)];
     // The mass arrays (about 7n values and indices) are stored, as NumPy stores them:
     // deflating them took 11% of a whole `eigs` command (26k vertices, k = 50).
-    let mass: Vec<(String, Vec<u8>)> = if vectors {
-        csc_npy("mass", &basis.mass).map_err(&e)?.into()
-    } else {
-        Vec::new()
-    };
     small.extend([
         (
             "residuals",
@@ -350,8 +326,8 @@ fn save_npz_as(
                 dtype,
             )?;
         }
-        for (name, bytes) in &mass {
-            npz.add(name, bytes, false)?;
+        if vectors {
+            npz.add_csc("mass", &basis.mass)?;
         }
         let rest = rest.iter().map(|(name, b)| (*name, b.as_slice()));
         let extra = extra.iter().map(|(name, b)| (name.as_str(), b.as_slice()));
@@ -399,6 +375,28 @@ impl<W: Write + std::io::Seek> NpzWriter<W> {
     /// Adds the array `name` from its `.npy` bytes.
     pub(crate) fn add(&mut self, name: &str, npy: &[u8], deflate: bool) -> std::io::Result<()> {
         self.start(name, deflate)?.write_all(npy)
+    }
+
+    /// Adds the four stored `.npy` files of a sparse matrix in SciPy's CSC layout, named
+    /// `{prefix}_data`, `{prefix}_indices`, `{prefix}_indptr` and `{prefix}_shape` (float64
+    /// values, int64 indices; [`NpzReader::square_csc`] reads them back), streamed from the
+    /// matrix without a copy (at 414k vertices a copy of the mass matrix as bytes was 70 MB
+    /// at the peak of an `eigs` command).
+    pub(crate) fn add_csc(&mut self, prefix: &str, m: &SparseMatrix) -> std::io::Result<()> {
+        let c = npyz::Order::C;
+        let (rows, ptr) = (m.row_idx(), m.col_ptr());
+        let as_i64 = |x: usize| (x as i64).to_le_bytes();
+        let name = format!("{prefix}_data");
+        let (len, vals) = (m.nnz() as u64, m.values());
+        write_le::<f64, f64, 8>(self.start(&name, false)?, vals, &[len], c, f64::to_le_bytes)?;
+        let name = format!("{prefix}_indices");
+        let len = rows.len() as u64;
+        write_le::<i64, usize, 8>(self.start(&name, false)?, rows, &[len], c, as_i64)?;
+        let name = format!("{prefix}_indptr");
+        let len = ptr.len() as u64;
+        write_le::<i64, usize, 8>(self.start(&name, false)?, ptr, &[len], c, as_i64)?;
+        let shape = npy_1d(&[m.nrows() as i64, m.ncols() as i64])?;
+        self.add(&format!("{prefix}_shape"), &shape, false)
     }
 
     /// Writes the archive's directory and flushes the output.
@@ -532,7 +530,7 @@ impl<R: Read + std::io::Seek> NpzReader<R> {
             .collect()
     }
 
-    /// The `n x n` sparse matrix written by [`csc_npy`] under `prefix`, checked completely
+    /// The `n x n` sparse matrix written by [`NpzWriter::add_csc`] under `prefix`, checked completely
     /// (shape, index pointer, finite values) before it is built.
     pub(crate) fn square_csc(
         &mut self,

@@ -132,8 +132,9 @@ impl ShiftInvert {
                 Ok(chol) => {
                     if crate::linalg::timing::enabled() {
                         eprintln!(
-                            "factor: n = {n}, {} values of L, split solve {:.2} of one thread's",
+                            "factor: n = {n}, {} values of L, {} row indices, split solve {:.2} of one thread's",
                             chol.factor_len(),
+                            chol.row_indices(),
                             chol.split_share()
                         );
                     }
