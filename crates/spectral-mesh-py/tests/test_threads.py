@@ -324,24 +324,30 @@ def test_the_allocator_setting_leaves_the_environment_as_it_was():
     assert run_script(script, env={"MIMALLOC_PURGE_DELAY": "250"}, timeout=60) == ["250"]
 
 
-def test_freed_memory_goes_back_to_the_system_during_a_solve():
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs /proc (Linux)")
+def test_freed_memory_goes_back_to_the_system_soon_after_a_solve():
     script = """
-        import resource
+        import time
         import spectral_mesh as sm
+        def kib(key):
+            for line in open("/proc/self/status"):
+                if line.startswith(key):
+                    return int(line.split()[1])
         V, F = sm.shape("sphere:res=5")
-        sm.eigenbasis(*sm.shape("sphere:res=1"), 3)
-        before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-        sm.eigenbasis(V, F, 100)
-        print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before)
+        tiny = sm.shape("sphere:res=1")
+        sm.eigenbasis(*tiny, 3)
+        before = kib("VmRSS:")
+        w, X = sm.eigenbasis(V, F, 100)
+        time.sleep(0.1)
+        sm.eigenbasis(*tiny, 3)  # the allocator at work again: it purges what is due
+        print(kib("VmRSS:") - before, X.nbytes // 1024)
     """
-    # The package's setting (10 ms) against the allocator's own default (1 s): the best of
-    # three runs each (the peak depends a little on timing).
-    ours = min(int(run_script(script, timeout=120)[0]) for _ in range(3))
-    kept = min(
-        int(run_script(script, env={"MIMALLOC_PURGE_DELAY": "1000"}, timeout=120)[0])
-        for _ in range(3)
-    )
-    assert ours < 0.9 * kept, (ours, kept)
+    # The package's setting (10 ms) against the allocator's own default (1 s, so that the
+    # buffers the solve freed are all still held): measured 22 against 56-66 MiB (the
+    # returned basis is 8 MiB of it).
+    ours, basis = map(int, run_script(script, timeout=120)[0].split())
+    kept, _ = map(int, run_script(script, env={"MIMALLOC_PURGE_DELAY": "1000"})[0].split())
+    assert basis <= ours < 0.6 * kept, (ours, kept, basis)
 
 
 def test_returned_arrays_own_their_data_in_the_documented_layout(torus):
