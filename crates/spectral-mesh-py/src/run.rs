@@ -60,6 +60,7 @@ static IDLE: Mutex<Idle> = Mutex::new(Idle {
 /// `RAYON_NUM_THREADS`, else the cores).
 static THREADS: OnceLock<usize> = OnceLock::new();
 
+/// The idle pools, locked (only to take or give back one: never across a computation).
 fn idle() -> std::sync::MutexGuard<'static, Idle> {
     IDLE.lock().unwrap_or_else(|p| p.into_inner())
 }
