@@ -244,18 +244,28 @@ def _local(inputs, params, params_hash, out, processes, threads, retry_failed, d
     pending = list(range(len(inputs)))
     records: dict[int, dict] = {}
     while pending:
+        # The shapes that were running when a worker died are suspects: they go round
+        # again first, one process at a time, so that the one that crashes takes no other
+        # shape's attempt (with several processes, a shape beside a crash twice in a row
+        # had failed as if it had crashed); the others follow with every process.
+        suspects = [i for i in pending if attempts[i] > 0]
+        if suspects:
+            now, width = suspects, 1
+            pending = [i for i in pending if attempts[i] == 0]
+        else:
+            now, width = pending, processes
+            pending = []
         # A SimpleQueue writes at once: a process that crashes right after saying which
         # shape it started has said it.
         started_queue = context.SimpleQueue()
         started: set[int] = set()
-        with ProcessPoolExecutor(processes, mp_context=context, initializer=_init_pool,
+        with ProcessPoolExecutor(width, mp_context=context, initializer=_init_pool,
                                  initargs=(started_queue,)) as pool:
             futures = {
                 pool.submit(_pool_task, i, inputs[i][0], inputs[i][1], params, out, threads,
                             retry_failed): i
-                for i in pending
+                for i in now
             }
-            pending = []
             while futures:
                 done, _ = wait(futures, timeout=deadline.remaining(), return_when=FIRST_COMPLETED)
                 if not done:
