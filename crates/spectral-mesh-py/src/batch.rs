@@ -102,7 +102,7 @@ pub fn batch_prepare(py: Python<'_>, out: PathBuf, force: bool) -> PyResult<usiz
 }
 
 /// One shape: its record as JSON text. Runs with the GIL released inside the shared pool
-/// of `threads` threads (0: the call's own pool, see [`run`]); never raises for a bad shape (its
+/// of `threads` threads (0: the library's global pool); never raises for a bad shape (its
 /// record says why), only for bad arguments or Ctrl-C.
 #[pyfunction]
 #[pyo3(signature = (path, name, params, out, threads, retry_failed=false))]

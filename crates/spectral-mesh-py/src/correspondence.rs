@@ -287,8 +287,7 @@ pub fn pairs_plan(
 }
 
 /// One pair: its record as JSON text (`process_pair`), in the shared pool of `threads`
-/// threads (0: the call's own pool, see [`crate::run::run`]); never raises for a bad mesh
-/// (its record says why).
+/// threads (0: the global pool); never raises for a bad mesh (its record says why).
 #[pyfunction]
 pub fn match_pair(
     py: Python<'_>,

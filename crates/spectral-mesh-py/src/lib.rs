@@ -6,8 +6,8 @@
 //! and the figure code. The Python layer (`python/spectral_mesh/`) normalizes user input,
 //! documents every function and is the public API; this module is private.
 //!
-//! Every computation goes through [`run::run`]: a job on a thread pool of its own, the GIL
-//! released, Ctrl-C honoured within a second, panics turned into exceptions.
+//! Every computation goes through [`run::run`]: a worker thread, the GIL released, Ctrl-C
+//! honoured within a second, panics turned into exceptions.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -718,10 +718,10 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
     pyjson::to_py(py, &spectral_mesh_render::defaults::to_json())
 }
 
-/// Threads a computation uses (the threads of each pool of [`run::run`]).
+/// Threads the computations use (the library's rayon pool).
 #[pyfunction]
-fn num_threads(py: Python<'_>) -> PyResult<usize> {
-    run::threads().map_err(|e| e.into_pyerr(py))
+fn num_threads() -> usize {
+    rayon::current_num_threads()
 }
 
 /// Test hook: panics on the worker thread (it must become `InternalError`).

@@ -39,7 +39,7 @@ import os as _os
 # environment once, when the module is loaded. Its default, 1000, is longer than a whole
 # eigensolve at 26k vertices: every buffer the solve had freed still counted in the
 # process' peak. 10 ms (mimalloc's earlier default) took the peak of eigenbasis(V, F, 50)
-# from 145 to 119 MiB at 26k vertices and from 378 to 338 MiB at 103k, in about the same
+# from 157 to 130 MiB at 26k vertices and from 387 to 336 MiB at 103k, in about the same
 # time. The variable is set for the load only, and only when the user has not set it.
 _PURGE_DELAY = "MIMALLOC_PURGE_DELAY"
 _set_purge_delay = _PURGE_DELAY not in _os.environ
