@@ -302,8 +302,6 @@ fn save_npz_as(
     let mut values_npy = Vec::new();
     write_npy(&mut values_npy, &basis.values, &[k as u64], false, dtype).map_err(&e)?;
     let mut small: Vec<(&str, Vec<u8>)> = vec![("eigenvalues", values_npy)];
-    // The mass arrays (about 7n values and indices) are stored, as NumPy stores them:
-    // deflating them took 11% of a whole `eigs` command (26k vertices, k = 50).
     small.extend([
         (
             "residuals",
@@ -326,6 +324,8 @@ fn save_npz_as(
                 dtype,
             )?;
         }
+        // The mass arrays (about 7n values and indices) are stored, as NumPy stores them:
+        // deflating them took 11% of a whole `eigs` command (26k vertices, k = 50).
         if vectors {
             npz.add_csc("mass", &basis.mass)?;
         }
