@@ -250,9 +250,10 @@ impl Topology {
             of_vertex: comp_id,
             count: nc,
         } = VertexComponents::new(mesh);
-        let used: Vec<bool> = comp_id.iter().map(|&c| c != usize::MAX).collect();
         let triangle_component: Vec<usize> = tris.iter().map(|t| comp_id[t[0]]).collect();
-        let unreferenced_vertices: Vec<usize> = (0..n).filter(|&v| !used[v]).collect();
+        // A vertex no triangle uses has no component.
+        let unreferenced_vertices: Vec<usize> =
+            (0..n).filter(|&v| comp_id[v] == usize::MAX).collect();
 
         // Orientability: 2-colouring of faces by flip parity.
         let mut parity_uf = UnionFind::new(2 * tris.len());
