@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use super::{LearningError, LearningOperators, LearningParams, LearningShape, compute_operators};
 use crate::cancel::CancelToken;
 use crate::linalg::EigenProgress;
-use crate::spectral::store::{NpzReader, NpzWriter, StoreError, io_err, npy_1d, npy_f64};
+use crate::spectral::store::{NpzReader, NpzWriter, StoreError, io_err, npy_1d, write_npy_f64};
 
 /// Version of the archive layout; a change makes every older file a cache miss.
 pub const CACHE_FORMAT_VERSION: u32 = 1;
@@ -86,28 +86,19 @@ pub fn save_operators(
         reason: err.to_string(),
     })?;
     let frames: Vec<f64> = ops.frames.iter().flatten().flatten().copied().collect();
-    let arrays: Vec<(String, Vec<u8>)> = vec![
-        (
-            "frames".into(),
-            npy_f64(&frames, &[n, 3, 3], false).map_err(&e)?,
-        ),
-        ("mass".into(), npy_f64(&ops.mass, &[n], false).map_err(&e)?),
-        (
-            "evals".into(),
-            npy_f64(&ops.evals, &[k], false).map_err(&e)?,
-        ),
-        (
-            "evecs".into(),
-            npy_f64(&ops.evecs, &[n, k], true).map_err(&e)?,
-        ),
-    ];
     let meta = npy_1d(&meta_json).map_err(&e)?;
     crate::io::write_atomic_with(path, |file| {
         let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
         // Stored, not deflated (as NumPy's `savez`): the cache is read far more often than
-        // it is written, and deflate shrinks floating-point data little.
-        for (name, bytes) in &arrays {
-            npz.add(name, bytes, false)?;
+        // it is written, and deflate shrinks floating-point data little. Every array is
+        // streamed from the operators (no copy as bytes first).
+        for (name, data, shape, fortran) in [
+            ("frames", &frames[..], &[n, 3, 3][..], false),
+            ("mass", &ops.mass[..], &[n][..], false),
+            ("evals", &ops.evals[..], &[k][..], false),
+            ("evecs", &ops.evecs[..], &[n, k][..], true),
+        ] {
+            write_npy_f64(npz.start(name, false)?, data, shape, fortran)?;
         }
         for (name, m) in [
             ("L", &ops.laplacian),
