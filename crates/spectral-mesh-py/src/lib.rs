@@ -254,7 +254,7 @@ fn laplacian<'py>(
 ) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyTuple>, f64)> {
     let mesh = mesh_from(&v, &f).map_err(|e| e.into_pyerr(py))?;
     let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
-    let (s, b, total) = run(py, move |_| {
+    let (s, b, total) = run::run_owned(py, move |_| {
         let mut ops = Operators::new(&mesh, lap);
         let total = ops.normalize_mass(normalize);
         Ok((csc_parts(&ops.stiffness), csc_parts(&ops.mass), total))
@@ -354,7 +354,7 @@ fn eigenbasis<'py>(
         normalize,
         eigen: solver.params().map_err(|e| e.into_pyerr(py))?,
     };
-    let (n, values, vectors, report) = run(py, move |token| {
+    let (n, values, vectors, report) = run::run_owned(py, move |token| {
         let an = Analysis::new(mesh, options);
         let basis = an.basis(k, &mut |p| progress.report(&p, token), token);
         let basis = progress.finish(basis.map_err(Failure::from))?;
@@ -482,7 +482,7 @@ fn eigsh<'py>(
             Failure::value(format!("k = {k}: must be between 1 and n = {n}")).into_pyerr(py),
         );
     }
-    let (n, values, vectors) = run(py, move |token| {
+    let (n, values, vectors) = run::run_owned(py, move |token| {
         let ops = Operators {
             laplacian: Laplacian::Cot,
             stiffness: s,

@@ -310,10 +310,12 @@ def test_freed_memory_goes_back_to_the_system_soon_after_a_solve():
     """
     # The package's setting (10 ms) against the allocator's own default (1 s, so that the
     # buffers the solve freed are all still held): measured 22 against 56-66 MiB (the
-    # returned basis is 8 MiB of it).
+    # returned basis is 8 MiB of it). Since a solve's helper threads exit with the call,
+    # what the first tiny solve's threads held is also given back before the end: the
+    # growth can read a few hundred KiB below the basis (7.6 MiB measured).
     ours, basis = map(int, run_script(script, timeout=120)[0].split())
     kept, _ = map(int, run_script(script, env={"MIMALLOC_PURGE_DELAY": "1000"})[0].split())
-    assert basis <= ours < 0.6 * kept, (ours, kept, basis)
+    assert 0.85 * basis <= ours < 0.6 * kept, (ours, kept, basis)
 
 
 def test_returned_arrays_own_their_data_in_the_documented_layout(torus):
@@ -325,3 +327,25 @@ def test_returned_arrays_own_their_data_in_the_documented_layout(torus):
     # The vectors are B-orthonormal columns, whatever the memory order.
     _, B = sm.laplacian(V, F)
     np.testing.assert_allclose(X.T @ (B @ X), np.eye(12), atol=1e-8)
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="needs /proc (Linux)")
+def test_a_solve_leaves_no_thread_behind():
+    # The module-level solves run on a thread pool made for the call: its threads exit with
+    # it (and give their memory back), where the global pool's would stay.
+    script = """
+        import os
+        import time
+        import spectral_mesh as sm
+        V, F = sm.shape("irregular-torus:res=3")
+        before = len(os.listdir("/proc/self/task"))
+        sm.eigenbasis(V, F, 20)
+        sm.laplacian(V, F)
+        deadline = time.monotonic() + 10
+        while len(os.listdir("/proc/self/task")) > before and time.monotonic() < deadline:
+            time.sleep(0.01)
+        print(before, len(os.listdir("/proc/self/task")))
+    """
+    out = run_script(script, env={"RAYON_NUM_THREADS": "2"}, timeout=60)
+    before, after = map(int, out[0].split())
+    assert after == before, (before, after)
