@@ -28,7 +28,7 @@ use crate::arrays::{
 };
 use crate::errors::Failure;
 use crate::pyjson;
-use crate::run::{Progress, run};
+use crate::run::{Progress, run, run_owned};
 use crate::{CloudArgs, Picture, PointsArgs, SolverArgs, draw, laplacian_of, with_values};
 
 /// The `k` weights of a Python weight function from its values at the eigenvalues of
@@ -228,11 +228,18 @@ impl PyAnalysis {
         F: FnOnce(BasisView<'_>) -> Result<T, Failure> + Send + 'static,
     {
         let an = self.inner.clone();
-        run(py, move |token: &CancelToken| {
+        let work = move |token: &CancelToken| {
             let b = an.basis(k, &mut |p| progress.report(&p, token), token);
             let b = progress.finish(b.map_err(Failure::from))?;
             f(b.view(k))
-        })
+        };
+        // An eigensolve to come gets a pool of its own (see `run`); a held basis does not
+        // pay for the pool's threads.
+        if self.inner.held_k() < k {
+            run_owned(py, work)
+        } else {
+            run(py, work)
+        }
     }
 }
 
@@ -259,7 +266,7 @@ impl PyAnalysis {
             ))
         };
         let (mesh, options) = prepare().map_err(|e| e.into_pyerr(py))?;
-        let inner = run(py, move |_| Ok(Arc::new(Analysis::new(mesh, options))))?;
+        let inner = run_owned(py, move |_| Ok(Arc::new(Analysis::new(mesh, options))))?;
         Ok(Self::wrap(inner, None))
     }
 
@@ -284,7 +291,7 @@ impl PyAnalysis {
             Ok((cloud, params, options))
         };
         let (cloud, params, options) = prepare().map_err(|e| e.into_pyerr(py))?;
-        let inner = run(py, move |_| {
+        let inner = run_owned(py, move |_| {
             Ok(Arc::new(Analysis::from_points(cloud, &params, options)?))
         })?;
         Ok(Self::wrap(inner, Some(params)))
@@ -310,7 +317,7 @@ impl PyAnalysis {
             Ok((kind, solver.params()?))
         };
         let (kind, eigen) = prepare().map_err(|e| e.into_pyerr(py))?;
-        let (inner, params) = run(py, move |_| {
+        let (inner, params) = run_owned(py, move |_| {
             let (input, params) = match AnalysisInput::from(read_input(&path)?) {
                 AnalysisInput::Points { cloud: points, .. } => {
                     let params = cloud.params(use_normals);

@@ -12,7 +12,7 @@ use spectral_mesh::geodesic::{
 
 use crate::arrays::{Layout, mesh_from, to_matrix, to_vector};
 use crate::errors::Failure;
-use crate::run::run;
+use crate::run::{run, run_owned};
 use crate::{PointsArgs, laplacian_of};
 
 impl From<GeodesicError> for Failure {
@@ -97,7 +97,7 @@ impl PyGeodesicSolver {
         let mesh = mesh_from(&v, &f).map_err(|e| e.into_pyerr(py))?;
         let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
         let params = geodesic_params(py, time_factor, convention)?;
-        let solver = run(py, move |_| Ok(GeodesicSolver::new(&mesh, lap, &params)?))?;
+        let solver = run_owned(py, move |_| Ok(GeodesicSolver::new(&mesh, lap, &params)?))?;
         Ok(Self::wrap(solver))
     }
 
@@ -120,7 +120,7 @@ impl PyGeodesicSolver {
             gradient_neighbors: gradient_neighbors.unwrap_or(d.gradient_neighbors),
             ..d
         };
-        let solver = run(py, move |_| {
+        let solver = run_owned(py, move |_| {
             Ok(GeodesicSolver::from_point_cloud(&cloud, &cp, &params)?)
         })?;
         Ok(Self::wrap(solver))

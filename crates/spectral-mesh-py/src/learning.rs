@@ -149,7 +149,7 @@ pub fn learning_operators<'py>(
         neighbors: n_neighbors,
         tolerance: tolerance_of(tol).map_err(fail)?,
     };
-    let (ops, hit, path) = run(py, move |token| {
+    let (ops, hit, path) = run::run_owned(py, move |token| {
         let shape = match &input {
             Input::Mesh(m) => LearningShape::Mesh(m),
             Input::Cloud(c) => LearningShape::Cloud(c),

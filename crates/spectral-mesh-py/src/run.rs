@@ -4,8 +4,10 @@
 //! - **GIL**: the calling thread waits with the GIL released, so other Python threads run
 //!   (and call the library) meanwhile; the work itself never touches Python objects.
 //! - **Threads**: the work uses the library's rayon pool (all cores unless
-//!   `RAYON_NUM_THREADS` says otherwise). The module-level solves ([`run_owned`]) make a
-//!   pool of that size for the call, the worker thread one of its threads: their parallel
+//!   `RAYON_NUM_THREADS` says otherwise). The heavy computations ([`run_owned`]: the
+//!   module-level solves, building an `Analysis` or a geodesic solver, an `Analysis`'
+//!   eigensolve for more pairs than it holds, the learning operators) make a pool of that
+//!   size for the call, the worker thread one of its threads: their parallel
 //!   steps are joined on a pool thread instead of being handed to the global pool and
 //!   waited for (26k vertices, k = 50, medians of alternating runs: 0.64 -> 0.62 s quiet
 //!   (10 runs; 0.69 -> 0.62 in another 8), 1.45 -> 1.10 s with two busy processes on the
@@ -42,7 +44,8 @@ pub const POLL: Duration = Duration::from_millis(50);
 pub const GRACE: Duration = Duration::from_millis(500);
 
 /// Runs `work` as described in the module documentation and returns its result, on a
-/// thread of its own (for work on objects other calls share).
+/// thread of its own whose parallel steps go to the global pool: for light work (queries
+/// on a held basis), where a pool's threads would cost more than they save.
 pub fn run<T, F>(py: Python<'_>, work: F) -> PyResult<T>
 where
     T: Send + 'static,
@@ -51,8 +54,9 @@ where
     run_on(py, false, work)
 }
 
-/// [`run`] for the heavy module-level solves: the worker thread is one of the threads of
-/// a rayon pool made for the call (see the module documentation).
+/// [`run`] for heavy work (a factorization, an eigensolve, an assembly): the worker thread
+/// is one of the threads of a rayon pool made for the call (see the module
+/// documentation).
 pub fn run_owned<T, F>(py: Python<'_>, work: F) -> PyResult<T>
 where
     T: Send + 'static,
