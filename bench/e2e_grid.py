@@ -43,7 +43,9 @@ COMMANDS = {
     "experiment": ["experiment", "spectral-distance", "MESH", "-k", "K", "-o", "OUT/exp"],
 }
 PEERS = ("scipy", "slepc")
-ROUTES = PEERS + tuple(COMMANDS)
+# Ours from Python: the user's script with this package (bench/eigs_python.py), whole
+# process like the others; compared with the same peers.
+ROUTES = PEERS + tuple(COMMANDS) + ("python",)
 SOLVE = re.compile(r"eigenpairs in ([0-9.]+) s")
 PHASES = re.compile(r"eig timings \(s\): (.*)")
 
@@ -52,6 +54,9 @@ def route_command(route, mesh, k, out, a):
     if route == "scipy":
         return [str(a.python), str(ROOT / "bench" / "eigs_scipy.py"), str(mesh), str(k),
                 "--mass", a.laplacian, "--cholmod", "--save", str(out / "basis.npz")]
+    if route == "python":
+        return [str(a.python), str(ROOT / "bench" / "eigs_python.py"), str(mesh), str(k),
+                "--mass", a.laplacian, "--save", str(out / "basis.npz")]
     if route == "slepc":
         return [str(a.slepc_python), str(ROOT / "bench" / "eigs_slepc.py"), str(mesh), str(k),
                 "--mass", a.laplacian, "--tol", repr(a.tol), "--save", str(out / "basis.npz")]
@@ -75,7 +80,7 @@ def measure(route, label, mesh, vertices, k, run, a):
     shutil.rmtree(out, ignore_errors=True)
     status, reason = eg.failure(status, code, stderr, a.timeout)
     solve = None
-    if route in PEERS:
+    if route in PEERS + ("python",):
         keys = eg.parse_line(stdout)
         solve = keys.get("seconds")
     else:
@@ -124,7 +129,8 @@ def render_table(records, a, command):
         "- whole process, wall seconds (mesh file in, outputs written), median "
         "(number of runs), and in brackets each peer's median over the command's (SciPy, "
         "then SLEPc); commands: "
-        + "; ".join(f"{r} = `spectral-mesh {' '.join(COMMANDS[r])}`" for r in ours)
+        + "; ".join(f"{r} = `spectral-mesh {' '.join(COMMANDS[r])}`" if r in COMMANDS
+                    else f"{r} = `eigs_python.py MESH K --save OUT/basis.npz`" for r in ours)
         + "; scipy = `eigs_scipy.py MESH K --cholmod --save OUT/basis.npz`"
         + f"; slepc = `eigs_slepc.py MESH K --tol {a.tol:g} --save OUT/basis.npz`",
         "",
@@ -184,7 +190,9 @@ def parse_args(argv):
     ap.add_argument("--large", type=int, default=300000,
                     help="meshes above this many vertices get --runs-large runs")
     ap.add_argument("--runs-large", type=int, default=1)
-    ap.add_argument("--routes", default=",".join(ROUTES))
+    ap.add_argument("--routes", default=",".join(r for r in ROUTES if r != "python"),
+                    help="comma list of routes; `python` (not in the default) needs the "
+                    "package in --python's venv (bench/python_eigs.sh installs it)")
     ap.add_argument("--laplacian", default="fem", choices=["fem", "voronoi-cot", "cot"])
     ap.add_argument("--tol", type=float, default=1e-10,
                     help="SLEPc's tolerance (the default of ours; SciPy runs with tol = 0)")
@@ -210,7 +218,7 @@ def parse_args(argv):
     if not a.render_only:
         if not (a.cli and a.cli.is_file()):
             ap.error("--cli: the spectral-mesh binary is needed")
-        if "scipy" in a.routes and not (a.python and a.python.is_file()):
+        if ("scipy" in a.routes or "python" in a.routes) and not (a.python and a.python.is_file()):
             ap.error("--python: the bench venv's python is needed for the SciPy route")
     return a
 
