@@ -236,7 +236,7 @@ impl PyAnalysis {
         // An eigensolve to come gets a pool of its own (see `run`); a held basis does not
         // pay for the pool's threads.
         if self.inner.held_k() < k {
-            run_owned(py, work)
+            run_owned(py, Some(self.inner.n()), work)
         } else {
             run(py, work)
         }
@@ -266,7 +266,10 @@ impl PyAnalysis {
             ))
         };
         let (mesh, options) = prepare().map_err(|e| e.into_pyerr(py))?;
-        let inner = run_owned(py, move |_| Ok(Arc::new(Analysis::new(mesh, options))))?;
+        let rows = Some(mesh.n_vertices());
+        let inner = run_owned(py, rows, move |_| {
+            Ok(Arc::new(Analysis::new(mesh, options)))
+        })?;
         Ok(Self::wrap(inner, None))
     }
 
@@ -291,7 +294,8 @@ impl PyAnalysis {
             Ok((cloud, params, options))
         };
         let (cloud, params, options) = prepare().map_err(|e| e.into_pyerr(py))?;
-        let inner = run_owned(py, move |_| {
+        let rows = Some(cloud.positions().len());
+        let inner = run_owned(py, rows, move |_| {
             Ok(Arc::new(Analysis::from_points(cloud, &params, options)?))
         })?;
         Ok(Self::wrap(inner, Some(params)))
@@ -317,7 +321,7 @@ impl PyAnalysis {
             Ok((kind, solver.params()?))
         };
         let (kind, eigen) = prepare().map_err(|e| e.into_pyerr(py))?;
-        let (inner, params) = run_owned(py, move |_| {
+        let (inner, params) = run_owned(py, None, move |_| {
             let (input, params) = match AnalysisInput::from(read_input(&path)?) {
                 AnalysisInput::Points { cloud: points, .. } => {
                     let params = cloud.params(use_normals);

@@ -97,7 +97,10 @@ impl PyGeodesicSolver {
         let mesh = mesh_from(&v, &f).map_err(|e| e.into_pyerr(py))?;
         let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
         let params = geodesic_params(py, time_factor, convention)?;
-        let solver = run_owned(py, move |_| Ok(GeodesicSolver::new(&mesh, lap, &params)?))?;
+        let rows = Some(mesh.n_vertices());
+        let solver = run_owned(py, rows, move |_| {
+            Ok(GeodesicSolver::new(&mesh, lap, &params)?)
+        })?;
         Ok(Self::wrap(solver))
     }
 
@@ -120,7 +123,8 @@ impl PyGeodesicSolver {
             gradient_neighbors: gradient_neighbors.unwrap_or(d.gradient_neighbors),
             ..d
         };
-        let solver = run_owned(py, move |_| {
+        let rows = Some(cloud.positions().len());
+        let solver = run_owned(py, rows, move |_| {
             Ok(GeodesicSolver::from_point_cloud(&cloud, &cp, &params)?)
         })?;
         Ok(Self::wrap(solver))

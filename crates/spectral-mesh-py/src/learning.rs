@@ -149,7 +149,11 @@ pub fn learning_operators<'py>(
         neighbors: n_neighbors,
         tolerance: tolerance_of(tol).map_err(fail)?,
     };
-    let (ops, hit, path) = run::run_owned(py, move |token| {
+    let rows = Some(match &input {
+        Input::Mesh(m) => m.n_vertices(),
+        Input::Cloud(c) => c.positions().len(),
+    });
+    let (ops, hit, path) = run::run_owned(py, rows, move |token| {
         let shape = match &input {
             Input::Mesh(m) => LearningShape::Mesh(m),
             Input::Cloud(c) => LearningShape::Cloud(c),

@@ -6,8 +6,9 @@
 //! and the figure code. The Python layer (`python/spectral_mesh/`) normalizes user input,
 //! documents every function and is the public API; this module is private.
 //!
-//! Every computation goes through [`run::run`]: a worker thread, the GIL released, Ctrl-C
-//! honoured within a second, panics turned into exceptions.
+//! Every computation goes through `run::run` (the heavy ones through `run::run_owned`, on
+//! a thread pool of the call's own): a worker thread, the GIL released, Ctrl-C honoured
+//! within a second, panics turned into exceptions.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -254,7 +255,8 @@ fn laplacian<'py>(
 ) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyTuple>, f64)> {
     let mesh = mesh_from(&v, &f).map_err(|e| e.into_pyerr(py))?;
     let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
-    let (s, b, total) = run::run_owned(py, move |_| {
+    let rows = Some(mesh.n_vertices());
+    let (s, b, total) = run::run_owned(py, rows, move |_| {
         let mut ops = Operators::new(&mesh, lap);
         let total = ops.normalize_mass(normalize);
         Ok((csc_parts(&ops.stiffness), csc_parts(&ops.mass), total))
@@ -354,7 +356,8 @@ fn eigenbasis<'py>(
         normalize,
         eigen: solver.params().map_err(|e| e.into_pyerr(py))?,
     };
-    let (n, values, vectors, report) = run::run_owned(py, move |token| {
+    let rows = Some(mesh.n_vertices());
+    let (n, values, vectors, report) = run::run_owned(py, rows, move |token| {
         let an = Analysis::new(mesh, options);
         let basis = an.basis(k, &mut |p| progress.report(&p, token), token);
         let basis = progress.finish(basis.map_err(Failure::from))?;
@@ -482,7 +485,7 @@ fn eigsh<'py>(
             Failure::value(format!("k = {k}: must be between 1 and n = {n}")).into_pyerr(py),
         );
     }
-    let (n, values, vectors) = run::run_owned(py, move |token| {
+    let (n, values, vectors) = run::run_owned(py, Some(n), move |token| {
         let ops = Operators {
             laplacian: Laplacian::Cot,
             stiffness: s,

@@ -6,16 +6,17 @@
 //! - **Threads**: the work uses the library's rayon pool (all cores unless
 //!   `RAYON_NUM_THREADS` says otherwise). The heavy computations ([`run_owned`]: the
 //!   module-level solves, building an `Analysis` or a geodesic solver, an `Analysis`'
-//!   eigensolve for more pairs than it holds, the learning operators) make a pool of that
-//!   size for the call, the worker thread one of its threads: their parallel
-//!   steps are joined on a pool thread instead of being handed to the global pool and
-//!   waited for (26k vertices, k = 50, medians of alternating runs: 0.64 -> 0.62 s quiet
-//!   (10 runs; 0.69 -> 0.62 in another 8), 1.45 -> 1.10 s with two busy processes on the
-//!   2 cores (8 runs)). The pool's other threads exit
-//!   with the call, so the memory their heaps hold goes back to the system as it did (the
-//!   global pool's threads stay, and with them up to 46 MiB after a 10k-vertex k = 100
-//!   solve, until they allocate again). Only the call's own jobs run in its pool: a
-//!   thread waiting in a join never takes up another call's work.
+//!   eigensolve for more pairs than it holds, the learning operators) on
+//!   [`POOL_MIN_ROWS`] rows or more run as a job of a pool of that size made for the
+//!   call: their parallel steps are joined on a pool thread instead of being handed from
+//!   the worker to the global pool one by one and waited for. 26k vertices, k = 50,
+//!   medians of alternating runs of the two builds: `eigenbasis` 0.654 -> 0.573 s quiet (8
+//!   runs), 1.72 -> 1.28 s with two busy processes on the 2 cores (6 runs);
+//!   `Analysis(V, F).basis(50)` 0.589 -> 0.522 s. The pool's threads end with the call,
+//!   so the memory their heaps hold goes back to the system (running on the global pool
+//!   instead was as fast, but its threads stay, and with them 46 MiB after a 10k-vertex
+//!   k = 100 solve). Only the call's own jobs run in its pool: a thread waiting in a join
+//!   never takes up another call's work.
 //! - **Ctrl-C**: every [`POLL`] the calling thread takes the GIL back for a moment and
 //!   runs Python's signal handlers (`PyErr_CheckSignals`, only effective on the main
 //!   thread). When one raises (`KeyboardInterrupt` for Ctrl-C) the work's
@@ -54,15 +55,22 @@ where
     run_on(py, false, work)
 }
 
-/// [`run`] for heavy work (a factorization, an eigensolve, an assembly): the worker thread
-/// is one of the threads of a rayon pool made for the call (see the module
+/// Below this many rows (vertices, points) a heavy call runs as [`run`] does: starting a
+/// pool's threads costs more than its parallel steps gain. Measured per call (2 cores):
+/// `eigenbasis(k = 20)` 2.9 -> 3.9 ms at 162 vertices, 10.7 -> 10.1 ms at 642, 32.7 ->
+/// 30.6 ms at 2,562; `laplacian` 0.26 -> 0.38 ms at 162 and 1.37 -> 1.64 ms at 2,562.
+pub const POOL_MIN_ROWS: usize = 4096;
+
+/// [`run`] for heavy work (a factorization, an eigensolve, an assembly) on `rows` rows
+/// (vertices or points; `None` when not known before the work starts, as for a file):
+/// from [`POOL_MIN_ROWS`] rows, on a rayon pool made for the call (see the module
 /// documentation).
-pub fn run_owned<T, F>(py: Python<'_>, work: F) -> PyResult<T>
+pub fn run_owned<T, F>(py: Python<'_>, rows: Option<usize>, work: F) -> PyResult<T>
 where
     T: Send + 'static,
     F: FnOnce(&CancelToken) -> Result<T, Failure> + Send + 'static,
 {
-    run_on(py, true, work)
+    run_on(py, rows.is_none_or(|n| n >= POOL_MIN_ROWS), work)
 }
 
 fn run_on<T, F>(py: Python<'_>, in_pool: bool, work: F) -> PyResult<T>
@@ -81,9 +89,10 @@ where
                     .unwrap_or_else(|payload| Err(Failure::Internal(panic_message(&payload))))
             };
             let out = if in_pool {
-                // The pool's usual size (all cores, or `RAYON_NUM_THREADS`), this thread
-                // one of them.
-                let pool = rayon::ThreadPoolBuilder::new().use_current_thread().build();
+                // The pool's usual size (all cores, or `RAYON_NUM_THREADS`), its threads
+                // started for the call (not `use_current_thread`: rayon then leaks the
+                // pool's registry, about 11 KiB a call, measured); they end with it.
+                let pool = rayon::ThreadPoolBuilder::new().build();
                 match pool {
                     Ok(pool) => pool.install(guarded),
                     Err(_) => guarded(),
