@@ -233,7 +233,7 @@ impl PyAnalysis {
             let b = progress.finish(b.map_err(Failure::from))?;
             f(b.view(k))
         };
-        // An eigensolve to come gets a pool of its own (see `run`); a held basis does not
+        // An eigensolve to come gets a pool of its own (see `run_owned`); a held basis does not
         // pay for the pool's threads.
         if self.inner.held_k() < k {
             run_owned(py, Some(self.inner.n()), work)
