@@ -302,6 +302,8 @@ def test_freed_memory_goes_back_to_the_system_soon_after_a_solve():
         V, F = sm.shape("sphere:res=5")
         tiny = sm.shape("sphere:res=1")
         sm.eigenbasis(*tiny, 3)
+        time.sleep(0.1)
+        sm.eigenbasis(*tiny, 3)  # what the start-up freed is purged before the baseline
         before = kib("VmRSS:")
         w, X = sm.eigenbasis(V, F, 100)
         time.sleep(0.1)
@@ -310,12 +312,11 @@ def test_freed_memory_goes_back_to_the_system_soon_after_a_solve():
     """
     # The package's setting (10 ms) against the allocator's own default (1 s, so that the
     # buffers the solve freed are all still held): measured 22 against 56-66 MiB (the
-    # returned basis is 8 MiB of it). The solve's own pool threads end with the call and
-    # give back all they held, and the purge can take back pages held before the solve
-    # too: the growth can read a few hundred KiB below the basis (7.6-7.9 MiB measured).
+    # returned basis is 8 MiB of it); with the solve's pool threads ending with the call
+    # and a settled baseline, 9.7-10.2 against 59 MiB.
     ours, basis = map(int, run_script(script, timeout=120)[0].split())
     kept, _ = map(int, run_script(script, env={"MIMALLOC_PURGE_DELAY": "1000"})[0].split())
-    assert 0.85 * basis <= ours < 0.6 * kept, (ours, kept, basis)
+    assert basis <= ours < 0.6 * kept, (ours, kept, basis)
 
 
 def test_returned_arrays_own_their_data_in_the_documented_layout(torus):
