@@ -219,7 +219,7 @@ def parse_args(argv):
         if not (a.cli and a.cli.is_file()):
             ap.error("--cli: the spectral-mesh binary is needed")
         if ("scipy" in a.routes or "python" in a.routes) and not (a.python and a.python.is_file()):
-            ap.error("--python: the bench venv's python is needed for the SciPy route")
+            ap.error("--python: the bench venv's python is needed for the scipy and python routes")
     return a
 
 

@@ -28,7 +28,7 @@ use crate::arrays::{
 };
 use crate::errors::Failure;
 use crate::pyjson;
-use crate::run::{Progress, run, run_owned};
+use crate::run::{Progress, run, run_heavy};
 use crate::{CloudArgs, Picture, PointsArgs, SolverArgs, draw, laplacian_of, with_values};
 
 /// The `k` weights of a Python weight function from its values at the eigenvalues of
@@ -233,10 +233,10 @@ impl PyAnalysis {
             let b = progress.finish(b.map_err(Failure::from))?;
             f(b.view(k))
         };
-        // An eigensolve to come gets a pool of its own (see `run_owned`); a held basis does not
+        // An eigensolve to come gets a pool of its own (see `run_heavy`); a held basis does not
         // pay for the pool's threads.
         if self.inner.held_k() < k {
-            run_owned(py, Some(self.inner.n()), work)
+            run_heavy(py, Some(self.inner.n()), work)
         } else {
             run(py, work)
         }
@@ -267,7 +267,7 @@ impl PyAnalysis {
         };
         let (mesh, options) = prepare().map_err(|e| e.into_pyerr(py))?;
         let rows = Some(mesh.n_vertices());
-        let inner = run_owned(py, rows, move |_| {
+        let inner = run_heavy(py, rows, move |_| {
             Ok(Arc::new(Analysis::new(mesh, options)))
         })?;
         Ok(Self::wrap(inner, None))
@@ -295,7 +295,7 @@ impl PyAnalysis {
         };
         let (cloud, params, options) = prepare().map_err(|e| e.into_pyerr(py))?;
         let rows = Some(cloud.positions().len());
-        let inner = run_owned(py, rows, move |_| {
+        let inner = run_heavy(py, rows, move |_| {
             Ok(Arc::new(Analysis::from_points(cloud, &params, options)?))
         })?;
         Ok(Self::wrap(inner, Some(params)))
@@ -321,7 +321,7 @@ impl PyAnalysis {
             Ok((kind, solver.params()?))
         };
         let (kind, eigen) = prepare().map_err(|e| e.into_pyerr(py))?;
-        let (inner, params) = run_owned(py, None, move |_| {
+        let (inner, params) = run_heavy(py, None, move |_| {
             let (input, params) = match AnalysisInput::from(read_input(&path)?) {
                 AnalysisInput::Points { cloud: points, .. } => {
                     let params = cloud.params(use_normals);

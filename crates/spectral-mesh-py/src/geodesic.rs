@@ -12,7 +12,7 @@ use spectral_mesh::geodesic::{
 
 use crate::arrays::{Layout, mesh_from, to_matrix, to_vector};
 use crate::errors::Failure;
-use crate::run::{run, run_owned};
+use crate::run::{run, run_heavy};
 use crate::{PointsArgs, laplacian_of};
 
 impl From<GeodesicError> for Failure {
@@ -98,7 +98,7 @@ impl PyGeodesicSolver {
         let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
         let params = geodesic_params(py, time_factor, convention)?;
         let rows = Some(mesh.n_vertices());
-        let solver = run_owned(py, rows, move |_| {
+        let solver = run_heavy(py, rows, move |_| {
             Ok(GeodesicSolver::new(&mesh, lap, &params)?)
         })?;
         Ok(Self::wrap(solver))
@@ -124,7 +124,7 @@ impl PyGeodesicSolver {
             ..d
         };
         let rows = Some(cloud.positions().len());
-        let solver = run_owned(py, rows, move |_| {
+        let solver = run_heavy(py, rows, move |_| {
             Ok(GeodesicSolver::from_point_cloud(&cloud, &cp, &params)?)
         })?;
         Ok(Self::wrap(solver))

@@ -153,7 +153,7 @@ pub fn learning_operators<'py>(
         Input::Mesh(m) => m.n_vertices(),
         Input::Cloud(c) => c.positions().len(),
     });
-    let (ops, hit, path) = run::run_owned(py, rows, move |token| {
+    let (ops, hit, path) = run::run_heavy(py, rows, move |token| {
         let shape = match &input {
             Input::Mesh(m) => LearningShape::Mesh(m),
             Input::Cloud(c) => LearningShape::Cloud(c),

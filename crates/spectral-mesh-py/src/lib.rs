@@ -6,7 +6,7 @@
 //! and the figure code. The Python layer (`python/spectral_mesh/`) normalizes user input,
 //! documents every function and is the public API; this module is private.
 //!
-//! Every computation goes through `run::run` (the heavy ones through `run::run_owned`, on
+//! Every computation goes through `run::run` (the heavy ones through `run::run_heavy`, on
 //! a thread pool of the call's own): a worker thread, the GIL released, Ctrl-C honoured
 //! within a second, panics turned into exceptions.
 
@@ -256,7 +256,7 @@ fn laplacian<'py>(
     let mesh = mesh_from(&v, &f).map_err(|e| e.into_pyerr(py))?;
     let lap = laplacian_of(kind).map_err(|e| e.into_pyerr(py))?;
     let rows = Some(mesh.n_vertices());
-    let (s, b, total) = run::run_owned(py, rows, move |_| {
+    let (s, b, total) = run::run_heavy(py, rows, move |_| {
         let mut ops = Operators::new(&mesh, lap);
         let total = ops.normalize_mass(normalize);
         Ok((csc_parts(&ops.stiffness), csc_parts(&ops.mass), total))
@@ -357,7 +357,7 @@ fn eigenbasis<'py>(
         eigen: solver.params().map_err(|e| e.into_pyerr(py))?,
     };
     let rows = Some(mesh.n_vertices());
-    let (n, values, vectors, report) = run::run_owned(py, rows, move |token| {
+    let (n, values, vectors, report) = run::run_heavy(py, rows, move |token| {
         let an = Analysis::new(mesh, options);
         let basis = an.basis(k, &mut |p| progress.report(&p, token), token);
         let basis = progress.finish(basis.map_err(Failure::from))?;
@@ -485,7 +485,7 @@ fn eigsh<'py>(
             Failure::value(format!("k = {k}: must be between 1 and n = {n}")).into_pyerr(py),
         );
     }
-    let (n, values, vectors) = run::run_owned(py, Some(n), move |token| {
+    let (n, values, vectors) = run::run_heavy(py, Some(n), move |token| {
         let ops = Operators {
             laplacian: Laplacian::Cot,
             stiffness: s,

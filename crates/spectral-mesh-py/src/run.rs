@@ -4,7 +4,7 @@
 //! - **GIL**: the calling thread waits with the GIL released, so other Python threads run
 //!   (and call the library) meanwhile; the work itself never touches Python objects.
 //! - **Threads**: the work uses the library's rayon pool (all cores unless
-//!   `RAYON_NUM_THREADS` says otherwise). The heavy computations ([`run_owned`]: the
+//!   `RAYON_NUM_THREADS` says otherwise). The heavy computations ([`run_heavy`]: the
 //!   module-level solves, building an `Analysis` or a geodesic solver, an `Analysis`'
 //!   eigensolve for more pairs than it holds, the learning operators) on
 //!   [`POOL_MIN_ROWS`] rows or more run as a job of a pool of that size made for the
@@ -65,7 +65,7 @@ pub const POOL_MIN_ROWS: usize = 4096;
 /// (vertices or points; `None` when not known before the work starts, as for a file):
 /// from [`POOL_MIN_ROWS`] rows, on a rayon pool made for the call (see the module
 /// documentation).
-pub fn run_owned<T, F>(py: Python<'_>, rows: Option<usize>, work: F) -> PyResult<T>
+pub fn run_heavy<T, F>(py: Python<'_>, rows: Option<usize>, work: F) -> PyResult<T>
 where
     T: Send + 'static,
     F: FnOnce(&CancelToken) -> Result<T, Failure> + Send + 'static,
