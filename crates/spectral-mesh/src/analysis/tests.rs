@@ -1,5 +1,6 @@
 use super::*;
 use crate::fields::harmonic::{ConstraintSpec, harmonic_map_with_operators};
+use crate::linalg::interior_target;
 use crate::shapes::build_str;
 use crate::spectral::distances::{distances_from, wfem_diffusion_distances_from};
 use crate::spectral::filters::Filter;
@@ -100,11 +101,23 @@ fn a_larger_k_gives_the_pairs_of_a_direct_solve() {
         .unwrap();
     assert_eq!(b200.values, direct.values);
     assert_eq!(b200.vectors, direct.vectors);
-    // The factorization of the first solve served the second (a counter, not a timer).
-    assert_eq!(grown.factorizations(), 1);
+    // Each solve factored for its own interior shift (k = 40 and 80 have different
+    // targets; a counter, not a timer)...
+    assert_ne!(interior_target(40), interior_target(80));
+    assert_eq!(grown.factorizations(), 2);
+    // ...and k = 85, with the target of 80, reuses that factor and still gives the pairs
+    // of a direct solve.
+    assert_eq!(interior_target(85), interior_target(80));
+    let b85 = grown.basis(85, &mut |_| {}, &c).unwrap();
+    assert_eq!(grown.factorizations(), 2);
+    let direct = analysis("sphere:res=4", true)
+        .basis(85, &mut |_| {}, &c)
+        .unwrap();
+    assert_eq!(b85.values, direct.values);
+    assert_eq!(b85.vectors, direct.vectors);
     // Fewer pairs reuse the held basis: no new solve.
     let again = grown.basis(10, &mut |_| {}, &c).unwrap();
-    assert!(Arc::ptr_eq(&again, &b200));
+    assert!(Arc::ptr_eq(&again, &b85));
 }
 
 #[test]

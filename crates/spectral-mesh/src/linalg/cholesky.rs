@@ -7,8 +7,8 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::perm::PermRef;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
-    factorize_symbolic_cholesky,
+    CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
@@ -51,6 +51,9 @@ pub struct SparseCholesky {
     symbolic: Arc<SymbolicCholesky<usize>>,
     layout: Option<Arc<Supernodes>>,
     values: Vec<f64>,
+    /// `None` for `L L^T`; for `L D L^T` (an indefinite matrix, see
+    /// [`CholeskyAnalysis::factor_indefinite`]) the signs of its pivots.
+    pivots: Option<Inertia>,
     /// Fingerprint of the pattern that was analysed (see [`pattern_fingerprint`]), so that
     /// [`SparseCholesky::refactor`] knows when the analysis still applies without keeping
     /// a copy of the pattern (26 MB at 411k vertices).
@@ -189,6 +192,32 @@ impl CholeskyAnalysis {
             symbolic: self.symbolic.clone(),
             layout: self.layout.clone(),
             values,
+            pivots: None,
+            pattern: self.pattern,
+        })
+    }
+
+    /// Factors the symmetric, possibly indefinite `a` (of the analysed pattern) as
+    /// `L D L^T` without pivoting, as [`inertia`] does; the factor solves like an `L L^T`
+    /// one and knows the signs of its pivots ([`SparseCholesky::inertia`]). A zero or
+    /// non-finite pivot is [`CholeskyError::ZeroPivot`]; a matrix of another pattern is
+    /// [`CholeskyError::Internal`].
+    pub(crate) fn factor_indefinite(
+        &self,
+        a: &SparseMatrix,
+    ) -> Result<SparseCholesky, CholeskyError> {
+        if a.nrows() != self.n || a.ncols() != self.n || pattern_fingerprint(a) != self.pattern {
+            return Err(CholeskyError::Internal(
+                "the matrix does not have the analysed pattern".to_string(),
+            ));
+        }
+        let (values, signs) = ldlt_values(&self.symbolic, a)?;
+        Ok(SparseCholesky {
+            n: self.n,
+            symbolic: self.symbolic.clone(),
+            layout: self.layout.clone(),
+            values,
+            pivots: Some(signs),
             pattern: self.pattern,
         })
     }
@@ -227,7 +256,15 @@ impl SparseCholesky {
             return Ok(());
         }
         self.values = numeric(&self.symbolic, a)?;
+        self.pivots = None;
         Ok(())
+    }
+
+    /// The signs of the pivots of an `L D L^T` factor (see
+    /// [`CholeskyAnalysis::factor_indefinite`]); `None` for an `L L^T` one (positive
+    /// definite).
+    pub fn inertia(&self) -> Option<Inertia> {
+        self.pivots
     }
 
     /// Dimension `n`.
@@ -247,19 +284,30 @@ impl SparseCholesky {
         // Every column goes through the same arithmetic whatever the group width, so a
         // column solved alone and in a block give bitwise equal results.
         if let Some(layout) = &self.layout {
-            layout.solve_many(&self.values, &mut b[..self.n * k], self.n);
+            let ldlt = self.pivots.is_some();
+            layout.solve_many(&self.values, &mut b[..self.n * k], self.n, ldlt);
             return;
         }
         let rhs = MatMut::from_column_major_slice_mut(b, self.n, k);
         let par = Par::Seq;
         let req = self.symbolic.solve_in_place_scratch::<f64>(k, par);
         let mut mem = MemBuffer::new(req);
-        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
-            Conj::No,
-            rhs,
-            par,
-            MemStack::new(&mut mem),
-        );
+        let stack = MemStack::new(&mut mem);
+        if self.pivots.is_some() {
+            LdltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+                Conj::No,
+                rhs,
+                par,
+                stack,
+            );
+        } else {
+            LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+                Conj::No,
+                rhs,
+                par,
+                stack,
+            );
+        }
     }
 
     /// Solves `A X = B` in place for `k` right-hand sides stored column-major
@@ -341,6 +389,14 @@ fn ldlt_inertia(
     symbolic: &SymbolicCholesky<usize>,
     a: &SparseMatrix,
 ) -> Result<Inertia, CholeskyError> {
+    ldlt_values(symbolic, a).map(|(_, signs)| signs)
+}
+
+/// The values of the `L D L^T` factor of `a` (no pivoting) and the signs of its pivots.
+fn ldlt_values(
+    symbolic: &SymbolicCholesky<usize>,
+    a: &SparseMatrix,
+) -> Result<(Vec<f64>, Inertia), CholeskyError> {
     let SymbolicCholeskyRaw::Supernodal(sn) = symbolic.raw() else {
         return Err(CholeskyError::Internal(
             "the analysis is not supernodal".to_string(),
@@ -378,7 +434,10 @@ fn ldlt_inertia(
             }
         }
     }
-    Ok(Inertia { negative, positive })
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(CholeskyError::ZeroPivot("non-finite factor".to_string()));
+    }
+    Ok((values, Inertia { negative, positive }))
 }
 
 #[cfg(test)]
@@ -473,9 +532,9 @@ mod tests {
             let k = 5;
             let b: Vec<f64> = (0..n * k).map(|_| rand() - 0.5).collect();
             let mut x = b.clone();
-            split.solve_many(&c.values, &mut x, n);
+            split.solve_many(&c.values, &mut x, n, false);
             let mut y = b.clone();
-            plain.solve_many(&c.values, &mut y, n);
+            plain.solve_many(&c.values, &mut y, n, false);
             let scale = y.iter().fold(0.0f64, |s, v| s.max(v.abs()));
             let diff = x
                 .iter()
@@ -495,8 +554,51 @@ mod tests {
                 .build()
                 .unwrap();
             let mut z = b.clone();
-            one.install(|| split.solve_many(&c.values, &mut z, n));
+            one.install(|| split.solve_many(&c.values, &mut z, n, false));
             assert!(x.iter().zip(&z).all(|(p, q)| p.to_bits() == q.to_bits()));
+        }
+    }
+
+    /// An indefinite grid matrix factored as `L D L^T` (the interior shifts of the
+    /// eigensolver): the pivots' signs are the eigenvalues' (known in closed form), and the
+    /// solve, split over the tree or not, solves the system.
+    #[test]
+    fn an_indefinite_factor_solves_and_counts_its_negative_pivots() {
+        for m in [20, 110] {
+            // Eigenvalues d - 2 cos(i pi / (m + 1)) - 2 cos(j pi / (m + 1)): both signs.
+            let d = 1.5137;
+            let a = ordering::tests::grid_matrix(m, d);
+            let n = a.nrows();
+            let h = std::f64::consts::PI / (m + 1) as f64;
+            let mut negative = 0;
+            for i in 1..=m {
+                for j in 1..=m {
+                    if d - 2.0 * (i as f64 * h).cos() - 2.0 * (j as f64 * h).cos() < 0.0 {
+                        negative += 1;
+                    }
+                }
+            }
+            assert!(negative > n / 10 && negative < n - n / 10);
+            let c = CholeskyAnalysis::new(&a)
+                .unwrap()
+                .factor_indefinite(&a)
+                .unwrap();
+            let signs = c.inertia().unwrap();
+            assert_eq!(signs.negative, negative, "{m} x {m}");
+            assert_eq!(signs.positive, n - negative);
+            assert_eq!(c.layout.as_ref().unwrap().is_split(), m == 110);
+            let mut rand = crate::test_support::lcg53(7 + m as u64);
+            let k = 5;
+            let x_true: Vec<f64> = (0..n * k).map(|_| rand() - 0.5).collect();
+            let mut b = Vec::with_capacity(n * k);
+            for q in 0..k {
+                b.extend(a.mul_vec(&x_true[q * n..(q + 1) * n]));
+            }
+            c.solve_many_in_place(&mut b, k);
+            let err = max_difference(&b, &x_true);
+            assert!(err < 1e-9, "{m} x {m}: error {err:e}");
+            // An `L L^T` factor of the same matrix does not exist.
+            assert!(SparseCholesky::new(&a).is_err());
         }
     }
 

@@ -17,10 +17,11 @@ pub use eigen::{
     CERTIFICATE_GAP, Certificate, Completed, certificate, certify_and_complete, count_below,
 };
 pub use eigen::{
-    ComponentNullSpace, DenseEigenError, EigenProgress, PartialEigen, ShiftInvert, SparseAlgorithm,
-    SparseEigenError, SparseEigenOptions, b_orthogonality_error, connected_components,
-    default_shift, dense_generalized_eigen, norm1, relative_residuals, sparse_generalized_eigen,
-    sparse_generalized_eigen_with, sym_spmm, sym_spmm_into,
+    ComponentNullSpace, DenseEigenError, EigenProgress, INTERIOR_MIN_K, PartialEigen, ShiftInvert,
+    SparseAlgorithm, SparseEigenError, SparseEigenOptions, b_orthogonality_error,
+    connected_components, default_shift, dense_generalized_eigen, interior_target, norm1,
+    relative_residuals, sparse_generalized_eigen, sparse_generalized_eigen_with, sym_spmm,
+    sym_spmm_into,
 };
 pub use sparse::SparseMatrix;
 

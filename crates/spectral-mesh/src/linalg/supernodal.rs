@@ -134,13 +134,14 @@ struct SolveOp<'a, const C: usize> {
     sn: &'a Supernodes,
     vals: &'a [f64],
     x: &'a mut [[f64; C]],
+    ldlt: bool,
 }
 
 impl<const C: usize> pulp::WithSimd for SolveOp<'_, C> {
     type Output = ();
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) {
-        self.sn.solve_block::<C>(self.vals, self.x);
+        self.sn.solve_block::<C>(self.vals, self.x, self.ldlt);
     }
 }
 
@@ -299,7 +300,10 @@ impl Supernodes {
     /// One sweep of the triangular solve over `nodes`: [`Sweep::Forward`], `L y = x` (nodes
     /// increasing; every supernode a node's rows depend on is among the nodes before it or
     /// already applied), or [`Sweep::Backward`], `L^T z = y` (decreasing; every supernode in
-    /// a node's pattern among the nodes before it or already applied).
+    /// a node's pattern among the nodes before it or already applied). With `ldlt` the
+    /// factor is `L D L^T` (faer's layout: `L` unit lower triangular, `D` on its
+    /// diagonal): the forward sweep does not divide, the backward one first divides each
+    /// supernode's own rows by `D`.
     #[inline(always)]
     fn sweep<const C: usize>(
         &self,
@@ -308,6 +312,7 @@ impl Supernodes {
         nodes: impl Iterator<Item = usize>,
         x: &mut Rows<'_, C>,
         top: &mut [[f64; C]],
+        ldlt: bool,
     ) {
         for s in nodes {
             let f = self.begin[s];
@@ -322,12 +327,14 @@ impl Supernodes {
                 Sweep::Forward => {
                     for jj in 0..size {
                         let col = &l[jj * nr..jj * nr + size];
-                        let inv = 1.0 / col[jj];
                         let mut xj = top[jj];
-                        for v in xj.iter_mut() {
-                            *v *= inv;
+                        if !ldlt {
+                            let inv = 1.0 / col[jj];
+                            for v in xj.iter_mut() {
+                                *v *= inv;
+                            }
+                            top[jj] = xj;
                         }
-                        top[jj] = xj;
                         for ii in jj + 1..size {
                             let a = col[ii];
                             sub_scaled(&mut top[ii], a, &xj);
@@ -367,6 +374,15 @@ impl Supernodes {
                     }
                 }
                 Sweep::Backward => {
+                    if ldlt {
+                        // `L D L^T`: the pivots `D` sit on the diagonal of the unit `L`.
+                        for (jj, tj) in top.iter_mut().enumerate() {
+                            let inv = 1.0 / l[jj * nr + jj];
+                            for v in tj.iter_mut() {
+                                *v *= inv;
+                            }
+                        }
+                    }
                     if size == 1 {
                         let mut acc = top[0];
                         for (&r, &a) in pat.iter().zip(&l[1..nr]) {
@@ -400,9 +416,11 @@ impl Supernodes {
                             let a = col[ii];
                             sub_scaled(&mut acc, a, &top[ii]);
                         }
-                        let inv = 1.0 / col[jj];
-                        for v in acc.iter_mut() {
-                            *v *= inv;
+                        if !ldlt {
+                            let inv = 1.0 / col[jj];
+                            for v in acc.iter_mut() {
+                                *v *= inv;
+                            }
                         }
                         top[jj] = acc;
                     }
@@ -422,17 +440,25 @@ impl Supernodes {
     /// on one thread, or split over the tree (see [`TreeSplit`]). Always inlined into
     /// [`SolveOp`], so that it is compiled for the SIMD level pulp detects.
     #[inline(always)]
-    fn solve_block<const C: usize>(&self, vals: &[f64], x: &mut [[f64; C]]) {
+    fn solve_block<const C: usize>(&self, vals: &[f64], x: &mut [[f64; C]], ldlt: bool) {
         let ns = self.n_supernodes();
         let mut top = self.diagonal_scratch::<C>();
         let Some(sp) = &self.split else {
-            self.sweep(Sweep::Forward, vals, 0..ns, &mut Rows::all(x, 0), &mut top);
+            self.sweep(
+                Sweep::Forward,
+                vals,
+                0..ns,
+                &mut Rows::all(x, 0),
+                &mut top,
+                ldlt,
+            );
             self.sweep(
                 Sweep::Backward,
                 vals,
                 (0..ns).rev(),
                 &mut Rows::all(x, 0),
                 &mut top,
+                ldlt,
             );
             return;
         };
@@ -441,7 +467,7 @@ impl Supernodes {
         // Forward: both parts side by side (the left part's updates of top rows go to
         // `shared`, added afterwards), then the top.
         self.sweep_parts(
-            Sweep::Forward,
+            (Sweep::Forward, ldlt),
             vals,
             sp,
             x,
@@ -459,6 +485,7 @@ impl Supernodes {
             sp.top.iter().copied(),
             &mut Rows::all(x, 0),
             &mut top,
+            ldlt,
         );
         // Backward: the top, then both parts side by side (the left part reads the top's
         // rows from `shared`).
@@ -468,12 +495,13 @@ impl Supernodes {
             sp.top.iter().rev().copied(),
             &mut Rows::all(x, 0),
             &mut top,
+            ldlt,
         );
         for (t, &j) in sp.top_cols.iter().enumerate() {
             shared[t] = x[j];
         }
         self.sweep_parts(
-            Sweep::Backward,
+            (Sweep::Backward, ldlt),
             vals,
             sp,
             x,
@@ -484,11 +512,11 @@ impl Supernodes {
 
     /// A sweep over the two parts of `split` side by side, the left part on the rows of
     /// `x` before the split's first column and `shared` (the top's rows), the right part
-    /// on the others; `tops` is each part's scratch.
+    /// on the others; `tops` is each part's scratch; `ldlt` as in [`Supernodes::sweep`].
     #[inline(always)]
     fn sweep_parts<const C: usize>(
         &self,
-        sweep: Sweep,
+        (sweep, ldlt): (Sweep, bool),
         vals: &[f64],
         split: &TreeSplit,
         x: &mut [[f64; C]],
@@ -507,18 +535,18 @@ impl Supernodes {
         let right_nodes = split.right.iter().copied();
         match sweep {
             Sweep::Forward => rayon::join(
-                || self.sweep(sweep, vals, 0..split.q, &mut lo, top_left),
-                || self.sweep(sweep, vals, right_nodes, &mut hi, top_right),
+                || self.sweep(sweep, vals, 0..split.q, &mut lo, top_left, ldlt),
+                || self.sweep(sweep, vals, right_nodes, &mut hi, top_right, ldlt),
             ),
             Sweep::Backward => rayon::join(
-                || self.sweep(sweep, vals, (0..split.q).rev(), &mut lo, top_left),
-                || self.sweep(sweep, vals, right_nodes.rev(), &mut hi, top_right),
+                || self.sweep(sweep, vals, (0..split.q).rev(), &mut lo, top_left, ldlt),
+                || self.sweep(sweep, vals, right_nodes.rev(), &mut hi, top_right, ldlt),
             ),
         };
     }
 
     /// Solves for `C` column-major columns of `b` (`n` rows each) in place.
-    fn solve_cols<const C: usize>(&self, vals: &[f64], b: &mut [f64], n: usize) {
+    fn solve_cols<const C: usize>(&self, vals: &[f64], b: &mut [f64], n: usize, ldlt: bool) {
         // The row-major block comes from the per-thread scratch pool (fresh large
         // allocations cost page faults on every call; the pool is capped and released
         // when an eigensolve ends).
@@ -530,7 +558,12 @@ impl Supernodes {
                 *v = b[q * n + src];
             }
         }
-        pulp::Arch::new().dispatch(SolveOp { sn: self, vals, x });
+        pulp::Arch::new().dispatch(SolveOp {
+            sn: self,
+            vals,
+            x,
+            ldlt,
+        });
         for (i, row) in x.iter().enumerate() {
             let dst = self.fwd[i];
             for (q, v) in row.iter().enumerate() {
@@ -546,8 +579,10 @@ impl Supernodes {
         self.split.is_some()
     }
 
-    /// Solves for any number of column-major columns, 8 (then 4, 2, 1) at a time.
-    pub(super) fn solve_many(&self, vals: &[f64], b: &mut [f64], n: usize) {
+    /// Solves for any number of column-major columns, 8 (then 4, 2, 1) at a time, with
+    /// the factor `L L^T` (`ldlt` false) or `L D L^T` (`L` unit lower triangular, the
+    /// pivots `D` on its diagonal, as faer stores it).
+    pub(super) fn solve_many(&self, vals: &[f64], b: &mut [f64], n: usize, ldlt: bool) {
         let mut rest = b;
         while !rest.is_empty() {
             let c = rest.len() / n;
@@ -562,10 +597,10 @@ impl Supernodes {
             };
             let (head, tail) = rest.split_at_mut(n * w);
             match w {
-                8 => self.solve_cols::<8>(vals, head, n),
-                4 => self.solve_cols::<4>(vals, head, n),
-                2 => self.solve_cols::<2>(vals, head, n),
-                _ => self.solve_cols::<1>(vals, head, n),
+                8 => self.solve_cols::<8>(vals, head, n, ldlt),
+                4 => self.solve_cols::<4>(vals, head, n, ldlt),
+                2 => self.solve_cols::<2>(vals, head, n, ldlt),
+                _ => self.solve_cols::<1>(vals, head, n, ldlt),
             }
             rest = tail;
         }

@@ -2,8 +2,10 @@
 //! `S x = lambda B x` with `S` symmetric positive semi-definite and `B` symmetric positive
 //! definite (sparse, diagonal or the identity).
 //!
-//! `K = S - sigma B` with a small negative shift `sigma` (so `K` is positive definite even
-//! though `S` is singular) is factored once by sparse Cholesky. Two iterations use it:
+//! `K = S - sigma B` is factored once: from `k = 24` on at an interior shift, with about
+//! 0.6 of the wanted eigenvalues below it, as `L D L^T` (see [`ShiftInvert::for_k`]);
+//! otherwise at a small negative shift `sigma` (so `K` is positive definite even though `S`
+//! is singular) by sparse Cholesky. Two iterations use it:
 //!
 //! - **Block Krylov-Schur** (the default, [`SparseAlgorithm::KrylovSchur`], in
 //!   `krylov_schur/`): thick-restart block Lanczos on `K^-1 B`, see that module.
@@ -58,7 +60,7 @@ pub use deflation::{ComponentNullSpace, connected_components};
 pub use dense::{DenseEigenError, dense_generalized_eigen};
 pub use kernels::{b_orthogonality_error, norm1, relative_residuals, sym_spmm, sym_spmm_into};
 pub use result::PartialEigen;
-pub use shift_invert::{ShiftInvert, default_shift};
+pub use shift_invert::{INTERIOR_MIN_K, ShiftInvert, default_shift, interior_target};
 pub use types::{EigenProgress, SparseAlgorithm, SparseEigenError, SparseEigenOptions};
 
 use super::{SparseMatrix, scratch};
@@ -86,11 +88,12 @@ pub fn sparse_generalized_eigen(
 }
 
 /// [`sparse_generalized_eigen`] with an optional factor of `S - sigma B` built beforehand
-/// by [`ShiftInvert::new`] from the same `S` and `B` (then `opts.shift` is not used):
-/// the result is, bit for bit, the one [`sparse_generalized_eigen`] gives with the shift
-/// of that factor, so one factor serves every `k` and a larger `k` costs only a fresh
-/// iteration. `None`: the factor is built here and freed before the eigenvectors are
-/// copied out of the basis (lower peak memory).
+/// from the same `S` and `B` (then `opts.shift` is not used): the result is, bit for bit,
+/// the one [`sparse_generalized_eigen`] gives when it makes that same factor (the factor
+/// of [`ShiftInvert::for_options`] for these options, or of [`ShiftInvert::new`] with
+/// `opts.shift` its shift), so one factor serves several `k` and a larger `k` costs only a
+/// fresh iteration. `None`: the factor is built here ([`ShiftInvert::for_options`]) and
+/// freed before the eigenvectors are copied out of the basis (lower peak memory).
 ///
 /// `cancel` stops the solve with [`SparseEigenError::Cancelled`]: it is checked before
 /// and after the factorization (which cannot be interrupted: 2.0-2.7 s at 411k mesh
@@ -144,6 +147,9 @@ pub fn sparse_generalized_eigen_with(
             )));
         }
         Some(f) => f,
+        None if krylov => {
+            owned.insert(ShiftInvert::for_k(s, b, k, opts.shift, (sn, bn), progress)?)
+        }
         None => owned.insert(ShiftInvert::with_norms(
             s,
             b,
@@ -436,6 +442,65 @@ pub(crate) mod tests {
             sparse_generalized_eigen_with(&s2, &b2, &opts, Some(&f), &mut |_| {}, &none),
             Err(SparseEigenError::Invalid(_))
         ));
+    }
+
+    /// From `INTERIOR_MIN_K` pairs on, a solve factors at an interior shift (`L D L^T`)
+    /// with about the target count of eigenvalues below it: the pairs are those of the
+    /// shift below the spectrum, with fewer solves, exactly `below` of them lie below the
+    /// shift, and the factor given back gives the same bits.
+    #[test]
+    fn an_interior_shift_finds_the_same_pairs_with_fewer_solves() {
+        let (s, b) = &fem("irregular-double-torus:res=3"); // 6564 vertices
+        let k = 50;
+        let opts = SparseEigenOptions {
+            k,
+            ..Default::default()
+        };
+        let f = ShiftInvert::for_options(s, b, &opts, &mut |_| {}).unwrap();
+        let c = interior_target(k).unwrap();
+        assert_eq!(ShiftInvert::target_of(&opts), Some(c));
+        assert!(f.shift() > 0.0);
+        let below = f.below().unwrap();
+        let m = below as f64;
+        assert!(m <= 1.4 * c && 1.4 * m >= c, "{below} below, target {c}");
+        let interior = sparse_generalized_eigen(s, b, &opts, &mut |_| {}).unwrap();
+        assert_eq!(interior.shift, f.shift());
+        let under = SparseEigenOptions {
+            shift: Some(default_shift(s, b)),
+            ..opts.clone()
+        };
+        assert_eq!(ShiftInvert::target_of(&under), None);
+        let plain = sparse_generalized_eigen(s, b, &under, &mut |_| {}).unwrap();
+        assert!(plain.shift < 0.0);
+        let lk = plain.values[k - 1];
+        for (p, q) in interior.values.iter().zip(&plain.values) {
+            assert!((p - q).abs() <= 1e-10 * lk, "{p} against {q}");
+        }
+        assert!(interior.residuals.iter().all(|&r| r <= 1e-10));
+        assert!(
+            interior.solves < plain.solves,
+            "{} against {} solves",
+            interior.solves,
+            plain.solves
+        );
+        let found = interior.values.iter().filter(|&&l| l < f.shift()).count();
+        assert_eq!(found, below);
+        let given =
+            sparse_generalized_eigen_with(s, b, &opts, Some(&f), &mut |_| {}, &CancelToken::new())
+                .unwrap();
+        same_bits(&interior, &given);
+        // Below the smallest k of the rule, the shift stays below the spectrum.
+        let small = SparseEigenOptions {
+            k: INTERIOR_MIN_K - 1,
+            ..Default::default()
+        };
+        assert_eq!(ShiftInvert::target_of(&small), None);
+        assert!(
+            sparse_generalized_eigen(s, b, &small, &mut |_| {})
+                .unwrap()
+                .shift
+                < 0.0
+        );
     }
 
     /// `ShiftInvert::refactor` (same patterns, new values: the analysis is reused) gives

@@ -15,7 +15,9 @@ pub struct SparseEigenOptions {
     pub block_size: usize,
     /// Largest search-space dimension before a restart; `0` picks one from `k`.
     pub max_basis: usize,
-    /// The shift `sigma < 0` of `S - sigma B`; `None` picks a scale-aware one.
+    /// The shift `sigma < 0` of `S - sigma B`; `None` (or a value `>= 0`) lets the solver
+    /// pick one: interior from `k = 24` on, else a scale-aware one below the spectrum
+    /// (see [`super::ShiftInvert::for_k`]).
     pub shift: Option<f64>,
     /// Seed of the random start block (results are deterministic for a given seed).
     pub seed: u64,

@@ -69,6 +69,8 @@ impl<'a> Pencil<'a> {
 #[derive(Debug, Default)]
 pub(super) struct Factors {
     pub(super) whole: Option<ShiftInvert>,
+    /// The interior target `whole` was made for ([`ShiftInvert::target_of`]).
+    pub(super) whole_target: Option<f64>,
     pub(super) parts: Vec<Option<ShiftInvert>>,
     /// Factorizations made so far.
     pub(super) count: usize,

@@ -106,8 +106,13 @@ pub(super) fn solve_pencil(
         } else {
             let factor = match keep {
                 Some(f) => {
-                    if f.whole.is_none() {
-                        f.whole = Some(ShiftInvert::new(s, b, opts.shift, progress)?);
+                    // The factor depends on k through its interior target only: kept
+                    // while that stays the same (k within a factor of about 1.19).
+                    let target = ShiftInvert::target_of(&opts);
+                    if f.whole.is_none() || f.whole_target != target {
+                        f.whole = None;
+                        f.whole = Some(ShiftInvert::for_options(s, b, &opts, progress)?);
+                        f.whole_target = target;
                         f.count += 1;
                     }
                     f.whole.as_ref()

@@ -23,7 +23,10 @@ use crate::operators::Operators;
 ///
 /// The factorization of `S - sigma B` (on the free vertices under Dirichlet conditions)
 /// is made by the first solve that takes the sparse path and kept, with its shift, for
-/// every later one: [`EigenSolver::factorizations`] stays 1. Problems on the dense path
+/// every later one with the same interior target
+/// ([`crate::linalg::ShiftInvert::target_of`]: `k` within a factor of about 1.19 share
+/// it); a `k` with another target factors afresh and keeps that one instead (so that the
+/// pairs stay those of [`super::compute_eigenbasis`]). Problems on the dense path
 /// (small `n`, see [`super::EigenMethod::Auto`]) need no factorization, nor does a `k` that only
 /// asks for zero eigenvalues (component indicators). A mesh with several components
 /// keeps one factorization per component solved on the sparse path (see
@@ -65,8 +68,9 @@ impl EigenSolver {
     }
 
     /// How many times the shifted pencil was factored (a counter, for tests and reports):
-    /// 0 before the first sparse solve and for dense-path problems, then 1 (or one per
-    /// component solved on the sparse path).
+    /// 0 before the first sparse solve and for dense-path problems, then one per interior
+    /// target solved for (one per component solved on the sparse path on a disconnected
+    /// mesh).
     pub fn factorizations(&self) -> usize {
         self.factors.count
     }

@@ -300,10 +300,12 @@ fn same_bits(a: &Eigenbasis, b: &Eigenbasis) {
     assert_eq!(a.residuals, b.residuals);
 }
 
-/// Factor reuse: solve(100) then solve(200) factors once, and the 200 pairs equal, bit
-/// for bit, those of a fresh solver and of `compute_eigenbasis`.
+/// Factor reuse: solve(100) then solve(105) (the same interior target) factors once,
+/// solve(200) (another target) once more, and the pairs equal, bit for bit, those of a
+/// fresh solver and of `compute_eigenbasis`.
 #[test]
 fn solver_keeps_the_factor_and_the_history_does_not_matter() {
+    use crate::linalg::interior_target;
     let ops = Arc::new(Operators::new(&icosphere(4, 1.0), Laplacian::Fem)); // 2562
     let params = EigenParams::default();
     let none = CancelToken::new();
@@ -315,10 +317,30 @@ fn solver_keeps_the_factor_and_the_history_does_not_matter() {
     assert_eq!(solver.factorizations(), 1);
     assert!(matches!(events[0], EigenProgress::Factorization { .. }));
     events.clear();
-    let b200 = solver.solve(200, &mut |e| events.push(e), &none).unwrap();
+    assert_eq!(interior_target(100), interior_target(105));
+    let b105 = solver.solve(105, &mut |e| events.push(e), &none).unwrap();
     assert_eq!(solver.factorizations(), 1);
     assert!(
         !events
+            .iter()
+            .any(|e| matches!(e, EigenProgress::Factorization { .. }))
+    );
+    let direct = compute_eigenbasis(
+        &ops,
+        &EigenParams {
+            k: 105,
+            ..params.clone()
+        },
+        &mut |_| {},
+    )
+    .unwrap();
+    same_bits(&b105, &direct);
+    events.clear();
+    assert_ne!(interior_target(105), interior_target(200));
+    let b200 = solver.solve(200, &mut |e| events.push(e), &none).unwrap();
+    assert_eq!(solver.factorizations(), 2);
+    assert!(
+        events
             .iter()
             .any(|e| matches!(e, EigenProgress::Factorization { .. }))
     );
@@ -417,7 +439,8 @@ fn a_cancelled_solve_leaves_the_solver_usable() {
     worker.join().unwrap();
     assert_eq!(r, Err(EigenError::Cancelled));
     assert!(solver.held().is_none());
-    assert!(solver.factorizations() <= 1);
+    let made = solver.factorizations();
+    assert!(made <= 1);
     // A cancelled token stops the next solve at once...
     assert!(matches!(
         solver.solve(40, &mut |_| {}, &remote),
@@ -426,7 +449,8 @@ fn a_cancelled_solve_leaves_the_solver_usable() {
     // ...and a fresh one gives what a fresh solver gives.
     let none = CancelToken::new();
     let b = solver.solve(40, &mut |_| {}, &none).unwrap();
-    assert_eq!(solver.factorizations(), 1);
+    // k = 40 has another interior target than 300: a factor of its own.
+    assert_eq!(solver.factorizations(), made + 1);
     let fresh = EigenSolver::new(ops, params)
         .solve(40, &mut |_| {}, &none)
         .unwrap();
