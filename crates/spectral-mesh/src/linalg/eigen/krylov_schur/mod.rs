@@ -1034,6 +1034,26 @@ pub(super) fn krylov_schur(
 mod tests {
     use super::*;
 
+    /// The skip between estimates follows the fall of the largest estimate: half the
+    /// expansions still needed at that rate, at most 8, none without a fall.
+    #[test]
+    fn estimates_skip_expansions_at_the_rate_they_fall() {
+        let tol = 1e-10;
+        assert_eq!(expansions_to_skip(None, (11, 1e-3), tol), 0);
+        // A tenfold fall per expansion, 1e-3 -> 1e-10: 7 more expansions, half of them.
+        assert_eq!(expansions_to_skip(Some((10, 1e-2)), (11, 1e-3), tol), 3);
+        // The same fall over two expansions: 14 more, half of them; a slow fall: 8.
+        assert_eq!(expansions_to_skip(Some((9, 1e-2)), (11, 1e-3), tol), 7);
+        assert_eq!(expansions_to_skip(Some((10, 1e-2)), (11, 0.9e-2), tol), 8);
+        // No fall, or nothing left to gain: estimate again at once.
+        assert_eq!(expansions_to_skip(Some((10, 1e-3)), (11, 2e-3), tol), 0);
+        assert_eq!(expansions_to_skip(Some((10, 1e-3)), (11, 1e-11), tol), 0);
+        assert_eq!(
+            expansions_to_skip(Some((10, 1e-3)), (11, f64::INFINITY), tol),
+            0
+        );
+    }
+
     /// Ritz values rank by the eigenvalue they stand for; with an interior shift one in
     /// the gap `(-1 / sigma, 0)` of the spectrum of `Op` (an eigenvalue below 0) ranks last.
     #[test]
