@@ -384,8 +384,9 @@ def eigsh(
     - Only the smallest eigenvalues: ``sigma`` must be ``None`` (then ``which`` must be
       ``"SM"`` or ``"SA"``) or a number ``<= 0`` with ``which="LM"`` (shift-invert: the
       eigenvalues nearest ``sigma`` are the smallest). The shift used inside is chosen
-      by the solver (``A - s M`` with a small ``s < 0``, factored by sparse Cholesky);
-      ``sigma`` only selects the mode.
+      by the solver (from ``k = 24`` on an interior ``s`` with about ``0.6 k``
+      eigenvalues below it, ``A - s M`` factored as ``L D L^T``; otherwise a small
+      ``s < 0`` and sparse Cholesky); ``sigma`` only selects the mode.
     - ``tol``: the target relative residual ``||A x - w M x|| / ((||A||_1 + |w| ||M||_1) ||x||)``
       of every pair; ``0`` (SciPy's "machine precision") means 1e-10.
     - ``v0``, ``ncv`` and ``maxiter`` are accepted and ignored (the start block comes

@@ -200,24 +200,10 @@ pub fn sparse_generalized_eigen_with(
         } else {
             columns_with_block(dim, k, bs)
         };
-        let pb = krylov_schur::Problem {
-            s,
-            b,
-            chol,
-            shift,
-            k,
-            tol,
-            sn,
-            bn,
-            cancel,
-            deflation: (nz > 0).then_some(&null),
-            extra: extra.as_ref(),
-            dim,
-            start: coarse
-                .as_deref()
-                .or(opts.start_vectors.as_deref().map(|v| v.as_slice())),
-        };
-        let mut sizes = krylov_schur::Sizes {
+        let start = coarse
+            .as_deref()
+            .or(opts.start_vectors.as_deref().map(|v| v.as_slice()));
+        let sizes = krylov_schur::Sizes {
             block: bs,
             max_basis,
             max_restarts: if opts.max_iterations > 0 {
@@ -232,16 +218,50 @@ pub fn sparse_generalized_eigen_with(
             local: !opts.ks_plain,
             early: true,
         };
-        let mut rng = start_rng();
-        let mut out = krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
-        if !opts.ks_plain && matches!(out, Err(SparseEigenError::NoConvergence { .. })) {
+        let run = |f: &ShiftInvert, progress: &mut dyn FnMut(EigenProgress)| {
+            let pb = krylov_schur::Problem {
+                s,
+                b,
+                chol: f.cholesky(),
+                shift: f.shift(),
+                k,
+                tol,
+                sn,
+                bn,
+                cancel,
+                deflation: (nz > 0).then_some(&null),
+                extra: extra.as_ref(),
+                dim,
+                start,
+            };
+            let mut rng = start_rng();
+            let out = krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
+            if opts.ks_plain || !matches!(out, Err(SparseEigenError::NoConvergence { .. })) {
+                return out;
+            }
             // A locked pair is never revisited, and the single full pass trusts the
             // Krylov relation: before reporting a failure, run once more as the plain
             // iteration (no locking, two full Gram-Schmidt passes).
-            sizes.lock = false;
-            sizes.local = false;
+            let plain = krylov_schur::Sizes {
+                lock: false,
+                local: false,
+                ..sizes
+            };
             let mut rng = start_rng();
-            out = krylov_schur::krylov_schur(&pb, &sizes, &mut rng, progress);
+            krylov_schur::krylov_schur(&pb, &plain, &mut rng, progress)
+        };
+        let mut out = run(factor, progress);
+        // An interior factor knows how many eigenvalues lie below its shift: the pairs
+        // found there (with the indicators, eigenvalue 0) must be as many. Fewer means
+        // one was skipped (a multiplicity the block missed, or an eigenvalue below 0 of
+        // an indefinite S, ranked as a mixture): the solve is made again below the
+        // spectrum, as from k < 24.
+        if let (Ok(pairs), Some(below)) = (&out, factor.below())
+            && nz + pairs.count_below(factor.shift()) < below
+        {
+            let low = ShiftInvert::with_norms(s, b, opts.shift, (sn, bn), progress)?;
+            drop(out);
+            out = run(&low, progress);
         }
         scratch::release_all();
         // A factor built here goes before the eigenvectors are copied out of the basis
@@ -501,6 +521,42 @@ pub(crate) mod tests {
                 .shift
                 < 0.0
         );
+    }
+
+    /// The interior factor's count of eigenvalues below its shift catches a skipped one:
+    /// with `S - alpha B` (indefinite: its smallest eigenvalue is `-alpha`) the
+    /// iteration on the interior shift ranks `-alpha` as a mixture and does not return
+    /// it, so the solve is made again below the spectrum, which finds it.
+    #[test]
+    fn a_pair_skipped_below_an_interior_shift_is_found_again() {
+        let (s, b) = &fem("irregular-double-torus:res=3"); // 6564 vertices
+        let k = 30;
+        let opts = SparseEigenOptions {
+            k,
+            ..Default::default()
+        };
+        let plain = sparse_generalized_eigen(s, b, &opts, &mut |_| {}).unwrap();
+        assert!(plain.shift > 0.0);
+        let alpha = 0.5 * plain.values[1];
+        let shifted = s.add_scaled(1.0, b, -alpha);
+        let f = ShiftInvert::for_options(&shifted, b, &opts, &mut |_| {}).unwrap();
+        assert!(f.shift() > 0.0, "the interior shift is taken");
+        let mut factored = 0;
+        let r = sparse_generalized_eigen(&shifted, b, &opts, &mut |e| {
+            if matches!(e, EigenProgress::Factorization { .. }) {
+                factored += 1;
+            }
+        })
+        .unwrap();
+        assert!(r.shift < 0.0, "solved again below the spectrum");
+        assert!(factored >= 2);
+        for (got, want) in r.values.iter().zip(&plain.values) {
+            assert!(
+                (got - (want - alpha)).abs() <= 1e-8 * plain.values[k - 1],
+                "{got} against {}",
+                want - alpha
+            );
+        }
     }
 
     /// `ShiftInvert::refactor` (same patterns, new values: the analysis is reused) gives

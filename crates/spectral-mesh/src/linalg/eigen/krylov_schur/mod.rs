@@ -594,6 +594,11 @@ pub(super) struct Converged {
 }
 
 impl Converged {
+    /// How many of the pairs have an eigenvalue below `sigma`.
+    pub(super) fn count_below(&self, sigma: f64) -> usize {
+        self.values.iter().filter(|&&l| l < sigma).count()
+    }
+
     /// Copies the eigenvectors out of the basis, frees it, and measures and reports the
     /// result (see [`package`]; stops when `cancel` is set). With `null`, its indicators
     /// (eigenvalue 0) come first, merged by eigenvalue with the pairs found (which come
