@@ -310,7 +310,7 @@ impl ShiftInvert {
         if !sigma.is_finite() || sigma <= 0.0 {
             return Ok(None);
         }
-        let kmat = s.add_scaled(1.0, b, -sigma);
+        let mut kmat = s.add_scaled(1.0, b, -sigma);
         let Ok(analysis) = timed(Phase::Ordering, || CholeskyAnalysis::new(&kmat)) else {
             return Ok(None);
         };
@@ -321,11 +321,9 @@ impl ShiftInvert {
         };
         for attempt in 0..2 {
             progress(EigenProgress::Factorization { n, shift: sigma });
-            let kmat = if attempt == 0 {
-                kmat.clone()
-            } else {
-                s.add_scaled(1.0, b, -sigma)
-            };
+            if attempt > 0 {
+                kmat = s.add_scaled(1.0, b, -sigma);
+            }
             let Ok(chol) = timed(Phase::Factor, || analysis.factor_indefinite(&kmat)) else {
                 return Ok(None);
             };
