@@ -255,11 +255,15 @@ pub fn sparse_generalized_eigen_with(
         // found there (with the indicators, eigenvalue 0) must be as many. Fewer means
         // one was skipped (a multiplicity the block missed, or an eigenvalue below 0 of
         // an indefinite S, ranked as a mixture): the solve is made again below the
-        // spectrum, as from k < 24. Not with deflated vectors: their eigenvalues are
-        // skipped on purpose (the certificate's search for missing pairs).
-        if let (Ok(pairs), Some(below), None) = (&out, factor.below(), &extra)
-            && nz + pairs.count_below(factor.shift()) < below
-        {
+        // spectrum, as from k < 24 (also when the interior solve did not converge). Not
+        // with deflated vectors: their eigenvalues are skipped on purpose (the
+        // certificate's search for missing pairs).
+        let again = match (&out, factor.below(), &extra) {
+            (Ok(pairs), Some(below), None) => nz + pairs.count_below(factor.shift()) < below,
+            (Err(SparseEigenError::NoConvergence { .. }), Some(_), _) => true,
+            _ => false,
+        };
+        if again {
             let low = ShiftInvert::with_norms(s, b, opts.shift, (sn, bn), progress)?;
             drop(out);
             out = run(&low, progress);
