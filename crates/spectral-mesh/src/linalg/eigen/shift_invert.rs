@@ -102,6 +102,17 @@ pub(super) fn first_shift(b: &SparseMatrix, shift: Option<f64>, (sn, bn): (f64, 
     }
 }
 
+/// The norms `(||S||_1, ||B||_1)` of a pencil of checked sizes (see [`check_sizes`]);
+/// an error when either is not finite.
+fn checked_norms(s: &SparseMatrix, b: &SparseMatrix) -> Result<(f64, f64), SparseEigenError> {
+    check_sizes(s, b)?;
+    let (sn, bn) = (norm1(s), norm1(b));
+    if !sn.is_finite() || !bn.is_finite() {
+        return Err(SparseEigenError::NonFinite);
+    }
+    Ok((sn, bn))
+}
+
 /// Checks that `S` and `B` are square of one size; returns that size.
 pub(super) fn check_sizes(s: &SparseMatrix, b: &SparseMatrix) -> Result<usize, SparseEigenError> {
     let n = s.ncols();
@@ -131,11 +142,7 @@ impl ShiftInvert {
         shift: Option<f64>,
         progress: &mut dyn FnMut(EigenProgress),
     ) -> Result<Self, SparseEigenError> {
-        check_sizes(s, b)?;
-        let (sn, bn) = (norm1(s), norm1(b));
-        if !sn.is_finite() || !bn.is_finite() {
-            return Err(SparseEigenError::NonFinite);
-        }
+        let (sn, bn) = checked_norms(s, b)?;
         Self::with_norms(s, b, shift, (sn, bn), progress)
     }
 
@@ -201,11 +208,7 @@ impl ShiftInvert {
         shift: Option<f64>,
         progress: &mut dyn FnMut(EigenProgress),
     ) -> Result<(), SparseEigenError> {
-        check_sizes(s, b)?;
-        let (sn, bn) = (norm1(s), norm1(b));
-        if !sn.is_finite() || !bn.is_finite() {
-            return Err(SparseEigenError::NonFinite);
-        }
+        let (sn, bn) = checked_norms(s, b)?;
         let sigma = first_shift(b, shift, (sn, bn));
         progress(EigenProgress::Factorization {
             n: s.ncols(),
@@ -275,11 +278,7 @@ impl ShiftInvert {
         opts: &SparseEigenOptions,
         progress: &mut dyn FnMut(EigenProgress),
     ) -> Result<Self, SparseEigenError> {
-        check_sizes(s, b)?;
-        let (sn, bn) = (norm1(s), norm1(b));
-        if !sn.is_finite() || !bn.is_finite() {
-            return Err(SparseEigenError::NonFinite);
-        }
+        let (sn, bn) = checked_norms(s, b)?;
         if opts.algorithm == SparseAlgorithm::KrylovSchur {
             Self::for_k(s, b, opts.k, opts.shift, (sn, bn), progress)
         } else {
