@@ -32,10 +32,12 @@
 //! accuracy of the solves or of the Krylov relation. The eigenvalues returned are the
 //! Rayleigh quotients `x^T S x / x^T B x`.
 //!
-//! Between restarts the convergence is estimated after every expansion as well (when
-//! [`Sizes::early`] is set, see `converged_early`): the projected eigenproblem of the
-//! basis as it stands and the same estimates, at the cost of two sparse products with
-//! the pending block. Once they say the wanted pairs have converged, the iteration goes
+//! Between restarts the convergence is estimated after expansions as well (when
+//! [`Sizes::early`] is set, see `converged_early`; from the start with an interior
+//! shift, else once a restart leaves at most two blocks of wanted pairs; after an
+//! estimate that says no, the next waits as `expansions_to_skip` says): the projected
+//! eigenproblem of the basis as it stands and the same estimates, at the cost of two
+//! sparse products with the pending block. Once they say the wanted pairs have converged, the iteration goes
 //! to its restart at once, where the true residuals decide. So the number of solves
 //! follows the tolerance instead of the size of the basis: measured on 6.5k-26k vertices
 //! at k = 50, `1e-6` takes about half the solves of `1e-10`.
