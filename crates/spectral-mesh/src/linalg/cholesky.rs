@@ -260,8 +260,8 @@ impl SparseCholesky {
         Ok(())
     }
 
-    /// The signs of the pivots of an `L D L^T` factor (see
-    /// [`CholeskyAnalysis::factor_indefinite`]); `None` for an `L L^T` one (positive
+    /// The signs of the pivots of an `L D L^T` factor (of an indefinite matrix, made for
+    /// an interior shift of the eigensolver); `None` for an `L L^T` one (positive
     /// definite).
     pub fn inertia(&self) -> Option<Inertia> {
         self.pivots

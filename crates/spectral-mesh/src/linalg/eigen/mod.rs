@@ -3,7 +3,7 @@
 //! definite (sparse, diagonal or the identity).
 //!
 //! `K = S - sigma B` is factored once: from `k = 24` on at an interior shift, with about
-//! 0.6 of the wanted eigenvalues below it, as `L D L^T` (see [`ShiftInvert::for_k`]);
+//! 0.6 of the wanted eigenvalues below it, as `L D L^T` (see [`ShiftInvert::for_options`]);
 //! otherwise at a small negative shift `sigma` (so `K` is positive definite even though `S`
 //! is singular) by sparse Cholesky. Two iterations use it:
 //!
@@ -147,12 +147,10 @@ pub fn sparse_generalized_eigen_with(
             )));
         }
         Some(f) => f,
-        None if krylov => {
-            owned.insert(ShiftInvert::for_k(s, b, k, opts.shift, (sn, bn), progress)?)
-        }
-        None => owned.insert(ShiftInvert::with_norms(
+        None => owned.insert(ShiftInvert::for_target(
             s,
             b,
+            ShiftInvert::target_of(opts),
             opts.shift,
             (sn, bn),
             progress,

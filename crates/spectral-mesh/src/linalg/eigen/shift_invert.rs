@@ -28,7 +28,7 @@ const INTERIOR_SHARE: f64 = 0.6;
 const INTERIOR_SLACK: f64 = 1.4;
 
 /// The count of eigenvalues an interior shift aims to have below it for a solve of `k`
-/// pairs: the largest power of `2^(1/4)` at most [`INTERIOR_SHARE`]` k`, so that nearby
+/// pairs: the largest power of `2^(1/4)` at most `0.6 k`, so that nearby
 /// `k` (within a factor `2^(1/4)`, about 1.19) share one shift and one factor. `None` below
 /// [`INTERIOR_MIN_K`] (the shift then lies below the spectrum).
 pub fn interior_target(k: usize) -> Option<f64> {
@@ -44,12 +44,18 @@ pub fn interior_target(k: usize) -> Option<f64> {
 /// under Neumann conditions and removes some under Dirichlet ones; the factor's inertia
 /// tells the true count).
 fn weyl_shift(b: &SparseMatrix, count: f64) -> f64 {
-    let area: f64 = b.values().iter().sum::<f64>().abs().max(f64::MIN_POSITIVE);
-    4.0 * std::f64::consts::PI * count / area
+    4.0 * std::f64::consts::PI * count / total_mass(b)
+}
+
+/// The total mass `1^T B 1` (its magnitude, at least the smallest positive `f64`): the
+/// area of a surface, the scale of both shifts.
+fn total_mass(b: &SparseMatrix) -> f64 {
+    b.values().iter().sum::<f64>().abs().max(f64::MIN_POSITIVE)
 }
 
 /// The factorization of `K = S - sigma B` with its shift: `L L^T` (sparse Cholesky) for
-/// `sigma < 0`, `L D L^T` for an interior shift `sigma > 0` (see [`ShiftInvert::for_k`]).
+/// `sigma < 0`, `L D L^T` for an interior shift `sigma > 0` (see
+/// [`ShiftInvert::for_options`]).
 /// The expensive part of a sparse eigensolve; it depends on `k` only through the interior
 /// target ([`ShiftInvert::target_of`]).
 ///
@@ -88,8 +94,7 @@ pub fn default_shift(s: &SparseMatrix, b: &SparseMatrix) -> f64 {
 }
 
 fn shift_from(b: &SparseMatrix, sn: f64, bn: f64) -> f64 {
-    let total_mass: f64 = b.values().iter().sum::<f64>().abs().max(f64::MIN_POSITIVE);
-    -(1e-2 / total_mass).max(1e-10 * sn / bn.max(f64::MIN_POSITIVE))
+    -(1e-2 / total_mass(b)).max(1e-10 * sn / bn.max(f64::MIN_POSITIVE))
 }
 
 /// The first shift tried for `(S, B)` with norms `(sn, bn)`: `shift` when it is negative,
@@ -230,35 +235,30 @@ impl ShiftInvert {
     }
 
     /// The shift `sigma` (negative, or positive for an interior shift, see
-    /// [`ShiftInvert::interior`]).
+    /// [`ShiftInvert::for_options`]).
     pub fn shift(&self) -> f64 {
         self.shift
     }
 
-    /// The factor for a solve of `k` pairs of `(S, B)` (norms `(sn, bn)`): an explicit
-    /// negative `shift` is used as given ([`ShiftInvert::new`]); otherwise, from
-    /// [`INTERIOR_MIN_K`] pairs on, an interior shift with about [`interior_target`]`(k)`
-    /// eigenvalues below it, factored as `L D L^T`. Its first value comes from Weyl's law
-    /// and the count below it from the factor's pivots; a count off the target by more
-    /// than [`INTERIOR_SLACK`] moves the shift once, in proportion (the analysis is
-    /// reused). When that misses too (or a pivot is zero, or `k` eigenvalues would lie
-    /// below), the shift below the spectrum of [`ShiftInvert::new`] is taken.
+    /// The factor for an interior `target` count of [`ShiftInvert::target_of`] (norms
+    /// `(sn, bn)`): with `Some(c)`, an interior shift with about `c` eigenvalues below
+    /// it, factored as `L D L^T`. Its first value comes from Weyl's law and the count
+    /// below it from the factor's pivots; a count off the target by more than
+    /// [`INTERIOR_SLACK`] moves the shift once, in proportion (the analysis is reused).
+    /// With `None`, or when that misses too (or a pivot is zero), the shift below the
+    /// spectrum of [`ShiftInvert::new`] (`shift` if negative).
     ///
     /// Why: `Op = (S - sigma B)^-1 B` maps the wanted eigenvalues on both sides of
     /// `sigma` far from the unwanted ones (which crowd near 0), so the Krylov iteration
     /// needs fewer solves: at 26k vertices, k = 50, 120 instead of 164.
-    pub(super) fn for_k(
+    pub(super) fn for_target(
         s: &SparseMatrix,
         b: &SparseMatrix,
-        k: usize,
+        target: Option<f64>,
         shift: Option<f64>,
         norms: (f64, f64),
         progress: &mut dyn FnMut(EigenProgress),
     ) -> Result<Self, SparseEigenError> {
-        let target = match (shift, interior_target(k)) {
-            (Some(s), _) if s < 0.0 => None,
-            (_, t) => t,
-        };
         if let Some(c) = target
             && let Some(f) = Self::interior_for(s, b, c, progress)?
         {
@@ -268,27 +268,27 @@ impl ShiftInvert {
     }
 
     /// The factor a solve with `opts` that factors for itself makes
-    /// ([`super::sparse_generalized_eigen`]): [`ShiftInvert::for_k`] for Krylov-Schur,
-    /// [`ShiftInvert::new`] for Davidson. Given to [`super::sparse_generalized_eigen_with`]
-    /// with the same options, it gives the same pairs, bit for bit. Two options with the
-    /// same [`ShiftInvert::target_of`] (and the same `shift`) get the same factor.
+    /// ([`super::sparse_generalized_eigen`]): from the target of
+    /// [`ShiftInvert::target_of`], an interior shift with about that many eigenvalues
+    /// below it, factored as `L D L^T` (the shift from Weyl's law, moved once when the
+    /// pivots count more than 1.4 times too many or too few), else the shift below the
+    /// spectrum of [`ShiftInvert::new`] (see docs/MATH.md, "Route"). Given to [`super::sparse_generalized_eigen_with`] with
+    /// the same options, it gives the same pairs, bit for bit. Two options with the same
+    /// target (and the same `shift`) get the same factor.
     pub fn for_options(
         s: &SparseMatrix,
         b: &SparseMatrix,
         opts: &SparseEigenOptions,
         progress: &mut dyn FnMut(EigenProgress),
     ) -> Result<Self, SparseEigenError> {
-        let (sn, bn) = checked_norms(s, b)?;
-        if opts.algorithm == SparseAlgorithm::KrylovSchur {
-            Self::for_k(s, b, opts.k, opts.shift, (sn, bn), progress)
-        } else {
-            Self::with_norms(s, b, opts.shift, (sn, bn), progress)
-        }
+        let norms = checked_norms(s, b)?;
+        Self::for_target(s, b, Self::target_of(opts), opts.shift, norms, progress)
     }
 
     /// What the factor of [`ShiftInvert::for_options`] depends on besides `S`, `B` and
-    /// `opts.shift`: the interior target count (`None`: a shift below the spectrum).
-    /// A solver that keeps a factor for several `k` reuses it while this stays the same.
+    /// `opts.shift`: the interior target count (`None`: a shift below the spectrum, for
+    /// an explicit negative shift, Davidson, or `k` below [`INTERIOR_MIN_K`]). A solver
+    /// that keeps a factor for several `k` reuses it while this stays the same.
     pub fn target_of(opts: &SparseEigenOptions) -> Option<f64> {
         match opts.shift {
             Some(s) if s < 0.0 => None,
@@ -297,7 +297,8 @@ impl ShiftInvert {
         }
     }
 
-    /// The interior factor of [`ShiftInvert::for_k`] with target count `c`, if one fits.
+    /// The interior factor of [`ShiftInvert::for_target`] with target count `c`, if one
+    /// fits.
     fn interior_for(
         s: &SparseMatrix,
         b: &SparseMatrix,
@@ -326,15 +327,16 @@ impl ShiftInvert {
             let Ok(chol) = timed(Phase::Factor, || analysis.factor_indefinite(&kmat)) else {
                 return Ok(None);
             };
-            let below = chol.inertia().map_or(0, |i| i.negative);
+            let f = Self { chol, shift: sigma };
+            let below = f.below().unwrap_or(0);
             if crate::linalg::timing::enabled() {
                 eprintln!(
                     "factor (L D L^T at {sigma:e}, target {c:.1}): n = {n}, {} values of L, {below} eigenvalues below",
-                    chol.factor_len(),
+                    f.factor_len(),
                 );
             }
             if fits(below) {
-                return Ok(Some(Self { chol, shift: sigma }));
+                return Ok(Some(f));
             }
             // Move the shift in proportion (Weyl: the count grows linearly), at most 8x.
             let m = (below as f64).max(c / 8.0);

@@ -17,7 +17,7 @@ pub struct SparseEigenOptions {
     pub max_basis: usize,
     /// The shift `sigma < 0` of `S - sigma B`; `None` (or a value `>= 0`) lets the solver
     /// pick one: interior from `k = 24` on, else a scale-aware one below the spectrum
-    /// (see [`super::ShiftInvert::for_k`]).
+    /// (see [`super::ShiftInvert::for_options`]).
     pub shift: Option<f64>,
     /// Seed of the random start block (results are deterministic for a given seed).
     pub seed: u64,

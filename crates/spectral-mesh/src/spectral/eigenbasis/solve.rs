@@ -110,6 +110,7 @@ pub(super) fn solve_pencil(
                     // while that stays the same (k within a factor of about 1.19).
                     let target = ShiftInvert::target_of(&opts);
                     if f.whole.is_none() || f.whole_target != target {
+                        // The old factor goes first: two are never held at once.
                         f.whole = None;
                         f.whole = Some(ShiftInvert::for_options(s, b, &opts, progress)?);
                         f.whole_target = target;

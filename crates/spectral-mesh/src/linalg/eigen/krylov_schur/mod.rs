@@ -3,7 +3,7 @@
 //! The operator is `Op = K^-1 B` with `K = S - sigma B`, factored once: by sparse
 //! Cholesky for a shift below the spectrum (`sigma < 0`), as `L D L^T` for an interior
 //! one (`sigma > 0`, about 0.6 of the wanted eigenvalues below it; see
-//! [`super::ShiftInvert::for_k`]). `Op` is self-adjoint in the `B` inner product and its
+//! [`super::ShiftInvert::for_options`]). `Op` is self-adjoint in the `B` inner product and its
 //! eigenvalues are `theta = 1 / (lambda - sigma)`. Below the spectrum the wanted ones are
 //! the largest; with an interior shift the wanted ones lie on both sides of `(0,
 //! 1 / (lambda_(k+1) - sigma))`, where the unwanted ones crowd, and are farther from them
