@@ -95,7 +95,7 @@ pub fn mib(bytes: usize) -> String {
 }
 
 /// The moment a request must be answered by (its start plus `request_seconds`), put
-/// into the request's extensions by [`guard`].
+/// into the request's extensions by the API's `guard` middleware.
 #[derive(Debug, Clone, Copy)]
 pub struct Deadline(pub tokio::time::Instant);
 
@@ -106,7 +106,7 @@ impl Deadline {
     }
 }
 
-/// Requests in progress (see [`guard`]).
+/// Requests in progress (see the API's `guard` middleware).
 #[derive(Debug, Default)]
 pub struct InFlight(AtomicUsize);
 

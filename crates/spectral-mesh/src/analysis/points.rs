@@ -22,7 +22,7 @@
 //! the Euler check holds as on a mesh; on noisy scans it may have holes and non-manifold
 //! edges (patched with the local triangles), where points are reported as non-manifold and
 //! the check can fail: read it as a check of the reconstruction as much as of the field.
-//! Points in no triangle ([`crate::operators::PointCloudStats::isolated_points`]) are not
+//! Points in no triangle ([`crate::operators::point_cloud::PointCloudStats::isolated_points`]) are not
 //! classified.
 
 use std::collections::HashMap;

@@ -8,14 +8,14 @@
 //! shape 2, a vertex of shape 1, and its functional map is the pull-back
 //! `C = Phi_2^T M_2 Phi_1[p2p_21, :]`.
 //!
-//! - [`descriptors`]: WKS/HKS (and landmarks' kernels) chosen as pyFM chooses them,
+//! - [`descriptors`](mod@descriptors): WKS/HKS (and landmarks' kernels) chosen as pyFM chooses them,
 //!   normalized in `L2(M)` and projected on a basis;
 //! - [`energy`]: the functional-map energy (descriptor preservation, Laplacian
 //!   commutativity, descriptor commutativity, orientation) and its exact minimizer: every
 //!   term is quadratic in `C`, so one dense symmetric solve in `vec(C)`;
 //! - [`pointwise`]: nearest neighbours in the spectral embedding (k-d tree), both ways,
 //!   the functional map of a point map, function transfer;
-//! - [`zoomout`]: ZoomOut refinement from `k` to `k_final` in steps, of `p2p_21`, of
+//! - [`zoomout`](mod@zoomout): ZoomOut refinement from `k` to `k_final` in steps, of `p2p_21`, of
 //!   `p2p_12` or both ([`ZoomoutDirection`]);
 //! - [`evaluate`]: mean geodesic error normalized by `sqrt(area)` and the cumulative curve;
 //! - [`match_shapes`]: the whole pipeline (descriptors, map, ZoomOut, point map).

@@ -12,7 +12,7 @@
 //! over the rows, padded with zeros to the next supported width (padding changes no
 //! distance); wider embeddings (the usual 30-100 eigenfunctions, where a k-d tree splits
 //! on a few coordinates only and prunes almost nothing) from a tree of hyperplanes fitted
-//! to the rows (see [`nearest_tree`]): a spectral embedding is a surface, two-dimensional
+//! to the rows (see `nearest_tree`): a spectral embedding is a surface, two-dimensional
 //! however many columns it has, and a query on or near it visits a leaf or a few.
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};

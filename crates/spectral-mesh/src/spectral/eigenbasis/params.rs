@@ -33,7 +33,7 @@ pub enum EigenError {
     /// iterations used.
     #[error(transparent)]
     NoConvergence(SparseEigenError),
-    /// The computation was cancelled through its [`CancelToken`].
+    /// The computation was cancelled through its [`crate::CancelToken`].
     #[error("the eigenbasis computation was cancelled")]
     Cancelled,
 }
@@ -48,7 +48,7 @@ impl From<SparseEigenError> for EigenError {
     }
 }
 
-/// Which eigensolver [`compute_eigenbasis`] uses.
+/// Which eigensolver [`super::compute_eigenbasis`] uses.
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
 )]
@@ -64,12 +64,12 @@ pub enum EigenMethod {
     ShiftInvertBlock,
 }
 
-/// Parameters of [`compute_eigenbasis`].
+/// Parameters of [`super::compute_eigenbasis`].
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EigenParams {
     /// Number of pairs (the smallest eigenvalues). Default 100, the paper's default.
     pub k: usize,
-    /// Target relative residual of every pair (see [`Eigenbasis::compute_residuals`]).
+    /// Target relative residual of every pair (see [`super::Eigenbasis::compute_residuals`]).
     /// Default `1e-10`.
     pub tolerance: f64,
     /// Dirichlet boundary vertices: the problem is solved on the other vertices and the

@@ -29,7 +29,7 @@
 //! *other* pair whose eigenvalue coincides with a suppressed one gets weight 0 too and is
 //! refused as not strictly positive.
 //!
-//! # Text syntax ([`Filter::from_str`])
+//! # Text syntax ([`Filter`]'s [`FromStr`](std::str::FromStr))
 //!
 //! - `diffusion:t=0.5` (also `heat:t=0.5`; `t` defaults to 0.5)
 //! - `commute` (also `commute-time`)
