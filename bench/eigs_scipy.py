@@ -121,6 +121,36 @@ def quality(S, B, lam, X, sn, bn):
     return res, orth, peak
 
 
+def solve(mesh, k, mass="fem", sigma=None, cholmod=False, tol=0.0, save=None):
+    """The user's whole call: read `mesh`, assemble, solve for `k` pairs, check and write
+    `save` (when given). Returns the printed line's fields (`seconds` is the solve's)."""
+    v, f = read_off(mesh)
+    t0 = time.perf_counter()
+    S, B = operators(v, f, mass)
+    t_ops = time.perf_counter() - t0
+    sigma, sn, bn = shift(S, B, sigma)
+    t1 = time.perf_counter()
+    if cholmod:
+        from sksparse.cholmod import cholesky
+        route = "cholmod"
+        fac = cholesky((S - sigma * B).tocsc())
+        op = sla.LinearOperator(S.shape, matvec=fac, dtype=float)
+        lam, X = sla.eigsh(S, k, M=B, sigma=sigma, which="LM", OPinv=op, tol=tol)
+    else:
+        route = "superlu"
+        lam, X = sla.eigsh(S, k, M=B, sigma=sigma, which="LM", tol=tol)
+    secs = time.perf_counter() - t1
+    order = np.argsort(lam)
+    lam, X = lam[order], X[:, order]
+    res, orth, peak = quality(S, B, lam, X, sn, bn)
+    if save:
+        save_basis(save, lam, X, B, res, mass, f"scipy {route}")
+    return {"mesh": mesh, "n": len(v), "k": k, "route": f"scipy-{route}", "tol": f"{tol:g}",
+            "seconds": f"{secs:.3f}", "assembly": f"{t_ops:.3f}",
+            "max_residual": f"{res.max():.2e}", "orth_error": f"{orth:.2e}",
+            "lambda_k": f"{lam[-1]:.12e}", "peak_rss_mib": f"{peak:.0f}"}
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("mesh")
@@ -131,34 +161,16 @@ def main():
     ap.add_argument("--tol", type=float, default=0.0)
     ap.add_argument("--save", default=None)
     a = ap.parse_args()
-    v, f = read_off(a.mesh)
-    t0 = time.perf_counter()
-    S, B = operators(v, f, a.mass)
-    t_ops = time.perf_counter() - t0
-    sigma, sn, bn = shift(S, B, a.sigma)
-    t1 = time.perf_counter()
     if a.cholmod:
         try:
-            from sksparse.cholmod import cholesky
+            import sksparse.cholmod  # noqa: F401
         except ImportError as e:
             print(f"--cholmod: scikit-sparse is not importable ({e}); "
                   "run bench/setup-bench-python.sh", file=sys.stderr)
             sys.exit(3)
-        route = "cholmod"
-        fac = cholesky((S - sigma * B).tocsc())
-        op = sla.LinearOperator(S.shape, matvec=fac, dtype=float)
-        lam, X = sla.eigsh(S, a.k, M=B, sigma=sigma, which="LM", OPinv=op, tol=a.tol)
-    else:
-        route = "superlu"
-        lam, X = sla.eigsh(S, a.k, M=B, sigma=sigma, which="LM", tol=a.tol)
-    secs = time.perf_counter() - t1
-    order = np.argsort(lam)
-    lam, X = lam[order], X[:, order]
-    res, orth, peak = quality(S, B, lam, X, sn, bn)
-    print(f"mesh={a.mesh} n={len(v)} k={a.k} route=scipy-{route} tol={a.tol:g} seconds={secs:.3f} assembly={t_ops:.3f} "
-          f"max_residual={res.max():.2e} orth_error={orth:.2e} lambda_k={lam[-1]:.12e} peak_rss_mib={peak:.0f}")
-    if a.save:
-        save_basis(a.save, lam, X, B, res, a.mass, f"scipy {route}")
+    out = solve(a.mesh, a.k, a.mass, a.sigma, a.cholmod, a.tol, a.save)
+    print(" ".join(f"{key}={val}" for key, val in out.items()))
+
 
 if __name__ == "__main__":
     main()

@@ -63,14 +63,25 @@ def main():
     except ImportError as e:
         print(f"slepc4py is not importable ({e}); run bench/setup-slepc.sh", file=sys.stderr)
         sys.exit(3)
+    out = solve(PETSc, SLEPc, a.mesh, a.k, a.mass, a.sigma, a.tol, a.save)
+    if int(out["nconv"]) < a.k:
+        print(f"SLEPc converged only {out['nconv']} of {a.k} pairs", file=sys.stderr)
+        sys.exit(1)
+    print(" ".join(f"{key}={val}" for key, val in out.items()))
+
+
+def solve(PETSc, SLEPc, mesh, k, mass="fem", sigma=None, tol=1e-10, save=None):
+    """The user's whole call with SLEPc: read `mesh`, assemble, solve for `k` pairs, check
+    and write `save` (when given; not when fewer than `k` pairs converged). Returns the
+    printed line's fields (`seconds` is the solve's)."""
     import numpy as np
     from eigs_scipy import operators, quality, read_off, save_basis, shift
 
-    v, f = read_off(a.mesh)
+    v, f = read_off(mesh)
     t0 = time.perf_counter()
-    S, B = operators(v, f, a.mass)
+    S, B = operators(v, f, mass)
     t_ops = time.perf_counter() - t0
-    sigma, sn, bn = shift(S, B, a.sigma)
+    sigma, sn, bn = shift(S, B, sigma)
     n = len(v)
 
     def petsc(m):
@@ -88,8 +99,8 @@ def main():
     eps.setOperators(A, M)
     eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
     eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
-    eps.setDimensions(a.k)
-    eps.setTolerances(a.tol, 10000)
+    eps.setDimensions(k)
+    eps.setTolerances(tol, 10000)
     eps.setConvergenceTest(SLEPc.EPS.Conv.NORM)
     eps.setTarget(sigma)
     eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
@@ -110,9 +121,9 @@ def main():
         eps.setUp()
     eps.solve()
     nconv = eps.getConverged()
-    if nconv < a.k:
-        print(f"SLEPc converged only {nconv} of {a.k} pairs", file=sys.stderr)
-        sys.exit(1)
+    iterations = eps.getIterationNumber()
+    if nconv < k:
+        return {"mesh": mesh, "n": n, "k": k, "route": route, "nconv": nconv}
     lam = np.empty(nconv)
     X = np.empty((n, nconv), order="F")
     xr = A.createVecRight()
@@ -120,15 +131,21 @@ def main():
         lam[i] = eps.getEigenpair(i, xr).real
         X[:, i] = xr.getArray()
     secs = time.perf_counter() - t1
-    order = np.argsort(lam)[: a.k]
+    # Freed here, not at exit: the in-process benchmark (eigs_call.py) calls this again.
+    eps.destroy()
+    A.destroy()
+    M.destroy()
+    order = np.argsort(lam)[:k]
     lam, X = lam[order], np.asfortranarray(X[:, order])
     res, orth, peak = quality(S, B, lam, X, sn, bn)
-    print(f"mesh={a.mesh} n={n} k={a.k} route={route} tol={a.tol:g} seconds={secs:.3f} "
-          f"assembly={t_ops:.3f} max_residual={res.max():.2e} orth_error={orth:.2e} "
-          f"lambda_k={lam[-1]:.12e} peak_rss_mib={peak:.0f} nconv={nconv} "
-          f"iterations={eps.getIterationNumber()}")
-    if a.save:
-        save_basis(a.save, lam, X, B, res, a.mass, route)
+    if save:
+        save_basis(save, lam, X, B, res, mass, route)
+    return {"mesh": mesh, "n": n, "k": k, "route": route, "tol": f"{tol:g}",
+            "seconds": f"{secs:.3f}", "assembly": f"{t_ops:.3f}",
+            "max_residual": f"{res.max():.2e}", "orth_error": f"{orth:.2e}",
+            "lambda_k": f"{lam[-1]:.12e}", "peak_rss_mib": f"{peak:.0f}",
+            "nconv": nconv, "iterations": iterations}
+
 
 if __name__ == "__main__":
     main()
