@@ -53,6 +53,9 @@ step "cargo clippy" cargo clippy --release --workspace --all-targets --quiet -- 
 # (crates/spectral-mesh-fuzz); the fuzzing itself is scripts/fuzz-smoke.sh and
 # fuzz/long-run.sh, run apart (RELIABILITY.md).
 step "cargo test" cargo test --release --workspace --quiet --no-fail-fast
+# Every public item's documentation builds without a broken or private link (the release
+# profile shares the build scripts and macros compiled above).
+step "cargo doc" env RUSTDOCFLAGS="-D warnings" cargo doc --release --workspace --no-deps --quiet
 # The CLI the tests ran (their build made it, with the workspace's features: a separate
 # `cargo build -p spectral-mesh-cli` would resolve them otherwise and rebuild the library).
 cli="$root/target/release/spectral-mesh"
