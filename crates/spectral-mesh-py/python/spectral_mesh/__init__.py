@@ -32,24 +32,11 @@ content), :class:`NoConvergenceError` and :class:`SolverError` for numerical fai
 
 from __future__ import annotations
 
-import os as _os
-
-# The native module's allocator (mimalloc, linked into it) returns the memory a computation
-# frees to the system MIMALLOC_PURGE_DELAY milliseconds later, a setting it reads from the
-# environment once, when the module is loaded. Its default, 1000, is longer than a whole
-# eigensolve at 26k vertices: every buffer the solve had freed still counted in the
-# process' peak. 10 ms (mimalloc's earlier default) took the peak of eigenbasis(V, F, 50)
-# from 157 to 130 MiB at 26k vertices and from 387 to 336 MiB at 103k, in about the same
-# time. The variable is set for the load only, and only when the user has not set it.
-_PURGE_DELAY = "MIMALLOC_PURGE_DELAY"
-_set_purge_delay = _PURGE_DELAY not in _os.environ
-if _set_purge_delay:
-    _os.environ[_PURGE_DELAY] = "10"
-try:
-    from . import _native
-finally:
-    if _set_purge_delay:
-        del _os.environ[_PURGE_DELAY]
+# The native module's allocator is mimalloc v2 (the workspace's Cargo.toml): it returns
+# the memory a computation frees to the system 10 ms later (MIMALLOC_PURGE_DELAY, read
+# from the environment when the module loads; v3's default of 1 s kept every buffer a
+# 26k-vertex solve had freed in the process' peak).
+from . import _native
 from ._analysis import Analysis, CriticalPoints, LevelSet
 from ._batch import batch
 from ._correspondence import functional_map, match_pairs, p2p, zoomout
