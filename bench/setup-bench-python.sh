@@ -22,8 +22,8 @@ if [ ! -f /usr/include/suitesparse/cholmod.h ]; then
   echo "setup-bench-python: installing libsuitesparse-dev (CHOLMOD headers)" >&2
   sudo=""
   if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
-  $sudo apt-get update -qq >&2
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq libsuitesparse-dev >&2
+  $sudo apt-get -o DPkg::Lock::Timeout=600 update -qq >&2
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get -o DPkg::Lock::Timeout=600 install -y -qq libsuitesparse-dev >&2
 fi
 
 stamp="$venv/.requirements.sha"

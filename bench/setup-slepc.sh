@@ -13,8 +13,8 @@ if ! "${check[@]}" 2>/dev/null; then
   echo "setup-slepc: installing python3-slepc4py and python3-scipy" >&2
   sudo=""
   if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
-  $sudo apt-get update -qq >&2
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq python3-slepc4py python3-scipy >&2
+  $sudo apt-get -o DPkg::Lock::Timeout=600 update -qq >&2
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get -o DPkg::Lock::Timeout=600 install -y -qq python3-slepc4py python3-scipy >&2
   "${check[@]}" >&2
 fi
 echo "$python"
