@@ -12,8 +12,9 @@
 //!   the worker to the global pool one by one and waited for. 26k vertices, k = 50,
 //!   medians of alternating runs of the two builds: `eigenbasis` 0.654 -> 0.573 s quiet (8
 //!   runs), 1.72 -> 1.28 s with two busy processes on the 2 cores (6 runs);
-//!   `Analysis(V, F).basis(50)` 0.589 -> 0.522 s. The pool's threads end with the call,
-//!   so the memory their heaps hold goes back to the system (running on the global pool
+//!   `Analysis(V, F).basis(50)` 0.589 -> 0.522 s. The pool's threads end with the call
+//!   (it waits for them, and for its worker thread), so the memory their heaps hold goes
+//!   back to the system (running on the global pool
 //!   instead was as fast, but its threads stay, and with them 46 MiB after a 10k-vertex
 //!   k = 100 solve). Only the call's own jobs run in its pool: a thread waiting in a join
 //!   never takes up another call's work.
@@ -81,7 +82,7 @@ where
     let token = CancelToken::new();
     let worker_token = token.clone();
     let (tx, rx) = channel();
-    std::thread::Builder::new()
+    let worker = std::thread::Builder::new()
         .name("spectral-mesh".into())
         .spawn(move || {
             let guarded = move || {
@@ -92,9 +93,20 @@ where
                 // The pool's usual size (all cores, or `RAYON_NUM_THREADS`), its threads
                 // started for the call (not `use_current_thread`: rayon then leaks the
                 // pool's registry, about 11 KiB a call, measured); they end with it.
-                let pool = rayon::ThreadPoolBuilder::new().build();
+                let (ended_tx, ended) = channel::<()>();
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .exit_handler(move |_| {
+                        let _ = ended_tx.send(());
+                    })
+                    .build();
                 match pool {
-                    Ok(pool) => pool.install(guarded),
+                    Ok(pool) => {
+                        let threads = pool.current_num_threads();
+                        let out = pool.install(guarded);
+                        drop(pool);
+                        wait_for_ends(&ended, threads);
+                        out
+                    }
                     Err(_) => guarded(),
                 }
             } else {
@@ -112,7 +124,15 @@ where
         let (got, back) = py.detach(move || (rx.recv_timeout(POLL), rx));
         rx = back;
         match got {
-            Ok(out) => return out.map_err(|f| f.into_pyerr(py)),
+            Ok(out) => {
+                // The worker ends right after sending: joined, so that its heap has gone
+                // back to the allocator when the call returns (it cannot have panicked:
+                // the work's panics are caught).
+                py.detach(move || {
+                    let _ = worker.join();
+                });
+                return out.map_err(|f| f.into_pyerr(py));
+            }
             Err(RecvTimeoutError::Timeout) => {
                 if let Err(signal) = py.check_signals() {
                     token.cancel();
@@ -123,6 +143,25 @@ where
             Err(RecvTimeoutError::Disconnected) => {
                 return Err(Failure::Internal("the worker thread vanished".into()).into_pyerr(py));
             }
+        }
+    }
+}
+
+/// The longest a call waits for its pool's threads to end after its work is done.
+const THREADS_END: Duration = Duration::from_millis(200);
+
+/// Waits (at most [`THREADS_END`]) until `threads` pool threads have said they ended on
+/// `ended`: a dropped rayon pool ends its threads without waiting for them, and a thread's
+/// heap goes back to the allocator (and the memory it freed to the system, mimalloc v2's
+/// 10 ms later) only when the thread has ended. Waited for, the memory a solve freed is
+/// returned soon after the call rather than whenever the threads happen to end (Python:
+/// `test_freed_memory_goes_back_to_the_system_soon_after_a_solve`).
+fn wait_for_ends(ended: &std::sync::mpsc::Receiver<()>, threads: usize) {
+    let deadline = std::time::Instant::now() + THREADS_END;
+    for _ in 0..threads {
+        let left = deadline.saturating_duration_since(std::time::Instant::now());
+        if ended.recv_timeout(left).is_err() {
+            return;
         }
     }
 }
