@@ -43,6 +43,11 @@ bash scripts/setup-python.sh >target/ci-logs/python-path 2>target/ci-logs/setup-
 setup_python=$!
 bash web/e2e/setup.sh --browser-only >target/ci-logs/setup-browser.log 2>&1 &
 setup_browser=$!
+# SLEPc for conformance/check_slepc.sh (Debian's python3-slepc4py; apt waits for the
+# browser's install to release its lock). Waited for before the conformance checks; the
+# check runs the same script, which then finds it installed (or says why it is not).
+bash bench/setup-slepc.sh >target/ci-logs/slepc-python 2>target/ci-logs/setup-slepc.log &
+setup_slepc=$!
 
 step "cargo fmt --check" cargo fmt --all -- --check
 # One build serves everything: clippy and the tests use the release profile, so the tests,
@@ -66,6 +71,7 @@ if ! wait "$setup_python"; then
   echo "python peers could not be installed"; exit 1
 fi
 py="$(cat target/ci-logs/python-path)"
+wait "$setup_slepc" || cat target/ci-logs/setup-slepc.log
 if [ -n "${SPECTRAL_MESH_SHARED_MESHES:-}" ]; then
   meshes=("$SPECTRAL_MESH_SHARED_MESHES"/*.off)
   step "conformance: operators vs libigl" "$py" conformance/operators_libigl.py --cli "$cli" "${meshes[@]}"
