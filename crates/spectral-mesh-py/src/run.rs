@@ -14,10 +14,9 @@
 //!   runs), 1.72 -> 1.28 s with two busy processes on the 2 cores (6 runs);
 //!   `Analysis(V, F).basis(50)` 0.589 -> 0.522 s. The pool's threads end with the call
 //!   (it waits for them, and for its worker thread), so the memory their heaps hold goes
-//!   back to the system (running on the global pool
-//!   instead was as fast, but its threads stay, and with them 46 MiB after a 10k-vertex
-//!   k = 100 solve). Only the call's own jobs run in its pool: a thread waiting in a join
-//!   never takes up another call's work.
+//!   back to the system (running on the global pool instead was as fast, but its threads
+//!   stay, and with them 46 MiB after a 10k-vertex k = 100 solve). Only the call's own
+//!   jobs run in its pool: a thread waiting in a join never takes up another call's work.
 //! - **Ctrl-C**: every [`POLL`] the calling thread takes the GIL back for a moment and
 //!   runs Python's signal handlers (`PyErr_CheckSignals`, only effective on the main
 //!   thread). When one raises (`KeyboardInterrupt` for Ctrl-C) the work's
