@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Conformance of our eigenbasis with SLEPc's (Krylov-Schur, shift-invert, CHOLMOD through
 PETSc: bench/eigs_slepc.py's `solve`), the same checks as conformance/eigs_scipy.py
-(`compare`): masses to 1e-12, eigenvalues to 1e-9 relative to lambda_k, X^T B X = I to
+(`eigencheck.compare`): masses to 1e-12, eigenvalues to 1e-9 relative to lambda_k, X^T B X = I to
 1e-10, every cluster's principal angles below 1e-6.
 
 usage: eigs_slepc.py MESH.off --k K --cli PATH [--mass fem|voronoi-cot|cot]
@@ -12,27 +12,20 @@ python of bench/setup-slepc.sh (Debian's /usr/bin/python3: petsc4py is built aga
 Debian's NumPy). Exit status 0 when everything holds.
 """
 import argparse
-import importlib.util
 import os
 import subprocess
 import sys
 import tempfile
 
 import numpy as np
-import scipy.sparse as sp
 
 here = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(here, "..", "bench"))
 import eigs_slepc  # noqa: E402  (bench/: the SLEPc script)
 from eigs_scipy import operators, read_off  # noqa: E402  (bench/eigs_scipy.py)
 
-# conformance/eigs_scipy.py shares its module name with bench's: loaded under another.
-_spec = importlib.util.spec_from_file_location("conformance_eigs_scipy",
-                                               os.path.join(here, "eigs_scipy.py"))
-_checks = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(_checks)
-compare = _checks.compare
-
+sys.path.insert(0, here)
+from eigencheck import compare, load_basis  # noqa: E402
 
 def main():
     ap = argparse.ArgumentParser()
@@ -52,10 +45,8 @@ def main():
         if not os.path.exists(theirs):
             print("FAIL: SLEPc did not converge")
             sys.exit(1)
-        f, g = np.load(ours), np.load(theirs)
-        lam, X = f["eigenvalues"], f["eigenvectors"]
-        Bf = sp.csc_matrix((f["mass_data"], f["mass_indices"], f["mass_indptr"]),
-                           shape=tuple(f["mass_shape"]))
+        lam, X, Bf, _ = load_basis(ours)
+        g = np.load(theirs)
         v, t = read_off(a.mesh)
         _, B = operators(v, t, a.mass)
         ok = compare(lam, X, Bf, B, g["eigenvalues"], g["eigenvectors"], "slepc")
