@@ -145,7 +145,52 @@ impl<const C: usize> pulp::WithSimd for SolveOp<'_, C> {
     }
 }
 
+/// Runtime SIMD dispatch of one [`Supernodes::sweep`], for the two parts of a split
+/// solve: they run in closures of `rayon::join`, which are functions of their own and do
+/// not inherit the SIMD level [`SolveOp`] was compiled for. Without this their loops ran
+/// as SSE2 code; dispatched, the solves of `eigs -k 50` took 0.13 s instead of 0.21 s at
+/// 26k vertices and 0.50-0.70 s instead of 0.90-0.99 s at 104k (BENCHMARKS.md).
+struct SweepOp<'s, 'r, 'x, const C: usize, I> {
+    sn: &'s Supernodes,
+    sweep: Sweep,
+    vals: &'s [f64],
+    nodes: I,
+    x: &'r mut Rows<'x, C>,
+    top: &'r mut [[f64; C]],
+    ldlt: bool,
+}
+
+impl<const C: usize, I: Iterator<Item = usize>> pulp::WithSimd for SweepOp<'_, '_, '_, C, I> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        self.sn.sweep(
+            self.sweep, self.vals, self.nodes, self.x, self.top, self.ldlt,
+        );
+    }
+}
+
 impl Supernodes {
+    /// [`Supernodes::sweep`] compiled for the SIMD level pulp detects (see [`SweepOp`]).
+    fn sweep_dispatched<const C: usize>(
+        &self,
+        (sweep, ldlt): (Sweep, bool),
+        vals: &[f64],
+        nodes: impl Iterator<Item = usize>,
+        x: &mut Rows<'_, C>,
+        top: &mut [[f64; C]],
+    ) {
+        pulp::Arch::new().dispatch(SweepOp {
+            sn: self,
+            sweep,
+            vals,
+            nodes,
+            x,
+            top,
+            ldlt,
+        });
+    }
+
     /// The layout of a supernodal analysis (`None` for a simplicial one), its solves split
     /// over the elimination tree when the factor is large and a cut pays.
     pub(super) fn from_symbolic(sym: &SymbolicCholesky<usize>) -> Option<Self> {
@@ -533,14 +578,15 @@ impl Supernodes {
         };
         let mut hi = Rows::all(right, split.c);
         let right_nodes = split.right.iter().copied();
+        let how = (sweep, ldlt);
         match sweep {
             Sweep::Forward => rayon::join(
-                || self.sweep(sweep, vals, 0..split.q, &mut lo, top_left, ldlt),
-                || self.sweep(sweep, vals, right_nodes, &mut hi, top_right, ldlt),
+                || self.sweep_dispatched(how, vals, 0..split.q, &mut lo, top_left),
+                || self.sweep_dispatched(how, vals, right_nodes, &mut hi, top_right),
             ),
             Sweep::Backward => rayon::join(
-                || self.sweep(sweep, vals, (0..split.q).rev(), &mut lo, top_left, ldlt),
-                || self.sweep(sweep, vals, right_nodes.rev(), &mut hi, top_right, ldlt),
+                || self.sweep_dispatched(how, vals, (0..split.q).rev(), &mut lo, top_left),
+                || self.sweep_dispatched(how, vals, right_nodes.rev(), &mut hi, top_right),
             ),
         };
     }
