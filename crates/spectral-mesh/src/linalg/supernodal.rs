@@ -13,6 +13,11 @@
 //! the top's, so they run side by side; the left part's updates of top rows go to a small
 //! buffer that is added before the top is solved. The split is a property of the factor,
 //! not of the thread count, so a solve gives the same bits on one thread or on many.
+//!
+//! The sweeps are compiled for the SIMD level pulp detects at run time (AVX2 where
+//! present): the whole solve through [`SolveOp`], and each part of a split solve through
+//! [`SweepOp`] of its own, since a closure given to `rayon::join` does not inherit the
+//! target features of the function it is written in.
 
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 
