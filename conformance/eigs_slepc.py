@@ -27,6 +27,7 @@ from eigs_scipy import operators, read_off  # noqa: E402  (bench/eigs_scipy.py)
 sys.path.insert(0, here)
 from eigencheck import compare, load_basis  # noqa: E402
 
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("mesh")
